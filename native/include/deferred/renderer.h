@@ -1,0 +1,109 @@
+// Public entry point of the native deferred renderer.
+//
+// A Renderer owns a headless EGL context on a render thread of its own; every
+// method forwards its work to that thread and waits for it, so callers never
+// need (and never disturb) a current GL context. The scene is synced EEVEE
+// style: clear_scene(), then add_mesh()/add_material()/add_instances()/
+// add_light()/set_world(), then render() any number of times.
+#pragma once
+
+#include <deferred/passes.h>
+#include <deferred/scene.h>
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace deferred {
+
+// Every failure of the library is one of these, with a message that names the
+// step that failed and, where there is one, the EGL/GL error by name.
+class Error : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+// Bad input from the caller (shape, range, NaN): maps to Python's ValueError.
+class InvalidInput : public Error {
+public:
+    using Error::Error;
+};
+
+struct ContextOptions {
+    // EGL device index for the EGL device platform; -1 picks automatically
+    // (first hardware device, else Mesa surfaceless, else the default
+    // display). The environment variable DEFERRED_EGL_DEVICE overrides -1.
+    int device_index = -1;
+};
+
+struct GLInfo {
+    std::string vendor, renderer, version;
+    std::string display;  // which step of the cascade gave the display
+};
+
+struct RenderSettings {
+    int width = 640;
+    int height = 480;
+    PassSet passes;
+    bool film_transparent = false;
+    Mist mist;
+    // Lighting samples averaged per pixel: each uses a different shift of the
+    // light-shape sample grid, so soft lighting converges as samples grow.
+    int samples = 1;
+};
+
+// One pass of a finished frame: rows bottom-up (row 0 is the bottom of the
+// image, as Blender's RenderResult expects), channels interleaved.
+struct PassImage {
+    Pass pass;
+    int width = 0, height = 0, channels = 0;
+    std::vector<float> pixels;
+};
+
+// Wall-clock split of the last render, in milliseconds (GPU work is fenced
+// per stage, so the numbers are what each stage really cost).
+struct FrameTimings {
+    double upload_ms = 0, geometry_ms = 0, lighting_ms = 0, passes_ms = 0, readback_ms = 0;
+    double total_ms = 0;
+    std::size_t gbuffer_bytes = 0;  // G-buffer + pass targets allocated for the frame
+};
+
+struct FrameResult {
+    std::vector<PassImage> passes;
+    FrameTimings timings;
+    const PassImage* find(Pass p) const;
+};
+
+class Renderer {
+public:
+    explicit Renderer(const ContextOptions& options = {});
+    ~Renderer();
+    Renderer(const Renderer&) = delete;
+    Renderer& operator=(const Renderer&) = delete;
+
+    const GLInfo& gl_info() const;
+
+    void clear_scene();
+    // Returns the mesh id. The data is validated and uploaded before returning.
+    std::uint32_t add_mesh(const MeshData& mesh);
+    std::uint32_t add_material(const Material& material);
+    // `count` instances of `mesh_id`: world matrices (column-major, 16 doubles
+    // each), object pass indices (may be null: 0), and a material slot map
+    // (slot -> material id; empty: slot i -> material i).
+    void add_instances(std::uint32_t mesh_id, const double* matrices, std::size_t count,
+                       const std::uint32_t* object_indices,
+                       const std::vector<std::uint32_t>& material_slots);
+    void add_light(const Light& light);
+    void set_world(const World& world);
+
+    FrameResult render(const Camera& camera, const RenderSettings& settings);
+
+    struct Impl;
+
+private:
+    std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace deferred

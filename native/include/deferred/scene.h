@@ -1,0 +1,108 @@
+// Scene description handed to the native renderer: plain data, no GL.
+//
+// Everything here mirrors a Blender 3.4 data-block closely enough that the
+// add-on's exporter is a field-by-field copy. Units are Blender's: metres,
+// Watts (sun: W/m^2), radians, millimetres for the lens and sensor.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace deferred {
+
+using Vec3 = std::array<float, 3>;
+// Column-major 4x4 matrix (m[col][row]), the layout numpy's `M.T` gives for a
+// Blender Matrix; doubles so that world matrices far from the origin keep
+// their precision until the camera position has been subtracted.
+using Mat4d = std::array<double, 16>;
+
+Mat4d identity_matrix();
+
+// A triangle mesh. Positions are indexed by `indices`; per-corner data
+// (normals, uvs) are given per triangle corner, in the order of `indices`
+// (corner c of triangle t is element 3*t + c), because Blender's split
+// normals and UVs live on loops, not vertices.
+struct MeshData {
+    const float* positions = nullptr;        // [vertex_count][3]
+    std::size_t vertex_count = 0;
+    const std::uint32_t* indices = nullptr;  // [triangle_count][3]
+    std::size_t triangle_count = 0;
+    const float* corner_normals = nullptr;   // [triangle_count*3][3], optional (flat if null)
+    const float* corner_uvs = nullptr;       // [triangle_count*3][2], optional
+    const std::int32_t* material_indices = nullptr;  // [triangle_count], optional (slot 0)
+};
+
+// Principled BSDF parameter set of Blender 3.4 (constants per material).
+struct Material {
+    Vec3 base_color{0.8f, 0.8f, 0.8f};
+    float metallic = 0.0f;
+    float roughness = 0.5f;
+    float specular = 0.5f;
+    float specular_tint = 0.0f;
+    float sheen = 0.0f;
+    float sheen_tint = 0.5f;
+    float clearcoat = 0.0f;
+    float clearcoat_roughness = 0.03f;
+    Vec3 emission{0.0f, 0.0f, 0.0f};
+    float emission_strength = 1.0f;
+    float alpha = 1.0f;
+    std::uint32_t pass_index = 0;  // IndexMA
+};
+
+enum class LightType : std::uint32_t { Point = 0, Spot = 1, Sun = 2, Area = 3 };
+enum class AreaShape : std::uint32_t { Square = 0, Rectangle = 1, Disk = 2, Ellipse = 3 };
+
+// A Blender light. `matrix` is the object's world matrix: position from its
+// translation, the light's -Z axis is its direction (spot, sun, area) and,
+// for area lights, the X/Y axes scale `size`/`size_y` (Cycles 3.4).
+struct Light {
+    LightType type = LightType::Point;
+    Mat4d matrix = identity_matrix();
+    Vec3 color{1.0f, 1.0f, 1.0f};
+    float energy = 10.0f;           // W (sun: W/m^2)
+    float radius = 0.25f;           // shadow_soft_size, m (point/spot)
+    float spot_size = 0.785398f;    // full cone angle, rad
+    float spot_blend = 0.15f;
+    float angle = 0.00918043f;      // sun angular diameter, rad (0.526 deg)
+    AreaShape shape = AreaShape::Square;
+    float size = 0.25f;             // area X size, m
+    float size_y = 0.25f;           // area Y size (RECTANGLE/ELLIPSE), m
+    bool cast_shadow = true;
+};
+
+enum class CameraType : std::uint32_t { Perspective = 0, Orthographic = 1 };
+enum class SensorFit : std::uint32_t { Auto = 0, Horizontal = 1, Vertical = 2 };
+
+// Blender camera parameters; see camera.cpp for how they become a projection
+// identical to Cycles' (blender/intern/cycles/blender/camera.cpp).
+struct Camera {
+    CameraType type = CameraType::Perspective;
+    Mat4d matrix = identity_matrix();  // camera object's world matrix (looks down -Z)
+    float lens = 50.0f;                // mm
+    float sensor_width = 36.0f;        // mm
+    float sensor_height = 24.0f;       // mm
+    SensorFit sensor_fit = SensorFit::Auto;
+    float shift_x = 0.0f;
+    float shift_y = 0.0f;
+    float clip_start = 0.1f;
+    float clip_end = 100.0f;
+    float ortho_scale = 6.0f;
+    float pixel_aspect_x = 1.0f;
+    float pixel_aspect_y = 1.0f;
+};
+
+struct World {
+    Vec3 color{0.05f, 0.05f, 0.05f};  // Background colour x strength
+};
+
+// Blender's mist settings (World > Mist Pass).
+enum class MistFalloff : std::uint32_t { Quadratic = 0, Linear = 1, InverseQuadratic = 2 };
+struct Mist {
+    float start = 5.0f;
+    float depth = 25.0f;
+    MistFalloff falloff = MistFalloff::Quadratic;
+};
+
+}  // namespace deferred

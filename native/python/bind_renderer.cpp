@@ -1,0 +1,268 @@
+#include "bindings.h"
+
+#include <pybind11/stl.h>
+
+#include <memory>
+#include <string>
+
+namespace deferred::python {
+
+namespace {
+
+// Checks dtype, C-contiguity and shape of a numpy array without copying it
+// (the renderer uploads before returning, so borrowing the buffer is safe).
+// `shape` uses -1 for "any"; returns the array's data pointer.
+template <class T>
+const T* borrow(const py::handle& obj, const char* name, std::initializer_list<py::ssize_t> shape,
+                py::ssize_t* first_dim = nullptr) {
+    if (!py::isinstance<py::array>(obj))
+        throw py::value_error(std::string(name) + ": expected a numpy array, got " +
+                              std::string(py::str(py::type::of(obj).attr("__name__"))));
+    py::array a = py::reinterpret_borrow<py::array>(obj);
+    if (!a.dtype().is(py::dtype::of<T>()))
+        throw py::value_error(std::string(name) + ": expected dtype " + std::string(py::str(py::dtype::of<T>())) +
+                              ", got " + std::string(py::str(a.dtype())));
+    if (!(a.flags() & py::array::c_style))
+        throw py::value_error(std::string(name) + ": array must be C-contiguous (use numpy.ascontiguousarray)");
+    if (a.ndim() != py::ssize_t(shape.size())) {
+        std::string want = "(";
+        for (auto s : shape) want += (s < 0 ? std::string("N") : std::to_string(s)) + ",";
+        want.back() = ')';
+        throw py::value_error(std::string(name) + ": expected shape " + want + ", got " + std::to_string(a.ndim()) +
+                              " dimension(s)");
+    }
+    int i = 0;
+    for (auto s : shape) {
+        if (s >= 0 && a.shape(i) != s)
+            throw py::value_error(std::string(name) + ": dimension " + std::to_string(i) + " must be " +
+                                  std::to_string(s) + ", got " + std::to_string(a.shape(i)));
+        ++i;
+    }
+    if (first_dim) *first_dim = a.ndim() > 0 ? a.shape(0) : 0;
+    return static_cast<const T*>(a.data());
+}
+
+Vec3 vec3_from(const py::handle& obj, const char* what) {
+    py::sequence s = py::reinterpret_borrow<py::sequence>(obj);
+    if (py::len(s) < 3) throw py::value_error(std::string(what) + ": expected 3 values");
+    return {s[0].cast<float>(), s[1].cast<float>(), s[2].cast<float>()};
+}
+
+// Hands a pass to Python without copying: the numpy array owns the vector.
+py::array_t<float> to_numpy(PassImage&& img) {
+    auto* owned = new std::vector<float>(std::move(img.pixels));
+    py::capsule free_when_done(owned, [](void* p) { delete static_cast<std::vector<float>*>(p); });
+    return py::array_t<float>({py::ssize_t(img.height), py::ssize_t(img.width), py::ssize_t(img.channels)},
+                              owned->data(), free_when_done);
+}
+
+struct PyRenderer {
+    std::unique_ptr<Renderer> renderer;
+    FrameTimings last;
+    Renderer& get() {
+        if (!renderer) throw Error("the renderer was closed");
+        return *renderer;
+    }
+};
+
+}  // namespace
+
+void declare_renderer(py::module_& m) {
+    py::class_<PyRenderer>(m, "Renderer",
+                           "Headless deferred renderer; owns an EGL context on a render thread of its own.")
+        .def(py::init([](int device_index) {
+                 ContextOptions o;
+                 o.device_index = device_index;
+                 std::unique_ptr<Renderer> r;
+                 {
+                     py::gil_scoped_release release;
+                     r = std::make_unique<Renderer>(o);
+                 }
+                 return PyRenderer{std::move(r), {}};
+             }),
+             py::arg("device_index") = -1)
+        .def("close", [](PyRenderer& self) {
+            py::gil_scoped_release release;
+            self.renderer.reset();
+        }, "Release the GL context and every GPU resource now.")
+        .def_property_readonly("gl_info", [](PyRenderer& self) {
+            const GLInfo& i = self.get().gl_info();
+            py::dict d;
+            d["vendor"] = i.vendor;
+            d["renderer"] = i.renderer;
+            d["version"] = i.version;
+            d["display"] = i.display;
+            return d;
+        })
+        .def_property_readonly("last_timings", [](PyRenderer& self) {
+            py::dict d;
+            d["upload_ms"] = self.last.upload_ms;
+            d["geometry_ms"] = self.last.geometry_ms;
+            d["lighting_ms"] = self.last.lighting_ms;
+            d["passes_ms"] = self.last.passes_ms;
+            d["readback_ms"] = self.last.readback_ms;
+            d["total_ms"] = self.last.total_ms;
+            d["gbuffer_bytes"] = self.last.gbuffer_bytes;
+            return d;
+        })
+        .def("clear_scene", [](PyRenderer& self) { self.get().clear_scene(); })
+        .def("add_mesh",
+             [](PyRenderer& self, const py::object& positions, const py::object& indices,
+                const py::object& corner_normals, const py::object& corner_uvs,
+                const py::object& material_indices) {
+                 MeshData mesh;
+                 py::ssize_t nv = 0, nt = 0, n = 0;
+                 mesh.positions = borrow<float>(positions, "positions", {-1, 3}, &nv);
+                 mesh.indices = borrow<std::uint32_t>(indices, "indices", {-1, 3}, &nt);
+                 mesh.vertex_count = std::size_t(nv);
+                 mesh.triangle_count = std::size_t(nt);
+                 if (!corner_normals.is_none()) {
+                     mesh.corner_normals = borrow<float>(corner_normals, "corner_normals", {-1, 3}, &n);
+                     if (n != 3 * nt)
+                         throw py::value_error("corner_normals: expected " + std::to_string(3 * nt) +
+                                               " rows (3 per triangle), got " + std::to_string(n));
+                 }
+                 if (!corner_uvs.is_none()) {
+                     mesh.corner_uvs = borrow<float>(corner_uvs, "corner_uvs", {-1, 2}, &n);
+                     if (n != 3 * nt)
+                         throw py::value_error("corner_uvs: expected " + std::to_string(3 * nt) +
+                                               " rows (3 per triangle), got " + std::to_string(n));
+                 }
+                 if (!material_indices.is_none()) {
+                     mesh.material_indices = borrow<std::int32_t>(material_indices, "material_indices", {-1}, &n);
+                     if (n != nt)
+                         throw py::value_error("material_indices: expected " + std::to_string(nt) +
+                                               " values (one per triangle), got " + std::to_string(n));
+                 }
+                 py::gil_scoped_release release;
+                 return self.get().add_mesh(mesh);
+             },
+             py::arg("positions"), py::arg("indices"), py::kw_only(), py::arg("corner_normals") = py::none(),
+             py::arg("corner_uvs") = py::none(), py::arg("material_indices") = py::none())
+        .def("add_material",
+             [](PyRenderer& self, const py::object& base_color, float metallic, float roughness, float specular,
+                float specular_tint, float sheen, float sheen_tint, float clearcoat, float clearcoat_roughness,
+                const py::object& emission, float emission_strength, float alpha, std::uint32_t pass_index) {
+                 Material mat;
+                 mat.base_color = vec3_from(base_color, "base_color");
+                 mat.metallic = metallic;
+                 mat.roughness = roughness;
+                 mat.specular = specular;
+                 mat.specular_tint = specular_tint;
+                 mat.sheen = sheen;
+                 mat.sheen_tint = sheen_tint;
+                 mat.clearcoat = clearcoat;
+                 mat.clearcoat_roughness = clearcoat_roughness;
+                 mat.emission = vec3_from(emission, "emission");
+                 mat.emission_strength = emission_strength;
+                 mat.alpha = alpha;
+                 mat.pass_index = pass_index;
+                 return self.get().add_material(mat);
+             },
+             py::kw_only(), py::arg("base_color") = py::make_tuple(0.8, 0.8, 0.8), py::arg("metallic") = 0.0f,
+             py::arg("roughness") = 0.5f, py::arg("specular") = 0.5f, py::arg("specular_tint") = 0.0f,
+             py::arg("sheen") = 0.0f, py::arg("sheen_tint") = 0.5f, py::arg("clearcoat") = 0.0f,
+             py::arg("clearcoat_roughness") = 0.03f, py::arg("emission") = py::make_tuple(0.0, 0.0, 0.0),
+             py::arg("emission_strength") = 1.0f, py::arg("alpha") = 1.0f, py::arg("pass_index") = 0u)
+        .def("add_instances",
+             [](PyRenderer& self, std::uint32_t mesh_id, const py::object& matrices, const py::object& object_indices,
+                const py::object& material_slots) {
+                 py::ssize_t n = 0, k = 0;
+                 const double* rows = borrow<double>(matrices, "matrices", {-1, 4, 4}, &n);
+                 // Row-major numpy (Blender Matrix order) -> column-major.
+                 std::vector<double> cols(std::size_t(n) * 16);
+                 for (py::ssize_t i = 0; i < n; ++i)
+                     for (int r = 0; r < 4; ++r)
+                         for (int c = 0; c < 4; ++c) cols[std::size_t(i * 16 + c * 4 + r)] = rows[i * 16 + r * 4 + c];
+                 const std::uint32_t* ids = nullptr;
+                 if (!object_indices.is_none()) {
+                     ids = borrow<std::uint32_t>(object_indices, "object_indices", {-1}, &k);
+                     if (k != n)
+                         throw py::value_error("object_indices: expected " + std::to_string(n) + " values, got " +
+                                               std::to_string(k));
+                 }
+                 std::vector<std::uint32_t> slots;
+                 if (!material_slots.is_none())
+                     for (const py::handle& h : material_slots) slots.push_back(h.cast<std::uint32_t>());
+                 py::gil_scoped_release release;
+                 self.get().add_instances(mesh_id, cols.data(), std::size_t(n), ids, slots);
+             },
+             py::arg("mesh_id"), py::arg("matrices"), py::kw_only(), py::arg("object_indices") = py::none(),
+             py::arg("material_slots") = py::none())
+        .def("add_light",
+             [](PyRenderer& self, const std::string& type, const py::object& matrix, const py::object& color,
+                float energy, float radius, float spot_size, float spot_blend, float angle, const std::string& shape,
+                float size, float size_y, bool cast_shadow) {
+                 Light l;
+                 if (type == "POINT") l.type = LightType::Point;
+                 else if (type == "SPOT") l.type = LightType::Spot;
+                 else if (type == "SUN") l.type = LightType::Sun;
+                 else if (type == "AREA") l.type = LightType::Area;
+                 else throw py::value_error("add_light: type '" + type + "' is not one of POINT, SPOT, SUN, AREA");
+                 if (shape == "SQUARE") l.shape = AreaShape::Square;
+                 else if (shape == "RECTANGLE") l.shape = AreaShape::Rectangle;
+                 else if (shape == "DISK") l.shape = AreaShape::Disk;
+                 else if (shape == "ELLIPSE") l.shape = AreaShape::Ellipse;
+                 else throw py::value_error("add_light: shape '" + shape + "' is not one of SQUARE, RECTANGLE, DISK, ELLIPSE");
+                 if (!matrix.is_none()) l.matrix = matrix_from_python(matrix, "add_light: matrix");
+                 l.color = vec3_from(color, "add_light: color");
+                 l.energy = energy;
+                 l.radius = radius;
+                 l.spot_size = spot_size;
+                 l.spot_blend = spot_blend;
+                 l.angle = angle;
+                 l.size = size;
+                 l.size_y = size_y;
+                 l.cast_shadow = cast_shadow;
+                 self.get().add_light(l);
+             },
+             py::kw_only(), py::arg("type") = "POINT", py::arg("matrix") = py::none(),
+             py::arg("color") = py::make_tuple(1.0, 1.0, 1.0), py::arg("energy") = 10.0f, py::arg("radius") = 0.25f,
+             py::arg("spot_size") = 0.785398f, py::arg("spot_blend") = 0.15f, py::arg("angle") = 0.00918043f,
+             py::arg("shape") = "SQUARE", py::arg("size") = 0.25f, py::arg("size_y") = 0.25f,
+             py::arg("cast_shadow") = true)
+        .def("set_world", [](PyRenderer& self, const py::object& color) {
+            World w;
+            w.color = vec3_from(color, "set_world: color");
+            self.get().set_world(w);
+        }, py::kw_only(), py::arg("color"))
+        .def("render",
+             [](PyRenderer& self, const Camera& camera, int width, int height, const std::vector<std::string>& passes,
+                bool film_transparent, float mist_start, float mist_depth, const std::string& mist_falloff,
+                int samples) {
+                 RenderSettings s;
+                 s.width = width;
+                 s.height = height;
+                 for (const std::string& name : passes) {
+                     auto p = pass_from_name(name);
+                     if (!p) throw py::value_error("render: unknown pass '" + name + "'");
+                     s.passes.insert(*p);
+                 }
+                 s.film_transparent = film_transparent;
+                 s.mist.start = mist_start;
+                 s.mist.depth = mist_depth;
+                 if (mist_falloff == "QUADRATIC") s.mist.falloff = MistFalloff::Quadratic;
+                 else if (mist_falloff == "LINEAR") s.mist.falloff = MistFalloff::Linear;
+                 else if (mist_falloff == "INVERSE_QUADRATIC") s.mist.falloff = MistFalloff::InverseQuadratic;
+                 else throw py::value_error("render: mist_falloff '" + mist_falloff + "' is not one of QUADRATIC, LINEAR, INVERSE_QUADRATIC");
+                 s.samples = samples;
+                 FrameResult frame;
+                 {
+                     py::gil_scoped_release release;
+                     frame = self.get().render(camera, s);
+                 }
+                 self.last = frame.timings;
+                 py::dict out;
+                 for (PassImage& img : frame.passes) {
+                     const char* name = pass_info(img.pass).name;
+                     out[name] = to_numpy(std::move(img));
+                 }
+                 return out;
+             },
+             py::arg("camera"), py::arg("width"), py::arg("height"), py::kw_only(),
+             py::arg("passes") = std::vector<std::string>{"Combined"}, py::arg("film_transparent") = false,
+             py::arg("mist_start") = 5.0f, py::arg("mist_depth") = 25.0f, py::arg("mist_falloff") = "QUADRATIC",
+             py::arg("samples") = 1);
+}
+
+}  // namespace deferred::python

@@ -1,0 +1,99 @@
+#include "bindings.h"
+
+#include <pybind11/stl.h>
+
+#include <cmath>
+#include <string>
+
+namespace deferred::python {
+
+Mat4d matrix_from_python(const py::handle& obj, const char* what) {
+    py::array_t<double, py::array::c_style | py::array::forcecast> a;
+    try {
+        a = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(obj);
+    } catch (const py::error_already_set&) {
+    }
+    if (!a || a.ndim() != 2 || a.shape(0) != 4 || a.shape(1) != 4)
+        throw py::value_error(std::string(what) + ": expected a (4, 4) matrix");
+    Mat4d m;
+    auto r = a.unchecked<2>();
+    for (int row = 0; row < 4; ++row)
+        for (int col = 0; col < 4; ++col) {
+            const double v = r(row, col);
+            if (!std::isfinite(v)) throw py::value_error(std::string(what) + ": matrix has NaN/Inf");
+            m[std::size_t(col * 4 + row)] = v;
+        }
+    return m;
+}
+
+namespace {
+
+template <class Enum>
+Enum enum_from_name(const std::string& value, std::initializer_list<std::pair<const char*, Enum>> names,
+                    const char* what) {
+    std::string allowed;
+    for (auto& [n, e] : names) {
+        if (value == n) return e;
+        allowed += std::string(allowed.empty() ? "" : ", ") + n;
+    }
+    throw py::value_error(std::string(what) + ": '" + value + "' is not one of " + allowed);
+}
+
+}  // namespace
+
+void declare_scene(py::module_& m) {
+    static py::exception<Error> error(m, "Error", PyExc_RuntimeError);
+    py::register_exception_translator([](std::exception_ptr p) {
+        try {
+            if (p) std::rethrow_exception(p);
+        } catch (const InvalidInput& e) {
+            PyErr_SetString(PyExc_ValueError, e.what());
+        } catch (const Error& e) {
+            error(e.what());
+        }
+    });
+
+    py::list passes;
+    for (std::uint32_t i = 0; i < kPassCount; ++i) {
+        const PassInfo& p = pass_info(Pass(i));
+        passes.append(py::make_tuple(p.name, p.chan_id, p.channels));
+    }
+    m.attr("PASSES") = passes;
+
+    py::class_<Camera>(m, "Camera", "Blender camera parameters (matrix: row-major 4x4 world matrix)")
+        .def(py::init([](const std::string& type, const py::object& matrix, float lens, float sensor_width,
+                         float sensor_height, const std::string& sensor_fit, float shift_x, float shift_y,
+                         float clip_start, float clip_end, float ortho_scale, float pixel_aspect_x,
+                         float pixel_aspect_y) {
+                 Camera c;
+                 c.type = enum_from_name<CameraType>(
+                     type, {{"PERSP", CameraType::Perspective}, {"ORTHO", CameraType::Orthographic}}, "Camera.type");
+                 if (!matrix.is_none()) c.matrix = matrix_from_python(matrix, "Camera.matrix");
+                 c.lens = lens;
+                 c.sensor_width = sensor_width;
+                 c.sensor_height = sensor_height;
+                 c.sensor_fit = enum_from_name<SensorFit>(sensor_fit,
+                                                          {{"AUTO", SensorFit::Auto},
+                                                           {"HORIZONTAL", SensorFit::Horizontal},
+                                                           {"VERTICAL", SensorFit::Vertical}},
+                                                          "Camera.sensor_fit");
+                 c.shift_x = shift_x;
+                 c.shift_y = shift_y;
+                 c.clip_start = clip_start;
+                 c.clip_end = clip_end;
+                 c.ortho_scale = ortho_scale;
+                 c.pixel_aspect_x = pixel_aspect_x;
+                 c.pixel_aspect_y = pixel_aspect_y;
+                 return c;
+             }),
+             py::kw_only(), py::arg("type") = "PERSP", py::arg("matrix") = py::none(), py::arg("lens") = 50.0f,
+             py::arg("sensor_width") = 36.0f, py::arg("sensor_height") = 24.0f, py::arg("sensor_fit") = "AUTO",
+             py::arg("shift_x") = 0.0f, py::arg("shift_y") = 0.0f, py::arg("clip_start") = 0.1f,
+             py::arg("clip_end") = 100.0f, py::arg("ortho_scale") = 6.0f, py::arg("pixel_aspect_x") = 1.0f,
+             py::arg("pixel_aspect_y") = 1.0f)
+        .def_readwrite("lens", &Camera::lens)
+        .def_readwrite("clip_start", &Camera::clip_start)
+        .def_readwrite("clip_end", &Camera::clip_end);
+}
+
+}  // namespace deferred::python

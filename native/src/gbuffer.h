@@ -1,0 +1,41 @@
+// G-buffer targets and their framebuffer (layout: shaders/gbuffer_lib.glsl).
+// Only the targets a frame needs are allocated: params1 when a material uses
+// sheen or clearcoat, ids for IndexOB/IndexMA, uv for UV, emit for Emit.
+#pragma once
+
+#include "gl_util.h"
+
+#include <cstddef>
+
+namespace deferred {
+
+struct GBufferFeatures {
+    bool params1 = false, ids = false, uv = false, emit = false;
+    bool operator==(const GBufferFeatures& o) const {
+        return params1 == o.params1 && ids == o.ids && uv == o.uv && emit == o.emit;
+    }
+};
+
+class GBuffer {
+public:
+    // Reallocates only when size or features change.
+    void ensure(int width, int height, const GBufferFeatures& features);
+    void bind_for_geometry() const;   // binds the FBO, clears (depth 0 = far, reversed Z)
+    void bind_textures() const;       // binds every target to its TEX_* unit
+
+    GLuint film() const { return film_.get(); }
+    std::size_t bytes() const { return bytes_; }
+    int width() const { return width_; }
+    int height() const { return height_; }
+    const GBufferFeatures& features() const { return features_; }
+
+private:
+    int width_ = 0, height_ = 0;
+    GBufferFeatures features_;
+    bool allocated_ = false;
+    std::size_t bytes_ = 0;
+    Texture depth_, film_, base_, params0_, normal_, params1_, ids_, uv_, emit_;
+    Framebuffer fbo_;
+};
+
+}  // namespace deferred

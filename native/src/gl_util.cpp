@@ -1,0 +1,91 @@
+#include "gl_util.h"
+
+#include <deferred/renderer.h>
+
+#include <algorithm>
+#include <chrono>
+
+namespace deferred {
+
+const char* gl_error_name(GLenum error) {
+    switch (error) {
+        case GL_NO_ERROR: return "GL_NO_ERROR";
+        case GL_INVALID_ENUM: return "GL_INVALID_ENUM";
+        case GL_INVALID_VALUE: return "GL_INVALID_VALUE";
+        case GL_INVALID_OPERATION: return "GL_INVALID_OPERATION";
+        case GL_INVALID_FRAMEBUFFER_OPERATION: return "GL_INVALID_FRAMEBUFFER_OPERATION";
+        case GL_OUT_OF_MEMORY: return "GL_OUT_OF_MEMORY";
+        case GL_STACK_UNDERFLOW: return "GL_STACK_UNDERFLOW";
+        case GL_STACK_OVERFLOW: return "GL_STACK_OVERFLOW";
+        default: return "unknown GL error";
+    }
+}
+
+void check_gl(const char* step) {
+    GLenum err = glGetError();
+    if (err == GL_NO_ERROR) return;
+    std::string names = gl_error_name(err);
+    // Drain the queue so the next check starts clean.
+    while ((err = glGetError()) != GL_NO_ERROR) names += std::string(", ") + gl_error_name(err);
+    throw Error(std::string(step) + " failed: " + names);
+}
+
+void delete_buffer(GLuint id) { glDeleteBuffers(1, &id); }
+void delete_texture(GLuint id) { glDeleteTextures(1, &id); }
+void delete_framebuffer(GLuint id) { glDeleteFramebuffers(1, &id); }
+void delete_program(GLuint id) { glDeleteProgram(id); }
+void delete_vertex_array(GLuint id) { glDeleteVertexArrays(1, &id); }
+
+Buffer make_storage_buffer(const void* data, std::size_t bytes, const char* what) {
+    GLuint id = 0;
+    glCreateBuffers(1, &id);
+    Buffer buffer(id);
+    const std::size_t size = std::max<std::size_t>(bytes, 16);
+    if (data && bytes >= 16) {
+        glNamedBufferStorage(id, static_cast<GLsizeiptr>(size), data, 0);
+    } else {
+        glNamedBufferStorage(id, static_cast<GLsizeiptr>(size), nullptr, GL_DYNAMIC_STORAGE_BIT);
+        if (data && bytes) glNamedBufferSubData(id, 0, static_cast<GLsizeiptr>(bytes), data);
+    }
+    check_gl((std::string("allocating buffer '") + what + "'").c_str());
+    return buffer;
+}
+
+Texture make_texture_2d(GLenum internal_format, int width, int height, const char* what) {
+    GLuint id = 0;
+    glCreateTextures(GL_TEXTURE_2D, 1, &id);
+    Texture tex(id);
+    glTextureStorage2D(id, 1, internal_format, width, height);
+    glTextureParameteri(id, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTextureParameteri(id, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    glTextureParameteri(id, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTextureParameteri(id, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    check_gl((std::string("allocating texture '") + what + "'").c_str());
+    return tex;
+}
+
+std::size_t texel_bytes(GLenum f) {
+    switch (f) {
+        case GL_RGBA32F: case GL_RGBA32UI: return 16;
+        case GL_RGBA16F: case GL_RG32F: case GL_RG32UI: return 8;
+        case GL_R32F: case GL_R32UI: case GL_RG16: case GL_DEPTH_COMPONENT32F: case GL_RGBA8: return 4;
+        default: return 16;
+    }
+}
+
+static double now_ms() {
+    using namespace std::chrono;
+    return duration<double, std::milli>(steady_clock::now().time_since_epoch()).count();
+}
+
+StageTimer::StageTimer() : last_(now_ms()) {}
+
+double StageTimer::lap_ms() {
+    glFinish();
+    const double t = now_ms();
+    const double d = t - last_;
+    last_ = t;
+    return d;
+}
+
+}  // namespace deferred

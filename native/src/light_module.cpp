@@ -1,0 +1,67 @@
+#include "light_module.h"
+
+#include "../../shaders/shader_defines.h"
+
+#include <cmath>
+
+namespace deferred {
+
+namespace {
+gpu::vec4 v4(const glm::dvec3& v, double w) {
+    return {float(v.x), float(v.y), float(v.z), float(w)};
+}
+}  // namespace
+
+gpu::GpuLight pack_light(const Light& l, const glm::dvec3& camera_position) {
+    const glm::dmat4 m = to_glm(l.matrix);
+    const glm::dvec3 position = glm::dvec3(m[3]) - camera_position;  // camera-relative, in double
+    const glm::dvec3 x_axis(m[0]), y_axis(m[1]), z_axis(m[2]);
+    const double zlen = glm::length(z_axis);
+    const glm::dvec3 direction = zlen > 0 ? -z_axis / zlen : glm::dvec3(0, 0, -1);
+    const glm::dvec3 S = glm::dvec3(l.color[0], l.color[1], l.color[2]) * double(l.energy);
+
+    gpu::GpuLight g{};
+    g.position_type = v4(position, double(static_cast<std::uint32_t>(l.type)));
+    const double radius = (l.type == LightType::Sun) ? 0.5 * l.angle : l.radius;
+    g.strength = v4(S, radius);
+    const double cs = std::cos(0.5 * double(l.spot_size));
+    g.direction = v4(direction, cs);
+    // Area extents: size along the object's X axis, size_y (RECTANGLE/ELLIPSE)
+    // or size along Y, both scaled by the object's scale (Cycles 3.4 light.cpp).
+    const bool separate_y = l.shape == AreaShape::Rectangle || l.shape == AreaShape::Ellipse;
+    const double sx = l.size, sy = separate_y ? l.size_y : l.size;
+    const glm::dvec3 half_x = 0.5 * sx * x_axis, half_y = 0.5 * sy * y_axis;
+    const bool ellipse = l.shape == AreaShape::Disk || l.shape == AreaShape::Ellipse;
+    g.axis_x = v4(half_x, (1.0 - cs) * double(l.spot_blend));
+    g.axis_y = v4(half_y, ellipse ? AREA_ELLIPSE : AREA_RECT);
+    const double area = 4.0 * glm::length(half_x) * glm::length(half_y) * (ellipse ? M_PI / 4.0 : 1.0);
+    g.params = {float(area), l.cast_shadow ? 1.0f : 0.0f, 0.0f, 0.0f};
+    return g;
+}
+
+void LightModule::sync(const std::vector<Light>& lights, const glm::dvec3& camera_position) {
+    std::vector<gpu::GpuLight> packed;
+    packed.reserve(lights.size());
+    for (auto& t : has_type_) t = false;
+    for (const Light& l : lights) {
+        // Lights that cannot contribute are dropped here, not in the shader.
+        if (l.energy == 0.0f || (l.color[0] == 0 && l.color[1] == 0 && l.color[2] == 0)) continue;
+        if (l.type == LightType::Area && (l.size <= 0 || (l.shape == AreaShape::Rectangle && l.size_y <= 0) ||
+                                          (l.shape == AreaShape::Ellipse && l.size_y <= 0)))
+            continue;  // zero-size area light: no emitting surface (Cycles renders nothing either)
+        packed.push_back(pack_light(l, camera_position));
+        has_type_[static_cast<int>(l.type)] = true;
+    }
+    count_ = static_cast<std::uint32_t>(packed.size());
+    buffer_ = make_storage_buffer(packed.data(), packed.size() * sizeof(gpu::GpuLight), "lights");
+}
+
+void LightModule::add_defines(ShaderVariant& variant) const {
+    static const char* names[4] = {"HAS_POINT_LIGHTS", "HAS_SPOT_LIGHTS", "HAS_SUN_LIGHTS", "HAS_AREA_LIGHTS"};
+    for (int i = 0; i < 4; ++i)
+        if (has_type_[i]) variant.defines.push_back(names[i]);
+}
+
+void LightModule::bind() const { glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_LIGHTS, buffer_.get()); }
+
+}  // namespace deferred

@@ -1,0 +1,35 @@
+// Lights -> GpuLight array (camera-relative), plus the shader defines for the
+// light types present (only those get code in the lighting shader).
+#pragma once
+
+#include "camera.h"
+#include "gl_util.h"
+#include "shader_library.h"
+
+#include "../../shaders/shader_shared.h"
+
+#include <deferred/scene.h>
+
+#include <vector>
+
+namespace deferred {
+
+// One Blender light as the lighting shader reads it (see shader_shared.h),
+// with Cycles 3.4's conventions applied: spot cone from spot_size/blend, area
+// extents scaled by the object's X/Y scale, ellipse area pi/4 u v.
+gpu::GpuLight pack_light(const Light& light, const glm::dvec3& camera_position);
+
+class LightModule {
+public:
+    void sync(const std::vector<Light>& lights, const glm::dvec3& camera_position);
+    void add_defines(ShaderVariant& variant) const;
+    void bind() const;
+    std::uint32_t count() const { return count_; }
+
+private:
+    Buffer buffer_;
+    std::uint32_t count_ = 0;
+    bool has_type_[4] = {false, false, false, false};
+};
+
+}  // namespace deferred

@@ -1,0 +1,389 @@
+// Renderer: owns every module (EEVEE Next's Instance pattern) and runs the
+// frame: sync scene -> geometry pass (G-buffer) -> lighting (compute) ->
+// passes (compute) -> readback. All GL work happens on the render thread.
+#include <deferred/renderer.h>
+
+#include "camera.h"
+#include "egl_context.h"
+#include "gbuffer.h"
+#include "gl_util.h"
+#include "light_module.h"
+#include "render_thread.h"
+#include "scene_store.h"
+#include "shader_library.h"
+
+#include "../../shaders/shader_defines.h"
+#include "../../shaders/shader_shared.h"
+
+#include <cmath>
+#include <cstddef>
+#include <cstdlib>
+#include <memory>
+#include <optional>
+
+namespace deferred {
+
+namespace {
+
+// Points per light shape (a 4x4 grid) per sample for the Monte Carlo parts
+// of disk and area lights (shaders/light_lib.glsl).
+constexpr std::uint32_t kLightShapePoints = 16;
+
+gpu::mat4 to_gpu(const glm::dmat4& m) {
+    gpu::mat4 r{};
+    for (int c = 0; c < 4; ++c)
+        r.cols[c] = {float(m[c][0]), float(m[c][1]), float(m[c][2]), float(m[c][3])};
+    return r;
+}
+
+std::string gl_string(GLenum name) {
+    const GLubyte* s = glGetString(name);
+    return s ? reinterpret_cast<const char*>(s) : "";
+}
+
+// Memory a frame may allocate for its targets, checked before allocating:
+// DEFERRED_MEMORY_BUDGET_MB, default 8192 MiB.
+std::size_t memory_budget_bytes() {
+    std::size_t mb = 8192;
+    if (const char* env = std::getenv("DEFERRED_MEMORY_BUDGET_MB")) {
+        char* end = nullptr;
+        unsigned long v = std::strtoul(env, &end, 10);
+        if (end && *end == '\0' && v > 0) mb = v;
+    }
+    return mb << 20;
+}
+
+}  // namespace
+
+const PassImage* FrameResult::find(Pass p) const {
+    for (const PassImage& img : passes)
+        if (img.pass == p) return &img;
+    return nullptr;
+}
+
+struct Renderer::Impl {
+    // Declaration order is destruction order reversed: GL objects must die
+    // before the context, and everything before the thread.
+    RenderThread thread;
+    std::unique_ptr<EglContext> context;
+    GLInfo info;
+    std::optional<ShaderLibrary> shaders;
+    SceneStore scene;
+    GBuffer gbuffer;
+    LightModule lights;
+    VertexArray empty_vao;
+    Buffer dummy_ssbo;
+    GLint max_texture_size = 0, max_fb_width = 0, max_fb_height = 0;
+
+    ~Impl() {
+        thread.run([this] {
+            // Release every GL object while the context is still current.
+            gbuffer = GBuffer();
+            lights = LightModule();
+            scene.clear();
+            shaders.reset();
+            empty_vao.reset();
+            dummy_ssbo.reset();
+            context.reset();
+        });
+    }
+
+    void init(const ContextOptions& options) {
+        context = std::make_unique<EglContext>(options.device_index);
+        info.vendor = gl_string(GL_VENDOR);
+        info.renderer = gl_string(GL_RENDERER);
+        info.version = gl_string(GL_VERSION);
+        info.display = context->display_description();
+        if (epoxy_gl_version() < 45)
+            throw Error("OpenGL 4.5 core is required, the context gives " + info.version);
+        glGetIntegerv(GL_MAX_TEXTURE_SIZE, &max_texture_size);
+        glGetIntegerv(GL_MAX_FRAMEBUFFER_WIDTH, &max_fb_width);
+        glGetIntegerv(GL_MAX_FRAMEBUFFER_HEIGHT, &max_fb_height);
+        shaders.emplace();
+        GLuint vao = 0;
+        glCreateVertexArrays(1, &vao);
+        empty_vao = VertexArray(vao);
+        dummy_ssbo = make_storage_buffer(nullptr, 16, "dummy");
+        check_gl("initialising the renderer");
+    }
+
+    void check_settings(const RenderSettings& s, std::size_t frame_bytes) const {
+        if (s.width <= 0 || s.height <= 0)
+            throw InvalidInput("resolution " + std::to_string(s.width) + "x" + std::to_string(s.height) +
+                               " must be positive");
+        const int limit_w = std::min(max_texture_size, max_fb_width);
+        const int limit_h = std::min(max_texture_size, max_fb_height);
+        if (s.width > limit_w || s.height > limit_h)
+            throw InvalidInput("resolution " + std::to_string(s.width) + "x" + std::to_string(s.height) +
+                               " exceeds the GPU limit of " + std::to_string(limit_w) + "x" +
+                               std::to_string(limit_h) + " (" + info.renderer + ")");
+        if (frame_bytes > memory_budget_bytes())
+            throw InvalidInput("resolution " + std::to_string(s.width) + "x" + std::to_string(s.height) +
+                               " needs " + std::to_string(frame_bytes >> 20) + " MiB of render targets, over the " +
+                               std::to_string(memory_budget_bytes() >> 20) +
+                               " MiB budget (set DEFERRED_MEMORY_BUDGET_MB to raise it)");
+    }
+
+    FrameResult render(const Camera& camera, const RenderSettings& settings);
+};
+
+FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings& settings) {
+    const PassSet& wanted = settings.passes;
+    GBufferFeatures features;
+    for (const Material& m : scene.materials())
+        if (m.sheen > 1e-5f || m.clearcoat > 1e-5f) features.params1 = true;
+    features.ids = wanted.contains(Pass::IndexOB) || wanted.contains(Pass::IndexMA);
+    features.uv = wanted.contains(Pass::UV);
+    features.emit = wanted.contains(Pass::Emit);
+    const bool light_split = wanted.contains(Pass::DiffDir) || wanted.contains(Pass::GlossDir);
+
+    // Memory check before any allocation: G-buffer + light split + pass
+    // scratch + the CPU copies of the passes.
+    const std::size_t pixels = std::size_t(settings.width > 0 ? settings.width : 0) *
+                               std::size_t(settings.height > 0 ? settings.height : 0);
+    std::size_t per_pixel = 4 + 16 + 8 + 8 + 4 + (features.params1 ? 8 : 0) + (features.ids ? 8 : 0) +
+                            (features.uv ? 8 : 0) + (features.emit ? 16 : 0) + (light_split ? 32 : 0) + 16;
+    for (Pass p : wanted.list()) per_pixel += 4 * std::size_t(pass_info(p).channels);
+    check_settings(settings, pixels * per_pixel);
+
+    FrameResult result;
+    StageTimer timer;
+    const CameraMatrices cam = build_camera(camera_in, settings.width, settings.height);
+
+    // --- Sync: pack per-frame buffers, camera-relative in double. ---
+    std::vector<gpu::GpuInstance> instances;
+    instances.reserve(scene.instance_count());
+    std::vector<std::uint32_t> slots;
+    struct Draw { std::uint32_t mesh, first, count; };
+    std::vector<Draw> draws;
+    for (const InstanceBatch& b : scene.batches()) {
+        const std::uint32_t slot_offset = static_cast<std::uint32_t>(slots.size());
+        slots.insert(slots.end(), b.material_slots.begin(), b.material_slots.end());
+        const std::size_t n = b.object_indices.size();
+        draws.push_back({b.mesh_id, static_cast<std::uint32_t>(instances.size()), static_cast<std::uint32_t>(n)});
+        for (std::size_t i = 0; i < n; ++i) {
+            Mat4d m;
+            std::copy(b.matrices.begin() + long(i * 16), b.matrices.begin() + long(i * 16 + 16), m.begin());
+            glm::dmat4 model = to_glm(m);
+            model[3] = glm::dvec4(glm::dvec3(model[3]) - cam.position, 1.0);
+            const glm::dmat3 linear(model);
+            const double det = glm::determinant(linear);
+            glm::dmat3 nm = std::abs(det) > 1e-300 ? glm::transpose(glm::inverse(linear)) : glm::dmat3(1.0);
+            gpu::GpuInstance g{};
+            g.model = to_gpu(model);
+            g.normal_matrix = to_gpu(glm::dmat4(nm));
+            g.ids = {b.object_indices[i], slot_offset, static_cast<std::uint32_t>(b.material_slots.size()),
+                     det < 0 ? 1u : 0u};
+            instances.push_back(g);
+        }
+    }
+    std::vector<gpu::GpuMaterial> materials;
+    for (const Material& m : scene.materials()) {
+        gpu::GpuMaterial g{};
+        g.base_alpha = {m.base_color[0], m.base_color[1], m.base_color[2], m.alpha};
+        g.params0 = {m.metallic, m.roughness, m.specular, m.specular_tint};
+        g.params1 = {m.sheen, m.sheen_tint, m.clearcoat, m.clearcoat_roughness};
+        g.emission = {m.emission[0] * m.emission_strength, m.emission[1] * m.emission_strength,
+                      m.emission[2] * m.emission_strength, float(m.pass_index)};
+        materials.push_back(g);
+    }
+    Buffer instance_buffer = make_storage_buffer(instances.data(), instances.size() * sizeof(gpu::GpuInstance), "instances");
+    Buffer slot_buffer = make_storage_buffer(slots.data(), slots.size() * sizeof(std::uint32_t), "material slots");
+    Buffer material_buffer = make_storage_buffer(materials.data(), materials.size() * sizeof(gpu::GpuMaterial), "materials");
+    lights.sync(scene.lights(), cam.position);
+
+    gpu::FrameConstants fc{};
+    fc.view = to_gpu(cam.view);
+    fc.projection = to_gpu(cam.projection);
+    fc.inv_view = to_gpu(glm::inverse(cam.view));
+    fc.inv_projection = to_gpu(glm::inverse(cam.projection));
+    fc.camera_position = {float(cam.position.x), float(cam.position.y), float(cam.position.z),
+                          cam.orthographic ? 1.0f : 0.0f};
+    const World& world = scene.world();
+    fc.world_color = {world.color[0], world.color[1], world.color[2], settings.film_transparent ? 1.0f : 0.0f};
+    fc.viewport = {float(settings.width), float(settings.height), 1.0f / float(settings.width),
+                   1.0f / float(settings.height)};
+    const float mist_depth = settings.mist.depth > 0 ? settings.mist.depth : 1e-6f;
+    fc.mist = {settings.mist.start, 1.0f / mist_depth, float(static_cast<std::uint32_t>(settings.mist.falloff)), 0};
+    if (settings.samples < 1 || settings.samples > 65536)
+        throw InvalidInput("samples must be in 1..65536, got " + std::to_string(settings.samples));
+    fc.counts = {lights.count(), wanted.bits(), kLightShapePoints, std::uint32_t(settings.samples)};
+    fc.sample_shift = {0.0f, 0.0f, 0.0f, 0.0f};
+    Buffer frame_buffer = make_storage_buffer(nullptr, sizeof(fc), "frame constants");
+    glNamedBufferSubData(frame_buffer.get(), 0, sizeof(fc), &fc);
+    glBindBufferBase(GL_UNIFORM_BUFFER, UBO_FRAME, frame_buffer.get());
+
+    gbuffer.ensure(settings.width, settings.height, features);
+    Texture diffuse_light, glossy_light;
+    if (light_split) {
+        diffuse_light = make_texture_2d(GL_RGBA32F, settings.width, settings.height, "diffuse light");
+        glossy_light = make_texture_2d(GL_RGBA32F, settings.width, settings.height, "glossy light");
+        const float zero[4] = {0, 0, 0, 0};
+        glClearTexImage(diffuse_light.get(), 0, GL_RGBA, GL_FLOAT, zero);
+        glClearTexImage(glossy_light.get(), 0, GL_RGBA, GL_FLOAT, zero);
+    }
+    result.timings.gbuffer_bytes = gbuffer.bytes() + (light_split ? 32 * pixels : 0);
+
+    // The variant: which G-buffer targets exist.
+    ShaderVariant base_variant;
+    if (features.params1) base_variant.defines.push_back("GBUF_PARAMS1");
+    if (features.ids) base_variant.defines.push_back("GBUF_IDS");
+    if (features.uv) base_variant.defines.push_back("GBUF_UV");
+    if (features.emit) base_variant.defines.push_back("GBUF_EMIT");
+    check_gl("frame sync");
+    result.timings.upload_ms = timer.lap_ms();
+
+    // --- Geometry pass. ---
+    gbuffer.bind_for_geometry();
+    glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_GREATER);  // reversed Z
+    glDepthMask(GL_TRUE);
+    glDisable(GL_CULL_FACE);  // two-sided, as Cycles
+    glDisable(GL_BLEND);
+    glBindVertexArray(empty_vao.get());
+    GLuint geometry = shaders->graphics_program("geometry_vert.glsl", "geometry_frag.glsl", base_variant);
+    glUseProgram(geometry);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_INSTANCES, instance_buffer.get());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_MATERIAL_SLOTS, slot_buffer.get());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_MATERIALS, material_buffer.get());
+    for (const Draw& d : draws) {
+        const GpuMesh& mesh = scene.meshes()[d.mesh];
+        if (mesh.triangle_count == 0) continue;
+        auto bind = [&](GLuint slot, const Buffer& b) {
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, slot, b ? b.get() : dummy_ssbo.get());
+        };
+        bind(SSBO_POSITIONS, mesh.positions);
+        bind(SSBO_INDICES, mesh.indices);
+        bind(SSBO_NORMALS, mesh.normals);
+        bind(SSBO_UVS, mesh.uvs);
+        bind(SSBO_MATERIAL_INDICES, mesh.material_indices);
+        glUniform1ui(0, d.first);
+        glUniform1ui(1, mesh.flags);
+        glDrawArraysInstanced(GL_TRIANGLES, 0, GLsizei(mesh.triangle_count * 3), GLsizei(d.count));
+    }
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    check_gl("geometry pass");
+    result.timings.geometry_ms = timer.lap_ms();
+
+    // --- Lighting pass. ---
+    const GLuint groups_x = GLuint((settings.width + LIGHTING_GROUP_SIZE - 1) / LIGHTING_GROUP_SIZE);
+    const GLuint groups_y = GLuint((settings.height + LIGHTING_GROUP_SIZE - 1) / LIGHTING_GROUP_SIZE);
+    glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+    ShaderVariant lighting_variant = base_variant;
+    lights.add_defines(lighting_variant);
+    if (light_split) lighting_variant.defines.push_back("OUT_LIGHT_SPLIT");
+    glUseProgram(shaders->compute_program("lighting_comp.glsl", lighting_variant));
+    gbuffer.bind_textures();
+    lights.bind();
+    glBindImageTexture(IMG_FILM, gbuffer.film(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
+    if (light_split) {
+        glBindImageTexture(IMG_DIFF_LIGHT, diffuse_light.get(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+        glBindImageTexture(IMG_GLOSS_LIGHT, glossy_light.get(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+    }
+    for (int sample = 0; sample < settings.samples; ++sample) {
+        // R2 low-discrepancy sequence (Roberts 2018) as the Cranley-Patterson
+        // shift of the light-shape grid; sample 0 uses the grid as is.
+        const double s = double(sample);
+        fc.sample_shift = {float(std::fmod(s * 0.7548776662466927, 1.0)),
+                           float(std::fmod(s * 0.5698402909980532, 1.0)), 0.0f, 0.0f};
+        glNamedBufferSubData(frame_buffer.get(), offsetof(gpu::FrameConstants, sample_shift),
+                             sizeof(fc.sample_shift), &fc.sample_shift);
+        glDispatchCompute(groups_x, groups_y, 1);
+        glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+    }
+    glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT |
+                    GL_TEXTURE_UPDATE_BARRIER_BIT);
+    check_gl("lighting pass");
+    result.timings.lighting_ms = timer.lap_ms();
+
+    // --- Passes: one small compute per requested pass, then readback. ---
+    auto read = [&](GLuint texture, Pass pass) {
+        const PassInfo& info = pass_info(pass);
+        PassImage img;
+        img.pass = pass;
+        img.width = settings.width;
+        img.height = settings.height;
+        img.channels = info.channels;
+        img.pixels.resize(pixels * std::size_t(info.channels));
+        const GLenum format = info.channels == 1 ? GL_RED : info.channels == 3 ? GL_RGB : GL_RGBA;
+        glPixelStorei(GL_PACK_ALIGNMENT, 1);
+        glGetTextureImage(texture, 0, format, GL_FLOAT, GLsizei(img.pixels.size() * sizeof(float)),
+                          img.pixels.data());
+        result.passes.push_back(std::move(img));
+    };
+    double readback_ms = 0;
+    read(gbuffer.film(), Pass::Combined);
+    readback_ms += timer.lap_ms();
+    Texture scratch;
+    double passes_ms = 0;
+    for (Pass p : wanted.list()) {
+        if (p == Pass::Combined) continue;
+        if (!scratch) scratch = make_texture_2d(GL_RGBA32F, settings.width, settings.height, "pass scratch");
+        ShaderVariant v = base_variant;
+        v.defines.push_back("PASS_ID " + std::to_string(static_cast<int>(p)));
+        if (light_split) v.defines.push_back("OUT_LIGHT_SPLIT");
+        glUseProgram(shaders->compute_program("passes_comp.glsl", v));
+        gbuffer.bind_textures();
+        if (light_split) {
+            glBindTextureUnit(TEX_DIFF_LIGHT, diffuse_light.get());
+            glBindTextureUnit(TEX_GLOSS_LIGHT, glossy_light.get());
+        }
+        glBindImageTexture(IMG_PASS_OUT, scratch.get(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+        glDispatchCompute(groups_x, groups_y, 1);
+        glMemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT | GL_PIXEL_BUFFER_BARRIER_BIT);
+        passes_ms += timer.lap_ms();
+        read(scratch.get(), p);
+        readback_ms += timer.lap_ms();
+    }
+    check_gl("passes and readback");
+    result.timings.passes_ms = passes_ms;
+    result.timings.readback_ms = readback_ms;
+    result.timings.total_ms = result.timings.upload_ms + result.timings.geometry_ms + result.timings.lighting_ms +
+                              passes_ms + readback_ms;
+    return result;
+}
+
+Renderer::Renderer(const ContextOptions& options) : impl_(std::make_unique<Impl>()) {
+    try {
+        impl_->thread.run([&] { impl_->init(options); });
+    } catch (...) {
+        impl_.reset();  // ~Impl releases whatever init created, on the thread
+        throw;
+    }
+}
+
+Renderer::~Renderer() = default;
+
+const GLInfo& Renderer::gl_info() const { return impl_->info; }
+
+void Renderer::clear_scene() {
+    impl_->thread.run([&] { impl_->scene.clear(); });
+}
+
+std::uint32_t Renderer::add_mesh(const MeshData& mesh) {
+    return impl_->thread.run([&] { return impl_->scene.add_mesh(mesh); });
+}
+
+std::uint32_t Renderer::add_material(const Material& material) {
+    return impl_->thread.run([&] { return impl_->scene.add_material(material); });
+}
+
+void Renderer::add_instances(std::uint32_t mesh_id, const double* matrices, std::size_t count,
+                             const std::uint32_t* object_indices, const std::vector<std::uint32_t>& material_slots) {
+    impl_->thread.run([&] { impl_->scene.add_instances(mesh_id, matrices, count, object_indices, material_slots); });
+}
+
+void Renderer::add_light(const Light& light) {
+    impl_->thread.run([&] { impl_->scene.add_light(light); });
+}
+
+void Renderer::set_world(const World& world) {
+    impl_->thread.run([&] { impl_->scene.set_world(world); });
+}
+
+FrameResult Renderer::render(const Camera& camera, const RenderSettings& settings) {
+    return impl_->thread.run([&] { return impl_->render(camera, settings); });
+}
+
+}  // namespace deferred

@@ -1,0 +1,49 @@
+// Builds GL programs from the embedded GLSL files.
+//
+// A shader file names its dependencies with `#include "file"` lines (the
+// shared C++/GLSL headers included); the library expands them once each,
+// prepends `#version 450 core` and the variant's `#define`s, and emits
+// `#line <line> <file id>` before every chunk so that a compile error is
+// reported as "bsdf_lib.glsl:42: ..." instead of a source-string number.
+// Programs are cached per (files, defines): only variants a scene needs are
+// ever compiled.
+#pragma once
+
+#include "gl_util.h"
+
+#include <map>
+#include <string>
+#include <vector>
+
+namespace deferred {
+
+struct ShaderVariant {
+    std::vector<std::string> defines;  // "NAME" or "NAME VALUE"
+    std::string key() const;
+};
+
+class ShaderLibrary {
+public:
+    ShaderLibrary();
+
+    // Expanded source of one file (for tests and error messages).
+    std::string expand(const std::string& file, const ShaderVariant& variant) const;
+
+    GLuint compute_program(const std::string& comp_file, const ShaderVariant& variant);
+    GLuint graphics_program(const std::string& vert_file, const std::string& frag_file,
+                            const ShaderVariant& variant);
+
+    std::size_t compiled_program_count() const { return programs_.size(); }
+
+private:
+    GLuint compile_stage(GLenum stage, const std::string& file, const ShaderVariant& variant) const;
+    GLuint link(const std::vector<GLuint>& stages, const std::string& label) const;
+    void expand_into(const std::string& file, std::string& out, std::vector<std::string>& included) const;
+    std::string map_log(const std::string& log) const;
+
+    std::map<std::string, std::string> sources_;
+    std::vector<std::string> file_ids_;  // #line source-string number -> file name
+    std::map<std::string, Program> programs_;
+};
+
+}  // namespace deferred

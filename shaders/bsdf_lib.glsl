@@ -1,0 +1,153 @@
+/* Blender 3.4 Principled BSDF as Cycles evaluates it for light sampling
+ * (intern/cycles/kernel/closure: bsdf_principled_diffuse.h,
+ * bsdf_principled_sheen.h, bsdf_microfacet.h; svm_closure.h for the weights).
+ * Every function returns BSDF x cos(theta_l) for unit incident radiance, the
+ * quantity Cycles' bsdf_eval returns. Formulas: shared/REFERENCE.md section 2.
+ * The CPU oracle (tests/oracle) implements the same in double. */
+
+#include "gbuffer_lib.glsl"
+
+#define M_PI_F 3.14159265358979
+#define M_1_PI_F 0.318309886183791
+
+/* Cycles' luminance approximation for tints (svm_closure.h, "luminance approx."). */
+vec3 principled_tint(vec3 base) {
+    float lum = 0.3 * base.r + 0.6 * base.g + 0.1 * base.b;
+    return lum > 0.0 ? base / lum : vec3(1.0);
+}
+
+float schlick_fresnel(float u) {
+    float m = clamp(1.0 - u, 0.0, 1.0);
+    float m2 = m * m;
+    return m2 * m2 * m;
+}
+
+/* Exact dielectric Fresnel (Cycles fresnel_dielectric_cos). */
+float fresnel_dielectric_cos(float cosi, float eta) {
+    float c = abs(cosi);
+    float g = eta * eta - 1.0 + c * c;
+    if (g > 0.0) {
+        g = sqrt(g);
+        float A = (g - c) / (g + c);
+        float B = (c * (g + c) - 1.0) / (c * (g - c) + 1.0);
+        return 0.5 * A * A * (1.0 + B * B);
+    }
+    return 1.0;
+}
+
+/* Smith G1 for GGX, separable form used by Cycles 3.4. */
+float ggx_G1(float alpha2, float cos_theta) {
+    float c2 = cos_theta * cos_theta;
+    return 2.0 / (1.0 + sqrt(1.0 + alpha2 * (1.0 - c2) / c2));
+}
+
+/* Closure weights of one surface (svm_closure.h, NODE_CLOSURE_BSDF principled). */
+struct PrincipledWeights {
+    vec3 diffuse;      /* base * (1 - metallic): the diffuse closure colour */
+    vec3 sheen;        /* sheen * (1 - metallic) * mix(1, tint, sheen_tint) */
+    vec3 cspec0;       /* specular colour at normal incidence */
+    float spec_eta;    /* IOR giving F0 = 0.08 * specular */
+    float spec_F0;
+    float alpha2;      /* GGX alpha^2, alpha = roughness^2 */
+    float clearcoat;   /* clearcoat weight (0.25 factor applied in eval) */
+    float cc_alpha;    /* GTR1 alpha = clearcoat_roughness^2 */
+};
+
+PrincipledWeights principled_weights(SurfaceParams s) {
+    PrincipledWeights w;
+    float m = clamp(s.metallic, 0.0, 1.0);
+    float wd = 1.0 - m; /* transmission is 0 in this parameter set */
+    vec3 tint = principled_tint(s.base_color);
+    w.diffuse = s.base_color * wd;
+    w.sheen = s.sheen > 1e-5 ? s.sheen * wd * mix(vec3(1.0), tint, s.sheen_tint) : vec3(0.0);
+    float spec = max(s.specular, 0.0);
+    w.cspec0 = spec * 0.08 * mix(vec3(1.0), tint, s.specular_tint) * (1.0 - m) + s.base_color * m;
+    w.spec_eta = 2.0 / (1.0 - sqrt(0.08 * spec)) - 1.0;
+    w.spec_F0 = fresnel_dielectric_cos(1.0, w.spec_eta);
+    float alpha = clamp(s.roughness * s.roughness, 0.0, 1.0);
+    w.alpha2 = alpha * alpha;
+    w.clearcoat = s.clearcoat > 1e-5 ? s.clearcoat : 0.0;
+    float cca = clamp(s.clearcoat_roughness * s.clearcoat_roughness, 0.0, 1.0);
+    w.cc_alpha = cca;
+    return w;
+}
+
+/* Diffuse closure colour and glossy closure weight, for DiffCol/GlossCol. */
+vec3 principled_diffuse_color(PrincipledWeights w) { return w.diffuse + w.sheen; }
+vec3 principled_glossy_color(PrincipledWeights w) { return vec3(1.0 + (w.clearcoat > 0.0 ? 1.0 : 0.0)); }
+
+/* Burley diffuse with retro-reflection, without the colour: the factor B
+ * such that f cos = base wd / pi * B * cos_l (bsdf_principled_diffuse.h). */
+float principled_diffuse_factor(float NdotL, float NdotV, float LdotV, float roughness) {
+    if (NdotL <= 0.0) return 0.0;
+    float FL = schlick_fresnel(NdotL), FV = schlick_fresnel(NdotV);
+    float RR = roughness * (1.0 + LdotV); /* 2 roughness cos^2(theta_d) */
+    float f = (1.0 - 0.5 * FL) * (1.0 - 0.5 * FV) + RR * (FL + FV + FL * FV * (RR - 1.0));
+    return f * M_1_PI_F * NdotL;
+}
+
+/* Sheen without the weight: f cos = (1 - L.H)^5 cos_l (bsdf_principled_sheen.h). */
+float principled_sheen_factor(vec3 N, vec3 V, vec3 L) {
+    float NdotL = dot(N, L), NdotV = dot(N, V);
+    if (NdotL < 0.0 || NdotV < 0.0) return 0.0;
+    vec3 H = normalize(L + V);
+    return schlick_fresnel(dot(L, H)) * NdotL;
+}
+
+/* GGX specular, f cos = F D G / (4 cos_v) (bsdf_microfacet_ggx_eval_reflect),
+ * with Cycles' principled Fresnel interpolation (interpolate_fresnel_color). */
+vec3 principled_specular(PrincipledWeights w, vec3 N, vec3 V, vec3 L) {
+    float NdotV = dot(N, V), NdotL = dot(N, L);
+    /* Cycles returns nothing from light sampling for a near-delta lobe. */
+    if (w.alpha2 <= 1e-7 || NdotL <= 0.0 || NdotV <= 0.0) return vec3(0.0);
+    NdotV = max(NdotV, 1e-4);
+    vec3 H = normalize(L + V);
+    float cosH = dot(N, H);
+    if (cosH <= 0.0) return vec3(0.0);
+    float cosH2 = cosH * cosH;
+    float tanH2 = (1.0 - cosH2) / cosH2;
+    float denom = w.alpha2 + tanH2;
+    float D = w.alpha2 / (M_PI_F * cosH2 * cosH2 * denom * denom);
+    float G = ggx_G1(w.alpha2, NdotV) * ggx_G1(w.alpha2, NdotL);
+    float FH = (fresnel_dielectric_cos(dot(L, H), w.spec_eta) - w.spec_F0) / (1.0 - w.spec_F0);
+    vec3 F = w.cspec0 * (1.0 - FH) + vec3(FH);
+    return F * (D * G * 0.25 / NdotV);
+}
+
+/* Clearcoat: GTR1 distribution, Smith G with fixed alpha 0.25, dielectric
+ * Fresnel at IOR 1.5 times 0.25 clearcoat (bsdf_microfacet.h, 3.4). */
+float principled_clearcoat(PrincipledWeights w, vec3 N, vec3 V, vec3 L) {
+    float NdotV = dot(N, V), NdotL = dot(N, L);
+    if (w.clearcoat <= 0.0 || w.cc_alpha * w.cc_alpha <= 1e-7 || NdotL <= 0.0 || NdotV <= 0.0) return 0.0;
+    NdotV = max(NdotV, 1e-4);
+    vec3 H = normalize(L + V);
+    float cosH = dot(N, H);
+    if (cosH <= 0.0) return 0.0;
+    float a = w.cc_alpha;
+    float D;
+    if (a >= 1.0) {
+        D = M_1_PI_F;
+    } else {
+        float a2 = a * a;
+        D = (a2 - 1.0) / (M_PI_F * log(a2) * (1.0 + (a2 - 1.0) * cosH * cosH));
+    }
+    float G = ggx_G1(0.0625, NdotV) * ggx_G1(0.0625, NdotL);
+    float F = fresnel_dielectric_cos(dot(L, H), 1.5) * 0.25 * w.clearcoat;
+    return F * D * G * 0.25 / NdotV;
+}
+
+/* Both light-transport groups of one incoming direction: diffuse (Burley +
+ * sheen) and glossy (specular + clearcoat), f cos for unit radiance. */
+struct LobeEval {
+    vec3 diffuse;
+    vec3 glossy;
+};
+
+LobeEval principled_eval(SurfaceParams s, PrincipledWeights w, vec3 N, vec3 V, vec3 L) {
+    LobeEval e;
+    float NdotL = dot(N, L);
+    e.diffuse = w.diffuse * principled_diffuse_factor(NdotL, dot(N, V), dot(L, V), s.roughness);
+    if (w.sheen != vec3(0.0)) e.diffuse += w.sheen * principled_sheen_factor(N, V, L);
+    e.glossy = principled_specular(w, N, V, L) + vec3(principled_clearcoat(w, N, V, L));
+    return e;
+}

@@ -1,0 +1,24 @@
+/* Per-frame constants and the scene buffers every pass may read. */
+#include "shader_shared.h"
+#include "shader_defines.h"
+
+layout(std140, binding = UBO_FRAME) uniform FrameBlock { FrameConstants frame; };
+
+bool frame_is_ortho() { return frame.camera_position.w > 0.5; }
+
+/* Direction towards the viewer from a camera-relative position. */
+vec3 frame_view_vector(vec3 P) {
+    if (frame_is_ortho()) return normalize(frame.inv_view[2].xyz);
+    return normalize(-P);
+}
+
+/* Camera-relative world position of a pixel from its reversed-Z depth. */
+vec3 frame_position_from_depth(ivec2 pixel, float depth) {
+    vec2 ndc = (vec2(pixel) + 0.5) * frame.viewport.zw * 2.0 - 1.0;
+    vec4 view = frame.inv_projection * vec4(ndc, depth, 1.0);
+    view /= view.w;
+    return (frame.inv_view * vec4(view.xyz, 1.0)).xyz;
+}
+
+/* Positive camera-space Z (Cycles' Depth pass) of a camera-relative position. */
+float frame_view_depth(vec3 P) { return -(frame.view * vec4(P, 1.0)).z; }

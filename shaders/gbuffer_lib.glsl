@@ -1,0 +1,45 @@
+/* G-buffer layout (one block, next to the code that packs and unpacks it).
+ *
+ *  target        format        contents                                         allocated
+ *  ------------  ------------  -----------------------------------------------  ------------------------
+ *  depth         D32F          reversed Z (near 1, far 0, cleared to 0), with    always
+ *                              glClipControl(LOWER_LEFT, ZERO_TO_ONE); the
+ *                              position is rebuilt from it, never stored
+ *  film          RGBA32F       rgb: emission, then + lighting; a: coverage        always
+ *  base          RGBA16F       rgb: base colour, a: material alpha                always
+ *  params0       RGBA16F       metallic, roughness, specular, specular tint       always
+ *  normal        RG16 unorm    world shading normal, octahedral (32 bits,        always
+ *                              0.0037 deg max error), facing the viewer
+ *  params1       RGBA16F       sheen, sheen tint, clearcoat, clearcoat rough.     scene has sheen/clearcoat (GBUF_PARAMS1)
+ *  ids           RG32UI        object pass index, material pass index             IndexOB/IndexMA (GBUF_IDS)
+ *  uv            RG32F         active UV map                                      UV pass (GBUF_UV)
+ *  emit          RGBA32F       emission only                                      Emit pass (GBUF_EMIT)
+ *
+ * Half floats keep 11 significant bits: roughness 0.5 is stored to 2.4e-4,
+ * well inside what the lighting's accuracy budget allows. */
+
+#include "octahedral_lib.glsl"
+
+struct SurfaceParams {
+    vec3 base_color;
+    float alpha;
+    float metallic, roughness, specular, specular_tint;
+    float sheen, sheen_tint, clearcoat, clearcoat_roughness;
+    vec3 N;
+};
+
+SurfaceParams gbuffer_unpack(vec4 base, vec4 params0, vec4 params1, vec2 normal_enc) {
+    SurfaceParams s;
+    s.base_color = base.rgb;
+    s.alpha = base.a;
+    s.metallic = params0.x;
+    s.roughness = params0.y;
+    s.specular = params0.z;
+    s.specular_tint = params0.w;
+    s.sheen = params1.x;
+    s.sheen_tint = params1.y;
+    s.clearcoat = params1.z;
+    s.clearcoat_roughness = params1.w;
+    s.N = octahedral_decode(normal_enc);
+    return s;
+}

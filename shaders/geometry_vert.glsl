@@ -1,0 +1,50 @@
+/* Geometry pass, vertex stage: vertex pulling. Triangle t, corner c is vertex
+ * 3t + c of a glDrawArraysInstanced call; positions are fetched through the
+ * index buffer, per-corner normals and UVs directly (Blender keeps split
+ * normals and UVs on loops). No vertex arrays, one draw per mesh. */
+#include "frame_lib.glsl"
+
+layout(std430, binding = SSBO_POSITIONS) readonly buffer Positions { float positions[]; };
+layout(std430, binding = SSBO_INDICES) readonly buffer Indices { uint indices[]; };
+layout(std430, binding = SSBO_NORMALS) readonly buffer Normals { float corner_normals[]; };
+layout(std430, binding = SSBO_UVS) readonly buffer Uvs { vec2 corner_uvs[]; };
+layout(std430, binding = SSBO_MATERIAL_INDICES) readonly buffer MaterialIndices { int material_indices[]; };
+layout(std430, binding = SSBO_INSTANCES) readonly buffer Instances { GpuInstance instances[]; };
+layout(std430, binding = SSBO_MATERIAL_SLOTS) readonly buffer Slots { uint material_slots[]; };
+
+layout(location = 0) uniform uint instance_offset;
+layout(location = 1) uniform uint mesh_flags;  /* 1: normals, 2: uvs, 4: material indices */
+
+out vec3 v_position;  /* camera-relative world */
+out vec3 v_normal;    /* world, unnormalised */
+out vec2 v_uv;
+flat out uint v_material;
+flat out uint v_object_index;
+flat out uint v_mirrored;
+
+void main() {
+    const uint corner = uint(gl_VertexID);
+    const uint triangle = corner / 3u;
+    GpuInstance inst = instances[instance_offset + uint(gl_InstanceID)];
+
+    const uint vi = indices[corner];
+    vec3 p = vec3(positions[3u * vi], positions[3u * vi + 1u], positions[3u * vi + 2u]);
+    vec4 world = inst.model * vec4(p, 1.0);
+    v_position = world.xyz;
+    gl_Position = frame.projection * (frame.view * world);
+
+    v_normal = vec3(0.0);
+    if ((mesh_flags & 1u) != 0u) {
+        vec3 n = vec3(corner_normals[3u * corner], corner_normals[3u * corner + 1u], corner_normals[3u * corner + 2u]);
+        v_normal = mat3(inst.normal_matrix) * n;
+    }
+    v_uv = (mesh_flags & 2u) != 0u ? corner_uvs[corner] : vec2(0.0);
+
+    /* Slot -> material id through the instance's slot map; out-of-range slots
+     * were rejected on upload, the clamp only guards against driver surprises. */
+    int slot = (mesh_flags & 4u) != 0u ? material_indices[triangle] : 0;
+    uint s = min(uint(max(slot, 0)), max(inst.ids.z, 1u) - 1u);
+    v_material = material_slots[inst.ids.y + s];
+    v_object_index = inst.ids.x;
+    v_mirrored = inst.ids.w;
+}

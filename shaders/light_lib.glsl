@@ -1,0 +1,237 @@
+/* Light evaluation with Cycles 3.4's light units (intern/cycles/kernel/light/
+ * light.h and shared/REFERENCE.md section 2). S = colour x energy.
+ *
+ *  point/spot, R = 0 : delta light, E = S cos / (4 pi d^2) (x spot attenuation)
+ *  point/spot, R > 0 : Cycles samples a disk of radius R centred on the light
+ *                      and facing the shading point, radiance S / (4 pi pi R^2)
+ *                      (eval_fac = 1/(4 pi) * invarea): shaded as that disk;
+ *                      the spot attenuation is taken per disk point
+ *                      (measured against Cycles 3.4.1: tools/cycles_probe)
+ *  sun               : E = S cos (delta direction; the disk comes with sampling)
+ *  area              : one-sided towards -Z, radiance S / (4 A)
+ *
+ * Disks and area lights are shaded in two parts (Arvo 1995 vector irradiance,
+ * used as a control variate):
+ *  - the Lambertian projected solid angle is EXACT: the vector irradiance
+ *    J = 1/2 sum theta_i normalize(v_i x v_i+1) of the light's outline
+ *    clipped to the surface's horizon (polygons: Sutherland-Hodgman; disks and
+ *    ellipses: the contour integral 1/2 closed-integral (r x dr)/|r|^2 by
+ *    Gauss-Legendre quadrature, plus the straight chord where the horizon cuts);
+ *  - the diffuse and sheen lobes are that exact term times their value in the
+ *    direction of J, plus a Monte Carlo correction over K stratified points
+ *    of the light; the glossy lobes are Monte Carlo over the same points.
+ * The points are a G x G grid shifted by frame.sample_shift (Cranley-Patterson
+ * rotation), so accumulating samples with different shifts converges to the
+ * integral Cycles computes. */
+
+#include "bsdf_lib.glsl"
+
+struct LightContribution {
+    vec3 diffuse; /* radiance through the diffuse group (with albedo) */
+    vec3 glossy;
+};
+
+float spot_attenuation(GpuLight light, vec3 light_to_point) {
+    /* Cycles 3.4 spot_attenuation, with its leading cos factor. */
+    float cs = light.direction.w, smooth_w = light.axis_x.w;
+    float c = dot(light.direction.xyz, light_to_point);
+    if (c <= cs) return 0.0;
+    float t = c - cs;
+    float att = c;
+    if (t < smooth_w && smooth_w != 0.0) {
+        float x = t / smooth_w;
+        att *= x * x * (3.0 - 2.0 * x);
+    }
+    return att;
+}
+
+/* Edge term of the vector irradiance: theta * normalize(a x b). */
+vec3 edge_vector_irradiance(vec3 a, vec3 b) {
+    vec3 c = cross(a, b);
+    float s = length(c);
+    if (s <= 0.0) return vec3(0.0);
+    return c * (atan(s, dot(a, b)) / s);
+}
+
+/* Twice the vector irradiance of the rectangle c +- a +- b (relative to the
+ * shading point) clipped to the half space dot(N, x) >= 0. */
+vec3 rect_vector_irradiance(vec3 c, vec3 a, vec3 b, vec3 N) {
+    vec3 quad[4] = vec3[4](c - a - b, c + a - b, c + a + b, c - a + b);
+    vec3 poly[5];
+    int n = 0;
+    for (int i = 0; i < 4; ++i) {
+        vec3 p = quad[i], q = quad[(i + 1) & 3];
+        float dp = dot(N, p), dq = dot(N, q);
+        if (dp >= 0.0) poly[n++] = p;
+        if ((dp >= 0.0) != (dq >= 0.0)) poly[n++] = p + (q - p) * (dp / (dp - dq));
+    }
+    vec3 J = vec3(0.0);
+    for (int i = 0; i < n; ++i) J += edge_vector_irradiance(poly[i], poly[(i + 1) % n]);
+    return J;
+}
+
+/* Gauss-Legendre, 8 nodes on [-1, 1]. */
+const float GL8_X[4] = float[4](0.1834346424956498, 0.5255324099163290, 0.7966664774136267, 0.9602898564975363);
+const float GL8_W[4] = float[4](0.3626837833783620, 0.3137066458778873, 0.2223810344533745, 0.1012285362903763);
+#define ELLIPSE_PANELS 4
+
+vec3 ellipse_point(vec3 c, vec3 a, vec3 b, float t) { return c + a * cos(t) + b * sin(t); }
+vec3 ellipse_integrand(vec3 c, vec3 a, vec3 b, float t) {
+    vec3 r = c + a * cos(t) + b * sin(t);
+    vec3 dr = -a * sin(t) + b * cos(t);
+    return cross(r, dr) / max(dot(r, r), 1e-30);
+}
+
+/* Twice the vector irradiance of the ellipse c + a cos t + b sin t, clipped
+ * to dot(N, x) >= 0: closed integral of (r x dr)/|r|^2 over the visible arc
+ * plus the chord the horizon cuts. */
+vec3 ellipse_vector_irradiance(vec3 c, vec3 a, vec3 b, vec3 N) {
+    float p = dot(N, c), na = dot(N, a), nb = dot(N, b);
+    float q = sqrt(na * na + nb * nb);
+    float t0 = 0.0, t1 = 2.0 * M_PI_F;
+    bool clipped = false;
+    if (p <= -q) return vec3(0.0);
+    if (p < q) {
+        float phi = atan(nb, na);
+        float beta = acos(clamp(-p / q, -1.0, 1.0));
+        t0 = phi - beta;
+        t1 = phi + beta;
+        clipped = true;
+    }
+    vec3 J = vec3(0.0);
+    float panel = (t1 - t0) / float(ELLIPSE_PANELS);
+    for (int k = 0; k < ELLIPSE_PANELS; ++k) {
+        float mid = t0 + (float(k) + 0.5) * panel, half_w = 0.5 * panel;
+        for (int i = 0; i < 4; ++i) {
+            J += (GL8_W[i] * half_w) * (ellipse_integrand(c, a, b, mid + half_w * GL8_X[i]) +
+                                       ellipse_integrand(c, a, b, mid - half_w * GL8_X[i]));
+        }
+    }
+    if (clipped) J += edge_vector_irradiance(ellipse_point(c, a, b, t1), ellipse_point(c, a, b, t0));
+    return J;
+}
+
+/* Shirley-Chiu concentric map of [0,1)^2 onto the unit disk. */
+vec2 concentric_disk(vec2 u) {
+    vec2 o = 2.0 * u - 1.0;
+    if (o == vec2(0.0)) return vec2(0.0);
+    float r, theta;
+    if (abs(o.x) > abs(o.y)) { r = o.x; theta = (M_PI_F / 4.0) * (o.y / o.x); }
+    else { r = o.y; theta = (M_PI_F / 2.0) - (M_PI_F / 4.0) * (o.x / o.y); }
+    return r * vec2(cos(theta), sin(theta));
+}
+
+/* Shade one planar emitter: outline c + a, b (relative to the shading point),
+ * radiance `radiance` x a spot attenuation that Cycles evaluates per sampled
+ * point (att_center at the centre; spot lights only, 1 otherwise), emitting
+ * along `emit_dir` (unit). */
+LightContribution shade_planar_light(vec3 c, vec3 a, vec3 b, bool ellipse, vec3 emit_dir, vec3 radiance,
+                                     GpuLight light, bool spot, float att_center,
+                                     SurfaceParams s, PrincipledWeights w, vec3 N, vec3 V) {
+    LightContribution r;
+    r.diffuse = vec3(0.0);
+    r.glossy = vec3(0.0);
+    vec3 J2 = ellipse ? ellipse_vector_irradiance(c, a, b, N) : rect_vector_irradiance(c, a, b, N);
+    float proj = 0.5 * dot(N, J2); /* projected solid angle, sign from the outline's orientation */
+    vec3 Jdir = proj < 0.0 ? -J2 : J2;
+    proj = abs(proj);
+
+    /* Control variate: diffuse BSDF value (f, not f cos) in the direction of J. */
+    vec3 diffuse_at_J = vec3(0.0);
+    float jlen = length(Jdir);
+    if (proj > 0.0 && jlen > 0.0) {
+        vec3 L = Jdir / jlen;
+        float NdotL = dot(N, L);
+        if (NdotL > 1e-4) diffuse_at_J = principled_eval(s, w, N, V, L).diffuse / NdotL;
+    }
+    r.diffuse = diffuse_at_J * (proj * att_center);
+
+    uint K = max(frame.counts.z, 1u);
+    uint G = uint(sqrt(float(K)) + 0.5);
+    G = max(G, 1u);
+    float area = ellipse ? M_PI_F * length(a) * length(b) : 4.0 * length(a) * length(b);
+    float weight = area / float(G * G);
+    vec3 mc_diffuse = vec3(0.0), mc_glossy = vec3(0.0);
+    for (uint j = 0u; j < G; ++j) {
+        for (uint i = 0u; i < G; ++i) {
+            vec2 u = fract((vec2(i, j) + 0.5) / float(G) + frame.sample_shift.xy);
+            vec2 xy = ellipse ? concentric_disk(u) : 2.0 * u - 1.0;
+            vec3 pt = c + a * xy.x + b * xy.y;
+            float t2 = dot(pt, pt);
+            if (t2 <= 1e-20) continue;
+            vec3 L = pt * inversesqrt(t2);
+            float cos_l = -dot(emit_dir, L);
+            if (cos_l <= 0.0) continue;
+            float geom = cos_l / t2 * weight;
+            float att = spot ? spot_attenuation(light, -L) : 1.0;
+            LobeEval e = principled_eval(s, w, N, V, L);
+            mc_diffuse += (e.diffuse * att - diffuse_at_J * (att_center * max(dot(N, L), 0.0))) * geom;
+            mc_glossy += e.glossy * (att * geom);
+        }
+    }
+    r.diffuse = (r.diffuse + mc_diffuse) * radiance;
+    r.glossy = mc_glossy * radiance;
+    return r;
+}
+
+/* Any vector perpendicular to unit n, and a second completing the basis. */
+void make_basis(vec3 n, out vec3 t, out vec3 bt) {
+    vec3 up = abs(n.z) < 0.999 ? vec3(0.0, 0.0, 1.0) : vec3(1.0, 0.0, 0.0);
+    t = normalize(cross(up, n));
+    bt = cross(n, t);
+}
+
+LightContribution shade_light(GpuLight light, SurfaceParams s, PrincipledWeights w, vec3 P, vec3 N, vec3 V) {
+    LightContribution r;
+    r.diffuse = vec3(0.0);
+    r.glossy = vec3(0.0);
+    const int type = int(light.position_type.w);
+    const vec3 S = light.strength.rgb;
+
+#if defined(HAS_POINT_LIGHTS) || defined(HAS_SPOT_LIGHTS)
+    if (type == LIGHT_POINT || type == LIGHT_SPOT) {
+        vec3 to_light = light.position_type.xyz - P;
+        float d2 = dot(to_light, to_light);
+        if (d2 <= 1e-20) return r;
+        vec3 L = to_light * inversesqrt(d2);
+        bool spot = type == LIGHT_SPOT;
+        float att = spot ? spot_attenuation(light, -L) : 1.0;
+        float R = light.strength.w;
+        if (R <= 0.0) {
+            if (att <= 0.0) return r;
+            LobeEval e = principled_eval(s, w, N, V, L);
+            vec3 scale = S * (att / (4.0 * M_PI_F * d2));
+            r.diffuse = e.diffuse * scale;
+            r.glossy = e.glossy * scale;
+            return r;
+        }
+        vec3 a, b;
+        make_basis(L, a, b);
+        /* Spot attenuation per sampled disk point, as Cycles 3.4 does. */
+        vec3 radiance = S / (4.0 * M_PI_F * M_PI_F * R * R);
+        return shade_planar_light(to_light, a * R, b * R, true, -L, radiance, light, spot, att, s, w, N, V);
+    }
+#endif
+#ifdef HAS_SUN_LIGHTS
+    if (type == LIGHT_SUN) {
+        vec3 L = -light.direction.xyz;
+        LobeEval e = principled_eval(s, w, N, V, L);
+        r.diffuse = e.diffuse * S;
+        r.glossy = e.glossy * S;
+        return r;
+    }
+#endif
+#ifdef HAS_AREA_LIGHTS
+    if (type == LIGHT_AREA) {
+        vec3 c = light.position_type.xyz - P;
+        /* One-sided: only points in front of the emitting (-Z) face. */
+        if (dot(-c, light.direction.xyz) <= 0.0) return r;
+        float A = light.params.x;
+        if (A <= 0.0) return r;
+        vec3 radiance = S / (4.0 * A);
+        return shade_planar_light(c, light.axis_x.xyz, light.axis_y.xyz, int(light.axis_y.w) == AREA_ELLIPSE,
+                                  light.direction.xyz, radiance, light, false, 1.0, s, w, N, V);
+    }
+#endif
+    return r;
+}

@@ -1,0 +1,91 @@
+/* Lighting pass: one invocation per pixel, every light (culling comes with
+ * the many-lights work). Adds direct light to the film, which the geometry
+ * pass filled with emission, once per sample (frame.sample_shift moves the
+ * light-shape points between samples); optionally keeps the diffuse and glossy light
+ * apart for the DiffDir/GlossDir passes. Variants: HAS_<TYPE>_LIGHTS for the
+ * light types present, GBUF_PARAMS1, OUT_LIGHT_SPLIT. */
+#include "frame_lib.glsl"
+#include "gbuffer_lib.glsl"
+#include "light_lib.glsl"
+
+layout(local_size_x = LIGHTING_GROUP_SIZE, local_size_y = LIGHTING_GROUP_SIZE) in;
+
+layout(std430, binding = SSBO_LIGHTS) readonly buffer Lights { GpuLight lights[]; };
+
+layout(binding = TEX_DEPTH) uniform sampler2D gbuf_depth;
+layout(binding = TEX_GBUF_BASE) uniform sampler2D gbuf_base;
+layout(binding = TEX_GBUF_PARAMS0) uniform sampler2D gbuf_params0;
+layout(binding = TEX_GBUF_NORMAL) uniform sampler2D gbuf_normal;
+#ifdef GBUF_PARAMS1
+layout(binding = TEX_GBUF_PARAMS1) uniform sampler2D gbuf_params1;
+#endif
+
+layout(binding = IMG_FILM, rgba32f) uniform image2D film;
+#ifdef OUT_LIGHT_SPLIT
+layout(binding = IMG_DIFF_LIGHT, rgba32f) uniform image2D diffuse_light;
+layout(binding = IMG_GLOSS_LIGHT, rgba32f) uniform image2D glossy_light;
+#endif
+
+/* World light at max_bounces 0, for now unshadowed: the constant world colour
+ * times the diffuse closure colour (Lambertian irradiance pi Lw times f = c/pi)
+ * and times the GGX directional albedo of the specular closure, from the
+ * analytic fit of Karis 2014 ("Physically Based Shading on Mobile"). Both are
+ * approximations of what Cycles integrates; occlusion is ignored. */
+LightContribution world_light(PrincipledWeights w, SurfaceParams s, float NdotV) {
+    LightContribution r;
+    vec3 Lw = frame.world_color.rgb;
+    r.diffuse = Lw * (w.diffuse + w.sheen);
+    const vec4 c0 = vec4(-1.0, -0.0275, -0.572, 0.022);
+    const vec4 c1 = vec4(1.0, 0.0425, 1.04, -0.04);
+    vec4 k = s.roughness * c0 + c1;
+    float a004 = min(k.x * k.x, exp2(-9.28 * max(NdotV, 0.0))) * k.x + k.y;
+    vec2 AB = vec2(-1.04, 1.04) * a004 + k.zw;
+    r.glossy = Lw * (w.cspec0 * AB.x + AB.y);
+    return r;
+}
+
+void main() {
+    ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
+    if (any(greaterThanEqual(pixel, ivec2(frame.viewport.xy)))) return;
+
+    float depth = texelFetch(gbuf_depth, pixel, 0).r;
+    if (depth <= 0.0) {
+        /* Background: the world colour, or transparent (Cycles film_transparent). */
+        bool transparent = frame.world_color.w > 0.5;
+        imageStore(film, pixel, transparent ? vec4(0.0) : vec4(frame.world_color.rgb, 1.0));
+#ifdef OUT_LIGHT_SPLIT
+        imageStore(diffuse_light, pixel, vec4(0.0));
+        imageStore(glossy_light, pixel, vec4(0.0));
+#endif
+        return;
+    }
+
+    vec4 params1 = vec4(0.0);
+#ifdef GBUF_PARAMS1
+    params1 = texelFetch(gbuf_params1, pixel, 0);
+#endif
+    SurfaceParams s = gbuffer_unpack(texelFetch(gbuf_base, pixel, 0), texelFetch(gbuf_params0, pixel, 0), params1,
+                                     texelFetch(gbuf_normal, pixel, 0).rg);
+    PrincipledWeights w = principled_weights(s);
+    vec3 P = frame_position_from_depth(pixel, depth);
+    vec3 V = frame_view_vector(P);
+    vec3 N = s.N;
+
+    LightContribution total = world_light(w, s, dot(N, V));
+    const uint light_count = frame.counts.x;
+    for (uint i = 0u; i < light_count; ++i) {
+        LightContribution c = shade_light(lights[i], s, w, P, N, V);
+        total.diffuse += c.diffuse;
+        total.glossy += c.glossy;
+    }
+
+    /* Each of the frame's samples adds its share (1/samples) to the film. */
+    float share = 1.0 / float(max(frame.counts.w, 1u));
+    vec4 f = imageLoad(film, pixel);
+    f.rgb += (total.diffuse + total.glossy) * share;
+    imageStore(film, pixel, f);
+#ifdef OUT_LIGHT_SPLIT
+    imageStore(diffuse_light, pixel, imageLoad(diffuse_light, pixel) + vec4(total.diffuse * share, 0.0));
+    imageStore(glossy_light, pixel, imageLoad(glossy_light, pixel) + vec4(total.glossy * share, 0.0));
+#endif
+}

@@ -1,0 +1,104 @@
+/* Writes one render pass (PASS_ID, one of the PASS_* ids) from the G-buffer
+ * into a float image, with Cycles' conventions (shared/REFERENCE.md):
+ * Depth is planar camera Z (background 1e10), Position and Normal are world
+ * space (background 0), DiffDir/GlossDir are light divided by their colour
+ * pass, Env is the world where the background is seen. Combined is the film
+ * itself and needs no shader. Compiled only for the passes requested. */
+#include "frame_lib.glsl"
+#include "gbuffer_lib.glsl"
+#include "bsdf_lib.glsl"
+
+layout(local_size_x = LIGHTING_GROUP_SIZE, local_size_y = LIGHTING_GROUP_SIZE) in;
+
+layout(binding = TEX_DEPTH) uniform sampler2D gbuf_depth;
+layout(binding = TEX_GBUF_BASE) uniform sampler2D gbuf_base;
+layout(binding = TEX_GBUF_PARAMS0) uniform sampler2D gbuf_params0;
+layout(binding = TEX_GBUF_NORMAL) uniform sampler2D gbuf_normal;
+#ifdef GBUF_PARAMS1
+layout(binding = TEX_GBUF_PARAMS1) uniform sampler2D gbuf_params1;
+#endif
+#ifdef GBUF_IDS
+layout(binding = TEX_GBUF_IDS) uniform usampler2D gbuf_ids;
+#endif
+#ifdef GBUF_UV
+layout(binding = TEX_GBUF_UV) uniform sampler2D gbuf_uv;
+#endif
+#ifdef GBUF_EMIT
+layout(binding = TEX_GBUF_EMIT) uniform sampler2D gbuf_emit;
+#endif
+#ifdef OUT_LIGHT_SPLIT
+layout(binding = TEX_DIFF_LIGHT) uniform sampler2D diffuse_light;
+layout(binding = TEX_GLOSS_LIGHT) uniform sampler2D glossy_light;
+#endif
+
+layout(binding = IMG_PASS_OUT, rgba32f) uniform writeonly image2D pass_out;
+
+SurfaceParams load_surface(ivec2 pixel) {
+    vec4 params1 = vec4(0.0);
+#ifdef GBUF_PARAMS1
+    params1 = texelFetch(gbuf_params1, pixel, 0);
+#endif
+    return gbuffer_unpack(texelFetch(gbuf_base, pixel, 0), texelFetch(gbuf_params0, pixel, 0), params1,
+                          texelFetch(gbuf_normal, pixel, 0).rg);
+}
+
+vec3 safe_divide(vec3 a, vec3 b) {
+    return vec3(b.x != 0.0 ? a.x / b.x : 0.0, b.y != 0.0 ? a.y / b.y : 0.0, b.z != 0.0 ? a.z / b.z : 0.0);
+}
+
+void main() {
+    ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
+    if (any(greaterThanEqual(pixel, ivec2(frame.viewport.xy)))) return;
+    float depth = texelFetch(gbuf_depth, pixel, 0).r;
+    bool background = depth <= 0.0;
+    vec4 value = vec4(0.0);
+    vec3 P = background ? vec3(0.0) : frame_position_from_depth(pixel, depth);
+
+#if PASS_ID == PASS_DEPTH
+    value = vec4(background ? 1e10 : frame_view_depth(P));
+#elif PASS_ID == PASS_MIST
+    /* Cycles: distance along the ray (planar for orthographic cameras),
+     * mapped by start/depth and the falloff exponent; background 1. */
+    float dist = frame_is_ortho() ? frame_view_depth(P) : length(P);
+    float mist = clamp((dist - frame.mist.x) * frame.mist.y, 0.0, 1.0);
+    int falloff = int(frame.mist.z);
+    if (falloff == 0) mist = mist * mist;
+    else if (falloff == 2) mist = sqrt(mist);
+    value = vec4(background ? 1.0 : mist);
+#elif PASS_ID == PASS_POSITION
+    value = background ? vec4(0.0) : vec4(P + frame.camera_position.xyz, 0.0);
+#elif PASS_ID == PASS_NORMAL
+    value = background ? vec4(0.0) : vec4(octahedral_decode(texelFetch(gbuf_normal, pixel, 0).rg), 0.0);
+#elif PASS_ID == PASS_UV
+    value = background ? vec4(0.0) : vec4(texelFetch(gbuf_uv, pixel, 0).rg, 1.0, 0.0);
+#elif PASS_ID == PASS_INDEX_OB
+    value = vec4(background ? 0.0 : float(texelFetch(gbuf_ids, pixel, 0).x));
+#elif PASS_ID == PASS_INDEX_MA
+    value = vec4(background ? 0.0 : float(texelFetch(gbuf_ids, pixel, 0).y));
+#elif PASS_ID == PASS_DIFF_COL || PASS_ID == PASS_DIFF_DIR
+    if (!background) {
+        vec3 color = principled_diffuse_color(principled_weights(load_surface(pixel)));
+#if PASS_ID == PASS_DIFF_COL
+        value = vec4(color, 0.0);
+#else
+        value = vec4(safe_divide(texelFetch(diffuse_light, pixel, 0).rgb, color), 0.0);
+#endif
+    }
+#elif PASS_ID == PASS_GLOSS_COL || PASS_ID == PASS_GLOSS_DIR
+    if (!background) {
+        vec3 color = principled_glossy_color(principled_weights(load_surface(pixel)));
+#if PASS_ID == PASS_GLOSS_COL
+        value = vec4(color, 0.0);
+#else
+        value = vec4(safe_divide(texelFetch(glossy_light, pixel, 0).rgb, color), 0.0);
+#endif
+    }
+#elif PASS_ID == PASS_EMIT
+    value = background ? vec4(0.0) : vec4(texelFetch(gbuf_emit, pixel, 0).rgb, 0.0);
+#elif PASS_ID == PASS_ENV
+    value = background ? vec4(frame.world_color.rgb, 0.0) : vec4(0.0);
+#else
+#error "passes_comp.glsl: unknown PASS_ID"
+#endif
+    imageStore(pass_out, pixel, value);
+}

@@ -1,0 +1,68 @@
+/* Every binding slot and workgroup size, shared by C++ and GLSL, so the two
+ * sides cannot disagree on where a buffer or image lives. */
+#ifndef DEFERRED_SHADER_DEFINES_H
+#define DEFERRED_SHADER_DEFINES_H
+
+/* Uniform blocks */
+#define UBO_FRAME 0
+
+/* Shader storage buffers */
+#define SSBO_POSITIONS 0
+#define SSBO_INDICES 1
+#define SSBO_NORMALS 2
+#define SSBO_UVS 3
+#define SSBO_MATERIAL_INDICES 4
+#define SSBO_INSTANCES 5
+#define SSBO_MATERIAL_SLOTS 6
+#define SSBO_MATERIALS 7
+#define SSBO_LIGHTS 8
+
+/* Textures sampled by compute passes (G-buffer inputs) */
+#define TEX_DEPTH 0
+#define TEX_GBUF_BASE 1
+#define TEX_GBUF_PARAMS0 2
+#define TEX_GBUF_NORMAL 3
+#define TEX_GBUF_PARAMS1 4
+#define TEX_GBUF_IDS 5
+#define TEX_GBUF_UV 6
+#define TEX_GBUF_EMIT 7
+#define TEX_FILM 8
+#define TEX_DIFF_LIGHT 9
+#define TEX_GLOSS_LIGHT 10
+
+/* Images written by compute passes */
+#define IMG_FILM 0
+#define IMG_DIFF_LIGHT 1  /* diffuse direct light, with albedo (divided later) */
+#define IMG_GLOSS_LIGHT 2
+#define IMG_PASS_OUT 3
+
+/* Fragment outputs of the geometry pass (G-buffer MRT) */
+#define OUT_FILM 0
+#define OUT_BASE 1
+#define OUT_PARAMS0 2
+#define OUT_NORMAL 3
+#define OUT_PARAMS1 4
+#define OUT_IDS 5
+#define OUT_UV 6
+#define OUT_EMIT 7
+
+/* Pass ids (deferred::Pass; static_assert'ed in native/src/passes.cpp) */
+#define PASS_COMBINED 0
+#define PASS_DEPTH 1
+#define PASS_MIST 2
+#define PASS_POSITION 3
+#define PASS_NORMAL 4
+#define PASS_UV 5
+#define PASS_INDEX_OB 6
+#define PASS_INDEX_MA 7
+#define PASS_DIFF_DIR 8
+#define PASS_DIFF_COL 9
+#define PASS_GLOSS_DIR 10
+#define PASS_GLOSS_COL 11
+#define PASS_EMIT 12
+#define PASS_ENV 13
+
+/* Compute workgroup size (8x8 pixels) */
+#define LIGHTING_GROUP_SIZE 8
+
+#endif

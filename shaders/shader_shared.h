@@ -1,0 +1,103 @@
+/* Structs the GPU reads, compiled both as C++ (native/) and as GLSL (shaders/).
+ *
+ * Every member is a vec4/uvec4/mat4 so that std140 and std430 layouts equal
+ * the C++ layout with no hidden padding; the static asserts below pin the
+ * sizes. Positions are camera-relative (the camera position is subtracted in
+ * double on the CPU), so float32 keeps sub-millimetre precision even when the
+ * scene sits 1e6 m from the origin. */
+#ifndef DEFERRED_SHADER_SHARED_H
+#define DEFERRED_SHADER_SHARED_H
+
+#ifdef __cplusplus
+#include <cstdint>
+namespace deferred::gpu {
+struct alignas(16) vec4 { float x, y, z, w; };
+struct alignas(16) uvec4 { std::uint32_t x, y, z, w; };
+struct alignas(16) mat4 { vec4 cols[4]; };
+#define SHARED_STRUCT(name) struct alignas(16) name
+#define SHARED_ASSERT_SIZE(name, bytes) static_assert(sizeof(name) == (bytes) && alignof(name) == 16, #name " layout drifted")
+#else
+#define SHARED_STRUCT(name) struct name
+#define SHARED_ASSERT_SIZE(name, bytes)
+#endif
+
+/* Light types (GpuLight.position_type.w) and area shapes (GpuLight.axis_y.w). */
+#define LIGHT_POINT 0
+#define LIGHT_SPOT 1
+#define LIGHT_SUN 2
+#define LIGHT_AREA 3
+#define AREA_RECT 0
+#define AREA_ELLIPSE 1
+
+/* One light, in camera-relative world space.
+ *   position_type : xyz position, w = LIGHT_* type
+ *   strength      : rgb = colour x energy (S, Watts; sun W/m^2), w = sphere radius R (point/spot)
+ *                   or the sun's angular radius (angle/2)
+ *   direction     : xyz = the light's -Z axis (unit), w = cos(spot_size/2)
+ *   axis_x        : xyz = area half-extent along the light's X axis (size/2 x X scale), w = spot blend width (1-cs)*blend
+ *   axis_y        : xyz = area half-extent along the light's Y axis, w = AREA_* shape
+ *   params        : x = area A (m^2, pi/4 factor for ellipses), y = cast shadow (0/1), zw unused */
+SHARED_STRUCT(GpuLight) {
+    vec4 position_type;
+    vec4 strength;
+    vec4 direction;
+    vec4 axis_x;
+    vec4 axis_y;
+    vec4 params;
+};
+SHARED_ASSERT_SIZE(GpuLight, 96);
+
+/* One material (Blender 3.4 Principled BSDF constants).
+ *   base_alpha : rgb base colour, a alpha
+ *   params0    : metallic, roughness, specular, specular_tint
+ *   params1    : sheen, sheen_tint, clearcoat, clearcoat_roughness
+ *   emission   : rgb emission colour x strength, w = material pass index */
+SHARED_STRUCT(GpuMaterial) {
+    vec4 base_alpha;
+    vec4 params0;
+    vec4 params1;
+    vec4 emission;
+};
+SHARED_ASSERT_SIZE(GpuMaterial, 64);
+
+/* One mesh instance.
+ *   model         : object -> camera-relative world
+ *   normal_matrix : inverse transpose of model's 3x3 (w column unused)
+ *   ids           : x object pass index, y offset of its material slot map in
+ *                   the slot buffer, z slot count, w 1 if mirrored (negative determinant) */
+SHARED_STRUCT(GpuInstance) {
+    mat4 model;
+    mat4 normal_matrix;
+    uvec4 ids;
+};
+SHARED_ASSERT_SIZE(GpuInstance, 144);
+
+/* Per-frame constants (std140 uniform block FrameBlock).
+ *   view            : camera-relative world -> view (rotation only)
+ *   projection      : view -> clip, reversed Z (near -> 1, far -> 0)
+ *   inv_view, inv_projection
+ *   camera_position : xyz world position of the camera (for the Position pass), w = 1 if orthographic
+ *   world_color     : rgb world colour, w = 1 if film transparent
+ *   viewport        : width, height, 1/width, 1/height
+ *   mist            : start, 1/depth, falloff (0 quadratic, 1 linear, 2 inverse quadratic), unused
+ *   counts          : x light count, y requested pass bits, z light-shape points K per sample, w samples
+ *   sample_shift    : xy Cranley-Patterson shift of the light-shape sample grid, zw unused */
+SHARED_STRUCT(FrameConstants) {
+    mat4 view;
+    mat4 projection;
+    mat4 inv_view;
+    mat4 inv_projection;
+    vec4 camera_position;
+    vec4 world_color;
+    vec4 viewport;
+    vec4 mist;
+    uvec4 counts;
+    vec4 sample_shift;
+};
+SHARED_ASSERT_SIZE(FrameConstants, 352);
+
+#ifdef __cplusplus
+}  // namespace deferred::gpu
+#endif
+
+#endif

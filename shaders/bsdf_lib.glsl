@@ -10,9 +10,18 @@
 #define M_PI_F 3.14159265358979
 #define M_1_PI_F 0.318309886183791
 
-/* Cycles' luminance approximation for tints (svm_closure.h, "luminance approx."). */
+/* Closures whose weight is below this are never allocated (CLOSURE_WEIGHT_CUTOFF). */
+#define CLOSURE_WEIGHT_CUTOFF 1e-5
+
+/* Specular tint: Cycles' luminance approximation (svm_closure.h, "luminance approx."). */
 vec3 principled_tint(vec3 base) {
     float lum = 0.3 * base.r + 0.6 * base.g + 0.1 * base.b;
+    return lum > 0.0 ? base / lum : vec3(1.0);
+}
+
+/* Sheen tint: linear_rgb_to_gray, the Rec.709 luminance of Blender's OCIO config. */
+vec3 principled_sheen_tint(vec3 base) {
+    float lum = dot(base, vec3(0.2126729, 0.7151522, 0.0721750));
     return lum > 0.0 ? base / lum : vec3(1.0);
 }
 
@@ -35,10 +44,12 @@ float fresnel_dielectric_cos(float cosi, float eta) {
     return 1.0;
 }
 
-/* Smith G1 for GGX, separable form used by Cycles 3.4. */
-float ggx_G1(float alpha2, float cos_theta) {
-    float c2 = cos_theta * cos_theta;
-    return 2.0 / (1.0 + sqrt(1.0 + alpha2 * (1.0 - c2) / c2));
+/* Smith G1 for GGX, separable form used by Cycles 3.4. sin^2 comes from a
+ * cross product: 1 - cos^2 cancels catastrophically in float near cos = 1. */
+float ggx_G1(float alpha2, vec3 N, vec3 D) {
+    float c = dot(N, D);
+    vec3 nxd = cross(N, D);
+    return 2.0 / (1.0 + sqrt(1.0 + alpha2 * dot(nxd, nxd) / (c * c)));
 }
 
 /* Closure weights of one surface (svm_closure.h, NODE_CLOSURE_BSDF principled). */
@@ -46,6 +57,7 @@ struct PrincipledWeights {
     vec3 diffuse;      /* base * (1 - metallic): the diffuse closure colour */
     vec3 sheen;        /* sheen * (1 - metallic) * mix(1, tint, sheen_tint) */
     vec3 cspec0;       /* specular colour at normal incidence */
+    float specular;    /* 1 if the specular closure exists, else 0 */
     float spec_eta;    /* IOR giving F0 = 0.08 * specular */
     float spec_F0;
     float alpha2;      /* GGX alpha^2, alpha = roughness^2 */
@@ -57,16 +69,22 @@ PrincipledWeights principled_weights(SurfaceParams s) {
     PrincipledWeights w;
     float m = clamp(s.metallic, 0.0, 1.0);
     float wd = 1.0 - m; /* transmission is 0 in this parameter set */
-    vec3 tint = principled_tint(s.base_color);
-    w.diffuse = s.base_color * wd;
-    w.sheen = s.sheen > 1e-5 ? s.sheen * wd * mix(vec3(1.0), tint, s.sheen_tint) : vec3(0.0);
+    bool diffuse = abs(s.base_color.r + s.base_color.g + s.base_color.b) / 3.0 > CLOSURE_WEIGHT_CUTOFF &&
+                   wd > CLOSURE_WEIGHT_CUTOFF;
+    w.diffuse = diffuse ? s.base_color * wd : vec3(0.0);
+    w.sheen = wd > CLOSURE_WEIGHT_CUTOFF && s.sheen > CLOSURE_WEIGHT_CUTOFF
+                  ? s.sheen * wd * mix(vec3(1.0), principled_sheen_tint(s.base_color), s.sheen_tint)
+                  : vec3(0.0);
     float spec = max(s.specular, 0.0);
-    w.cspec0 = spec * 0.08 * mix(vec3(1.0), tint, s.specular_tint) * (1.0 - m) + s.base_color * m;
+    w.specular = (s.specular > CLOSURE_WEIGHT_CUTOFF || s.metallic > CLOSURE_WEIGHT_CUTOFF) ? 1.0 : 0.0;
+    /* bsdf_microfacet_ggx_fresnel_setup saturates cspec0. */
+    w.cspec0 = clamp(spec * 0.08 * mix(vec3(1.0), principled_tint(s.base_color), s.specular_tint) * (1.0 - m) +
+                         s.base_color * m, 0.0, 1.0);
     w.spec_eta = 2.0 / (1.0 - sqrt(0.08 * spec)) - 1.0;
     w.spec_F0 = fresnel_dielectric_cos(1.0, w.spec_eta);
     float alpha = clamp(s.roughness * s.roughness, 0.0, 1.0);
     w.alpha2 = alpha * alpha;
-    w.clearcoat = s.clearcoat > 1e-5 ? s.clearcoat : 0.0;
+    w.clearcoat = s.clearcoat > CLOSURE_WEIGHT_CUTOFF ? s.clearcoat : 0.0;
     float cca = clamp(s.clearcoat_roughness * s.clearcoat_roughness, 0.0, 1.0);
     w.cc_alpha = cca;
     return w;
@@ -74,7 +92,7 @@ PrincipledWeights principled_weights(SurfaceParams s) {
 
 /* Diffuse closure colour and glossy closure weight, for DiffCol/GlossCol. */
 vec3 principled_diffuse_color(PrincipledWeights w) { return w.diffuse + w.sheen; }
-vec3 principled_glossy_color(PrincipledWeights w) { return vec3(1.0 + (w.clearcoat > 0.0 ? 1.0 : 0.0)); }
+vec3 principled_glossy_color(PrincipledWeights w) { return vec3(w.specular + (w.clearcoat > 0.0 ? 1.0 : 0.0)); }
 
 /* Burley diffuse with retro-reflection, without the colour: the factor B
  * such that f cos = base wd / pi * B * cos_l (bsdf_principled_diffuse.h). */
@@ -99,16 +117,16 @@ float principled_sheen_factor(vec3 N, vec3 V, vec3 L) {
 vec3 principled_specular(PrincipledWeights w, vec3 N, vec3 V, vec3 L) {
     float NdotV = dot(N, V), NdotL = dot(N, L);
     /* Cycles returns nothing from light sampling for a near-delta lobe. */
-    if (w.alpha2 <= 1e-7 || NdotL <= 0.0 || NdotV <= 0.0) return vec3(0.0);
-    NdotV = max(NdotV, 1e-4);
+    if (w.specular == 0.0 || w.alpha2 <= 1e-7 || NdotL <= 0.0 || NdotV <= 0.0) return vec3(0.0);
     vec3 H = normalize(L + V);
     float cosH = dot(N, H);
     if (cosH <= 0.0) return vec3(0.0);
     float cosH2 = cosH * cosH;
-    float tanH2 = (1.0 - cosH2) / cosH2;
+    vec3 nxh = cross(N, H);
+    float tanH2 = dot(nxh, nxh) / cosH2;
     float denom = w.alpha2 + tanH2;
     float D = w.alpha2 / (M_PI_F * cosH2 * cosH2 * denom * denom);
-    float G = ggx_G1(w.alpha2, NdotV) * ggx_G1(w.alpha2, NdotL);
+    float G = ggx_G1(w.alpha2, N, V) * ggx_G1(w.alpha2, N, L);
     float FH = (fresnel_dielectric_cos(dot(L, H), w.spec_eta) - w.spec_F0) / (1.0 - w.spec_F0);
     vec3 F = w.cspec0 * (1.0 - FH) + vec3(FH);
     return F * (D * G * 0.25 / NdotV);
@@ -119,7 +137,6 @@ vec3 principled_specular(PrincipledWeights w, vec3 N, vec3 V, vec3 L) {
 float principled_clearcoat(PrincipledWeights w, vec3 N, vec3 V, vec3 L) {
     float NdotV = dot(N, V), NdotL = dot(N, L);
     if (w.clearcoat <= 0.0 || w.cc_alpha * w.cc_alpha <= 1e-7 || NdotL <= 0.0 || NdotV <= 0.0) return 0.0;
-    NdotV = max(NdotV, 1e-4);
     vec3 H = normalize(L + V);
     float cosH = dot(N, H);
     if (cosH <= 0.0) return 0.0;
@@ -131,7 +148,7 @@ float principled_clearcoat(PrincipledWeights w, vec3 N, vec3 V, vec3 L) {
         float a2 = a * a;
         D = (a2 - 1.0) / (M_PI_F * log(a2) * (1.0 + (a2 - 1.0) * cosH * cosH));
     }
-    float G = ggx_G1(0.0625, NdotV) * ggx_G1(0.0625, NdotL);
+    float G = ggx_G1(0.0625, N, V) * ggx_G1(0.0625, N, L);
     float F = fresnel_dielectric_cos(dot(L, H), 1.5) * 0.25 * w.clearcoat;
     return F * D * G * 0.25 / NdotV;
 }

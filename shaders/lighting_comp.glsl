@@ -40,7 +40,7 @@ LightContribution world_light(PrincipledWeights w, SurfaceParams s, float NdotV)
     vec4 k = s.roughness * c0 + c1;
     float a004 = min(k.x * k.x, exp2(-9.28 * max(NdotV, 0.0))) * k.x + k.y;
     vec2 AB = vec2(-1.04, 1.04) * a004 + k.zw;
-    r.glossy = Lw * (w.cspec0 * AB.x + AB.y);
+    r.glossy = Lw * (w.cspec0 * AB.x + AB.y) * w.specular;
     return r;
 }
 

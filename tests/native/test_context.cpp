@@ -1,0 +1,87 @@
+// Headless context: creation, device selection errors, repeated create/destroy,
+// shader error messages.
+#include "gl_test_context.h"
+
+#include "builtin_scenes.h"
+
+#include <deferred/renderer.h>
+
+#include <gtest/gtest.h>
+
+using namespace deferred;
+
+TEST(Context, CreatesGL45CoreAndReportsIt) {
+    Renderer r;
+    const GLInfo& info = r.gl_info();
+    EXPECT_FALSE(info.renderer.empty());
+    EXPECT_NE(info.version.find("4."), std::string::npos) << info.version;
+    EXPECT_FALSE(info.display.empty());
+    std::printf("GL: %s | %s | %s via %s\n", info.vendor.c_str(), info.renderer.c_str(), info.version.c_str(),
+                info.display.c_str());
+}
+
+TEST(Context, MissingDeviceIndexIsAClearError) {
+    ContextOptions o;
+    o.device_index = 999;
+    try {
+        Renderer r(o);
+        FAIL() << "device 999 should not exist";
+    } catch (const Error& e) {
+        const std::string msg = e.what();
+        EXPECT_NE(msg.find("EGL device 999"), std::string::npos) << msg;
+    }
+    // The library still works afterwards.
+    Renderer ok;
+    EXPECT_FALSE(ok.gl_info().renderer.empty());
+}
+
+TEST(Context, RenderersCanBeCreatedAndDestroyedRepeatedly) {
+    for (int i = 0; i < 5; ++i) {
+        Renderer r;
+        tools::MeshArrays plane = tools::make_plane(1.0f);
+        const std::uint32_t mesh = r.add_mesh(plane.view());
+        const std::uint32_t mat = r.add_material(Material{});
+        Mat4d I = identity_matrix();
+        r.add_instances(mesh, I.data(), 1, nullptr, {mat});
+        Camera cam;
+        cam.matrix = tools::translation(0, 0, 3);
+        RenderSettings s;
+        s.width = 16;
+        s.height = 16;
+        FrameResult f = r.render(cam, s);
+        ASSERT_EQ(f.passes.size(), 1u);
+    }
+}
+
+class ShaderErrors : public deferred::testing::GLTest {};
+
+TEST_F(ShaderErrors, CompileErrorNamesFileAndLine) {
+    ShaderVariant v;
+    v.defines.push_back("PASS_ID 99");  // hits the #error in passes_comp.glsl
+    try {
+        shaders().compute_program("passes_comp.glsl", v);
+        FAIL() << "expected a compile error";
+    } catch (const Error& e) {
+        const std::string msg = e.what();
+        EXPECT_NE(msg.find("passes_comp.glsl:"), std::string::npos) << msg;
+        EXPECT_NE(msg.find("unknown PASS_ID"), std::string::npos) << msg;
+    }
+}
+
+TEST_F(ShaderErrors, EveryShipedVariantFamilyCompiles) {
+    // Geometry with every optional target, lighting with every light type and
+    // the light split, and every pass.
+    ShaderVariant full;
+    full.defines = {"GBUF_PARAMS1", "GBUF_IDS", "GBUF_UV", "GBUF_EMIT"};
+    EXPECT_NE(shaders().graphics_program("geometry_vert.glsl", "geometry_frag.glsl", full), 0u);
+    ShaderVariant lighting = full;
+    lighting.defines.insert(lighting.defines.end(), {"HAS_POINT_LIGHTS", "HAS_SPOT_LIGHTS", "HAS_SUN_LIGHTS",
+                                                     "HAS_AREA_LIGHTS", "OUT_LIGHT_SPLIT"});
+    EXPECT_NE(shaders().compute_program("lighting_comp.glsl", lighting), 0u);
+    for (int p = 1; p < int(kPassCount); ++p) {
+        ShaderVariant v = full;
+        v.defines.push_back("OUT_LIGHT_SPLIT");
+        v.defines.push_back("PASS_ID " + std::to_string(p));
+        EXPECT_NE(shaders().compute_program("passes_comp.glsl", v), 0u) << pass_info(Pass(p)).name;
+    }
+}

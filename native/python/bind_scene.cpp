@@ -64,7 +64,7 @@ void declare_scene(py::module_& m) {
         .def(py::init([](const std::string& type, const py::object& matrix, float lens, float sensor_width,
                          float sensor_height, const std::string& sensor_fit, float shift_x, float shift_y,
                          float clip_start, float clip_end, float ortho_scale, float pixel_aspect_x,
-                         float pixel_aspect_y) {
+                         float pixel_aspect_y, const py::object& fov) {
                  Camera c;
                  c.type = enum_from_name<CameraType>(
                      type, {{"PERSP", CameraType::Perspective}, {"ORTHO", CameraType::Orthographic}}, "Camera.type");
@@ -84,13 +84,21 @@ void declare_scene(py::module_& m) {
                  c.ortho_scale = ortho_scale;
                  c.pixel_aspect_x = pixel_aspect_x;
                  c.pixel_aspect_y = pixel_aspect_y;
+                 if (!fov.is_none()) {
+                     // Blender's Camera.fov: 2 atan(sensor / (2 lens)), with the
+                     // sensor dimension chosen by sensor_fit (AUTO: width).
+                     const double f = fov.cast<double>();
+                     if (!(f > 0.0 && f < M_PI)) throw py::value_error("Camera.fov must be in (0, pi) radians");
+                     const double sensor = c.sensor_fit == SensorFit::Vertical ? c.sensor_height : c.sensor_width;
+                     c.lens = float(0.5 * sensor / std::tan(0.5 * f));
+                 }
                  return c;
              }),
              py::kw_only(), py::arg("type") = "PERSP", py::arg("matrix") = py::none(), py::arg("lens") = 50.0f,
              py::arg("sensor_width") = 36.0f, py::arg("sensor_height") = 24.0f, py::arg("sensor_fit") = "AUTO",
              py::arg("shift_x") = 0.0f, py::arg("shift_y") = 0.0f, py::arg("clip_start") = 0.1f,
              py::arg("clip_end") = 100.0f, py::arg("ortho_scale") = 6.0f, py::arg("pixel_aspect_x") = 1.0f,
-             py::arg("pixel_aspect_y") = 1.0f)
+             py::arg("pixel_aspect_y") = 1.0f, py::arg("fov") = py::none())
         .def_readwrite("lens", &Camera::lens)
         .def_readwrite("clip_start", &Camera::clip_start)
         .def_readwrite("clip_end", &Camera::clip_end);

@@ -84,6 +84,17 @@ class ModuleTest(unittest.TestCase):
             self.r.render(camera(), 100000, 100000)
         self.assertIn("100000x100000", str(ctx.exception))
 
+    def test_fov_equals_lens(self):
+        p, i, n = plane(20.0)
+        mesh = self.r.add_mesh(p, i, corner_normals=n)
+        self.r.add_instances(mesh, np.eye(4)[None], material_slots=[self.r.add_material()])
+        m = np.eye(4)
+        m[2, 3] = 5.0
+        pos_lens = self.r.render(dn.Camera(matrix=m, lens=35.0), 16, 9, passes=["Position"])["Position"]
+        fov = 2.0 * np.arctan(36.0 / (2.0 * 35.0))
+        pos_fov = self.r.render(dn.Camera(matrix=m, fov=fov, lens=99.0), 16, 9, passes=["Position"])["Position"]
+        np.testing.assert_allclose(pos_fov, pos_lens, atol=1e-5)
+
     def test_bad_device_index_is_native_error(self):
         with self.assertRaises(dn.Error) as ctx:
             dn.Renderer(device_index=999)

@@ -5,7 +5,7 @@
  *  depth         D32F          reversed Z (near 1, far 0, cleared to 0), with    always
  *                              glClipControl(LOWER_LEFT, ZERO_TO_ONE); the
  *                              position is rebuilt from it, never stored
- *  film          RGBA32F       rgb: emission, then + lighting; a: coverage        always
+ *  emission      RGBA16F       rgb: emission x strength, a: coverage (1)          always
  *  base          RGBA16F       rgb: base colour, a: material alpha                always
  *  params0       RGBA16F       metallic, roughness, specular, specular tint       always
  *  normal        RG16 unorm    world shading normal, octahedral (32 bits,        always
@@ -13,10 +13,11 @@
  *  params1       RGBA16F       sheen, sheen tint, clearcoat, clearcoat rough.     scene has sheen/clearcoat (GBUF_PARAMS1)
  *  ids           RG32UI        object pass index, material pass index             IndexOB/IndexMA (GBUF_IDS)
  *  uv            RG32F         active UV map                                      UV pass (GBUF_UV)
- *  emit          RGBA32F       emission only                                      Emit pass (GBUF_EMIT)
  *
- * Half floats keep 11 significant bits: roughness 0.5 is stored to 2.4e-4,
- * well inside what the lighting's accuracy budget allows. */
+ * Half floats keep 11 significant bits (2.4e-4 relative), well inside the
+ * lighting's accuracy budget; emission above 65504 saturates (a 6.5e4 W/m^2
+ * emitter already clips any display transform). The accumulated film and the
+ * passes live in the Film, not here: the G-buffer is per sample. */
 
 #include "octahedral_lib.glsl"
 

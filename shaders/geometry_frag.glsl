@@ -11,7 +11,7 @@ flat in uint v_material;
 flat in uint v_object_index;
 flat in uint v_mirrored;
 
-layout(location = OUT_FILM) out vec4 out_film;
+layout(location = OUT_EMISSION) out vec4 out_emission;
 layout(location = OUT_BASE) out vec4 out_base;
 layout(location = OUT_PARAMS0) out vec4 out_params0;
 layout(location = OUT_NORMAL) out vec2 out_normal;
@@ -23,9 +23,6 @@ layout(location = OUT_IDS) out uvec2 out_ids;
 #endif
 #ifdef GBUF_UV
 layout(location = OUT_UV) out vec2 out_uv;
-#endif
-#ifdef GBUF_EMIT
-layout(location = OUT_EMIT) out vec4 out_emit;
 #endif
 
 void main() {
@@ -45,7 +42,7 @@ void main() {
         if (back) N = -N;
     }
 
-    out_film = vec4(m.emission.rgb, 1.0);
+    out_emission = vec4(min(m.emission.rgb, vec3(65504.0)), 1.0);
     out_base = m.base_alpha;
     out_params0 = m.params0;
     out_normal = octahedral_encode(N);
@@ -57,8 +54,5 @@ void main() {
 #endif
 #ifdef GBUF_UV
     out_uv = v_uv;
-#endif
-#ifdef GBUF_EMIT
-    out_emit = vec4(m.emission.rgb, 1.0);
 #endif
 }

@@ -7,7 +7,7 @@
  *                      (eval_fac = 1/(4 pi) * invarea): shaded as that disk;
  *                      the spot attenuation is taken per disk point
  *                      (measured against Cycles 3.4.1: tools/cycles_probe)
- *  sun               : E = S cos (delta direction; the disk comes with sampling)
+ *  sun               : E = S cos, one point of its disk per film sample
  *  area              : one-sided towards -Z, radiance S / (4 A)
  *
  * Disks and area lights are shaded in two parts (Arvo 1995 vector irradiance,
@@ -20,9 +20,9 @@
  *  - the diffuse and sheen lobes are that exact term times their value in the
  *    direction of J, plus a Monte Carlo correction over K stratified points
  *    of the light; the glossy lobes are Monte Carlo over the same points.
- * The points are a G x G grid shifted by frame.sample_shift (Cranley-Patterson
- * rotation), so accumulating samples with different shifts converges to the
- * integral Cycles computes. */
+ * The points are one per cell of a G x G grid, placed in each cell at
+ * frame.sample_shift (a low-discrepancy point per film sample), so
+ * accumulating samples converges to the integral Cycles computes. */
 
 #include "bsdf_lib.glsl"
 
@@ -154,7 +154,7 @@ LightContribution shade_planar_light(vec3 c, vec3 a, vec3 b, bool ellipse, vec3 
     vec3 mc_diffuse = vec3(0.0), mc_glossy = vec3(0.0);
     for (uint j = 0u; j < G; ++j) {
         for (uint i = 0u; i < G; ++i) {
-            vec2 u = fract((vec2(i, j) + 0.5) / float(G) + frame.sample_shift.xy);
+            vec2 u = (vec2(i, j) + frame.sample_shift.xy) / float(G);
             vec2 xy = ellipse ? concentric_disk(u) : 2.0 * u - 1.0;
             vec3 pt = c + a * xy.x + b * xy.y;
             float t2 = dot(pt, pt);
@@ -214,7 +214,17 @@ LightContribution shade_light(GpuLight light, SurfaceParams s, PrincipledWeights
 #endif
 #ifdef HAS_SUN_LIGHTS
     if (type == LIGHT_SUN) {
+        /* One point of the sun's disk per sample (angular radius in
+         * strength.w), uniform over the tangent disk as Cycles'
+         * distant_light_sample; sample 0 looks at the centre. */
         vec3 L = -light.direction.xyz;
+        float tan_r = tan(light.strength.w);
+        if (tan_r > 0.0) {
+            vec3 t, bt;
+            make_basis(L, t, bt);
+            vec2 d = concentric_disk(frame.sample_shift.xy) * tan_r;
+            L = normalize(L + t * d.x + bt * d.y);
+        }
         LobeEval e = principled_eval(s, w, N, V, L);
         r.diffuse = e.diffuse * S;
         r.glossy = e.glossy * S;

@@ -1,8 +1,9 @@
 /* Lighting pass: one invocation per pixel, every light (culling comes with
- * the many-lights work). Adds direct light to the film, which the geometry
- * pass filled with emission, once per sample (frame.sample_shift moves the
- * light-shape points between samples); optionally keeps the diffuse and glossy light
- * apart for the DiffDir/GlossDir passes. Variants: HAS_<TYPE>_LIGHTS for the
+ * the many-lights work). Runs once per film sample (the projection is
+ * jittered by the pixel filter, frame.sample_shift moves the light-shape
+ * points) and adds 1/samples of (emission + direct light) to the Combined
+ * accumulation; optionally accumulates the diffuse and glossy light apart
+ * for the DiffDir/GlossDir passes. Variants: HAS_<TYPE>_LIGHTS for the
  * light types present, GBUF_PARAMS1, OUT_LIGHT_SPLIT. */
 #include "frame_lib.glsl"
 #include "gbuffer_lib.glsl"
@@ -13,6 +14,7 @@ layout(local_size_x = LIGHTING_GROUP_SIZE, local_size_y = LIGHTING_GROUP_SIZE) i
 layout(std430, binding = SSBO_LIGHTS) readonly buffer Lights { GpuLight lights[]; };
 
 layout(binding = TEX_DEPTH) uniform sampler2D gbuf_depth;
+layout(binding = TEX_GBUF_EMISSION) uniform sampler2D gbuf_emission;
 layout(binding = TEX_GBUF_BASE) uniform sampler2D gbuf_base;
 layout(binding = TEX_GBUF_PARAMS0) uniform sampler2D gbuf_params0;
 layout(binding = TEX_GBUF_NORMAL) uniform sampler2D gbuf_normal;
@@ -48,15 +50,14 @@ void main() {
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(pixel, ivec2(frame.viewport.xy)))) return;
 
+    /* Each sample adds its share (1/samples) to the accumulations. */
+    float share = 1.0 / float(max(frame.counts.w, 1u));
     float depth = texelFetch(gbuf_depth, pixel, 0).r;
     if (depth <= 0.0) {
         /* Background: the world colour, or transparent (Cycles film_transparent). */
         bool transparent = frame.world_color.w > 0.5;
-        imageStore(film, pixel, transparent ? vec4(0.0) : vec4(frame.world_color.rgb, 1.0));
-#ifdef OUT_LIGHT_SPLIT
-        imageStore(diffuse_light, pixel, vec4(0.0));
-        imageStore(glossy_light, pixel, vec4(0.0));
-#endif
+        vec4 bg = transparent ? vec4(0.0) : vec4(frame.world_color.rgb, 1.0);
+        imageStore(film, pixel, imageLoad(film, pixel) + bg * share);
         return;
     }
 
@@ -79,11 +80,9 @@ void main() {
         total.glossy += c.glossy;
     }
 
-    /* Each of the frame's samples adds its share (1/samples) to the film. */
-    float share = 1.0 / float(max(frame.counts.w, 1u));
-    vec4 f = imageLoad(film, pixel);
-    f.rgb += (total.diffuse + total.glossy) * share;
-    imageStore(film, pixel, f);
+    vec4 emission = texelFetch(gbuf_emission, pixel, 0);
+    vec4 sample_value = vec4(emission.rgb + total.diffuse + total.glossy, emission.a);
+    imageStore(film, pixel, imageLoad(film, pixel) + sample_value * share);
 #ifdef OUT_LIGHT_SPLIT
     imageStore(diffuse_light, pixel, imageLoad(diffuse_light, pixel) + vec4(total.diffuse * share, 0.0));
     imageStore(glossy_light, pixel, imageLoad(glossy_light, pixel) + vec4(total.glossy * share, 0.0));

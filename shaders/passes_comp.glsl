@@ -1,9 +1,15 @@
-/* Writes one render pass (PASS_ID, one of the PASS_* ids) from the G-buffer
- * into a float image, with Cycles' conventions (shared/REFERENCE.md):
- * Depth is planar camera Z (background 1e10), Position and Normal are world
- * space (background 0), DiffDir/GlossDir are light divided by their colour
- * pass, Env is the world where the background is seen. Combined is the film
- * itself and needs no shader. Compiled only for the passes requested. */
+/* One render pass (PASS_ID, one of the PASS_* ids) from the G-buffer, with
+ * Cycles' conventions (shared/REFERENCE.md): Depth is planar camera Z
+ * (background 1e10), Position and Normal are world space (background 0),
+ * DiffDir/GlossDir are light divided by their colour pass, Env is the world
+ * where the background is seen. Combined is accumulated by the lighting pass.
+ *
+ * Variants: ACCUMULATE adds 1/samples of this sample's value to the pass
+ * image (filtered passes, every sample); without it the value is written
+ * once (Depth, Position, IndexOB, IndexMA: sample 0, the pixel centre, as
+ * Cycles). DiffDir/GlossDir accumulate their colour during the samples and
+ * RESOLVE_LIGHT divides the accumulated light by it at the end, as Cycles
+ * divides the accumulated passes. Compiled only for the passes requested. */
 #include "frame_lib.glsl"
 #include "gbuffer_lib.glsl"
 #include "bsdf_lib.glsl"
@@ -11,6 +17,7 @@
 layout(local_size_x = LIGHTING_GROUP_SIZE, local_size_y = LIGHTING_GROUP_SIZE) in;
 
 layout(binding = TEX_DEPTH) uniform sampler2D gbuf_depth;
+layout(binding = TEX_GBUF_EMISSION) uniform sampler2D gbuf_emission;
 layout(binding = TEX_GBUF_BASE) uniform sampler2D gbuf_base;
 layout(binding = TEX_GBUF_PARAMS0) uniform sampler2D gbuf_params0;
 layout(binding = TEX_GBUF_NORMAL) uniform sampler2D gbuf_normal;
@@ -23,15 +30,12 @@ layout(binding = TEX_GBUF_IDS) uniform usampler2D gbuf_ids;
 #ifdef GBUF_UV
 layout(binding = TEX_GBUF_UV) uniform sampler2D gbuf_uv;
 #endif
-#ifdef GBUF_EMIT
-layout(binding = TEX_GBUF_EMIT) uniform sampler2D gbuf_emit;
-#endif
-#ifdef OUT_LIGHT_SPLIT
+#ifdef RESOLVE_LIGHT
 layout(binding = TEX_DIFF_LIGHT) uniform sampler2D diffuse_light;
 layout(binding = TEX_GLOSS_LIGHT) uniform sampler2D glossy_light;
 #endif
 
-layout(binding = IMG_PASS_OUT, rgba32f) uniform writeonly image2D pass_out;
+layout(binding = IMG_PASS_OUT, rgba32f) uniform image2D pass_out;
 
 SurfaceParams load_surface(ivec2 pixel) {
     vec4 params1 = vec4(0.0);
@@ -49,6 +53,15 @@ vec3 safe_divide(vec3 a, vec3 b) {
 void main() {
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(pixel, ivec2(frame.viewport.xy)))) return;
+
+#ifdef RESOLVE_LIGHT
+#if PASS_ID == PASS_DIFF_DIR
+    vec3 light = texelFetch(diffuse_light, pixel, 0).rgb;
+#else
+    vec3 light = texelFetch(glossy_light, pixel, 0).rgb;
+#endif
+    imageStore(pass_out, pixel, vec4(safe_divide(light, imageLoad(pass_out, pixel).rgb), 0.0));
+#else
     float depth = texelFetch(gbuf_depth, pixel, 0).r;
     bool background = depth <= 0.0;
     vec4 value = vec4(0.0);
@@ -76,29 +89,19 @@ void main() {
 #elif PASS_ID == PASS_INDEX_MA
     value = vec4(background ? 0.0 : float(texelFetch(gbuf_ids, pixel, 0).y));
 #elif PASS_ID == PASS_DIFF_COL || PASS_ID == PASS_DIFF_DIR
-    if (!background) {
-        vec3 color = principled_diffuse_color(principled_weights(load_surface(pixel)));
-#if PASS_ID == PASS_DIFF_COL
-        value = vec4(color, 0.0);
-#else
-        value = vec4(safe_divide(texelFetch(diffuse_light, pixel, 0).rgb, color), 0.0);
-#endif
-    }
+    if (!background) value = vec4(principled_diffuse_color(principled_weights(load_surface(pixel))), 0.0);
 #elif PASS_ID == PASS_GLOSS_COL || PASS_ID == PASS_GLOSS_DIR
-    if (!background) {
-        vec3 color = principled_glossy_color(principled_weights(load_surface(pixel)));
-#if PASS_ID == PASS_GLOSS_COL
-        value = vec4(color, 0.0);
-#else
-        value = vec4(safe_divide(texelFetch(glossy_light, pixel, 0).rgb, color), 0.0);
-#endif
-    }
+    if (!background) value = vec4(principled_glossy_color(principled_weights(load_surface(pixel))), 0.0);
 #elif PASS_ID == PASS_EMIT
-    value = background ? vec4(0.0) : vec4(texelFetch(gbuf_emit, pixel, 0).rgb, 0.0);
+    value = background ? vec4(0.0) : vec4(texelFetch(gbuf_emission, pixel, 0).rgb, 0.0);
 #elif PASS_ID == PASS_ENV
     value = background ? vec4(frame.world_color.rgb, 0.0) : vec4(0.0);
 #else
 #error "passes_comp.glsl: unknown PASS_ID"
 #endif
+#ifdef ACCUMULATE
+    value = imageLoad(pass_out, pixel) + value * (1.0 / float(max(frame.counts.w, 1u)));
+#endif
     imageStore(pass_out, pixel, value);
+#endif
 }

@@ -25,26 +25,24 @@
 #define TEX_GBUF_PARAMS1 4
 #define TEX_GBUF_IDS 5
 #define TEX_GBUF_UV 6
-#define TEX_GBUF_EMIT 7
-#define TEX_FILM 8
-#define TEX_DIFF_LIGHT 9
-#define TEX_GLOSS_LIGHT 10
+#define TEX_GBUF_EMISSION 7
+#define TEX_DIFF_LIGHT 8
+#define TEX_GLOSS_LIGHT 9
 
 /* Images written by compute passes */
-#define IMG_FILM 0
+#define IMG_FILM 0        /* Combined accumulation */
 #define IMG_DIFF_LIGHT 1  /* diffuse direct light, with albedo (divided later) */
 #define IMG_GLOSS_LIGHT 2
 #define IMG_PASS_OUT 3
 
 /* Fragment outputs of the geometry pass (G-buffer MRT) */
-#define OUT_FILM 0
+#define OUT_EMISSION 0
 #define OUT_BASE 1
 #define OUT_PARAMS0 2
 #define OUT_NORMAL 3
 #define OUT_PARAMS1 4
 #define OUT_IDS 5
 #define OUT_UV 6
-#define OUT_EMIT 7
 
 /* Pass ids (deferred::Pass; static_assert'ed in native/src/passes.cpp) */
 #define PASS_COMBINED 0

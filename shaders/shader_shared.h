@@ -81,7 +81,8 @@ SHARED_ASSERT_SIZE(GpuInstance, 144);
  *   viewport        : width, height, 1/width, 1/height
  *   mist            : start, 1/depth, falloff (0 quadratic, 1 linear, 2 inverse quadratic), unused
  *   counts          : x light count, y requested pass bits, z light-shape points K per sample, w samples
- *   sample_shift    : xy Cranley-Patterson shift of the light-shape sample grid, zw unused */
+ *   sample_shift    : xy this sample's point in [0,1)^2 inside every cell of the light-shape
+ *                     grid and on the sun's disk (0.5: the centre, sample 0), zw unused */
 SHARED_STRUCT(FrameConstants) {
     mat4 view;
     mat4 projection;

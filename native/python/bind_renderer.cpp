@@ -229,7 +229,7 @@ void declare_renderer(py::module_& m) {
         .def("render",
              [](PyRenderer& self, const Camera& camera, int width, int height, const std::vector<std::string>& passes,
                 bool film_transparent, float mist_start, float mist_depth, const std::string& mist_falloff,
-                int samples) {
+                int samples, float filter_width) {
                  RenderSettings s;
                  s.width = width;
                  s.height = height;
@@ -246,6 +246,7 @@ void declare_renderer(py::module_& m) {
                  else if (mist_falloff == "INVERSE_QUADRATIC") s.mist.falloff = MistFalloff::InverseQuadratic;
                  else throw py::value_error("render: mist_falloff '" + mist_falloff + "' is not one of QUADRATIC, LINEAR, INVERSE_QUADRATIC");
                  s.samples = samples;
+                 s.filter_width = filter_width;
                  FrameResult frame;
                  {
                      py::gil_scoped_release release;
@@ -262,7 +263,7 @@ void declare_renderer(py::module_& m) {
              py::arg("camera"), py::arg("width"), py::arg("height"), py::kw_only(),
              py::arg("passes") = std::vector<std::string>{"Combined"}, py::arg("film_transparent") = false,
              py::arg("mist_start") = 5.0f, py::arg("mist_depth") = 25.0f, py::arg("mist_falloff") = "QUADRATIC",
-             py::arg("samples") = 1);
+             py::arg("samples") = 1, py::arg("filter_width") = 1.5f);
 }
 
 }  // namespace deferred::python

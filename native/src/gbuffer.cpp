@@ -19,14 +19,13 @@ void GBuffer::ensure(int width, int height, const GBufferFeatures& f) {
         bytes_ += texel_bytes(format) * std::size_t(width) * std::size_t(height);
     };
     make(depth_, GL_DEPTH_COMPONENT32F, "gbuffer depth");
-    make(film_, GL_RGBA32F, "film");
+    make(emission_, GL_RGBA16F, "gbuffer emission");
     make(base_, GL_RGBA16F, "gbuffer base");
     make(params0_, GL_RGBA16F, "gbuffer params0");
     make(normal_, GL_RG16, "gbuffer normal");
     if (f.params1) make(params1_, GL_RGBA16F, "gbuffer params1");
     if (f.ids) make(ids_, GL_RG32UI, "gbuffer ids");
     if (f.uv) make(uv_, GL_RG32F, "gbuffer uv");
-    if (f.emit) make(emit_, GL_RGBA32F, "gbuffer emit");
 
     GLuint fbo = 0;
     glCreateFramebuffers(1, &fbo);
@@ -38,14 +37,13 @@ void GBuffer::ensure(int width, int height, const GBufferFeatures& f) {
         glNamedFramebufferTexture(fbo, GL_COLOR_ATTACHMENT0 + slot, t.get(), 0);
         draw[static_cast<std::size_t>(slot)] = GL_COLOR_ATTACHMENT0 + slot;
     };
-    attach(film_, OUT_FILM);
+    attach(emission_, OUT_EMISSION);
     attach(base_, OUT_BASE);
     attach(params0_, OUT_PARAMS0);
     attach(normal_, OUT_NORMAL);
     attach(params1_, OUT_PARAMS1);
     attach(ids_, OUT_IDS);
     attach(uv_, OUT_UV);
-    attach(emit_, OUT_EMIT);
     glNamedFramebufferDrawBuffers(fbo, static_cast<GLsizei>(draw.size()), draw.data());
     GLenum status = glCheckNamedFramebufferStatus(fbo, GL_FRAMEBUFFER);
     if (status != GL_FRAMEBUFFER_COMPLETE)
@@ -61,20 +59,20 @@ void GBuffer::bind_for_geometry() const {
     const GLuint uzero[4] = {0, 0, 0, 0};
     const float depth_far = 0.0f;  // reversed Z: far plane is 0
     glClearNamedFramebufferfv(fbo_.get(), GL_DEPTH, 0, &depth_far);
-    for (int slot : {OUT_FILM, OUT_BASE, OUT_PARAMS0, OUT_NORMAL, OUT_PARAMS1, OUT_UV, OUT_EMIT})
+    for (int slot : {OUT_EMISSION, OUT_BASE, OUT_PARAMS0, OUT_NORMAL, OUT_PARAMS1, OUT_UV})
         glClearNamedFramebufferfv(fbo_.get(), GL_COLOR, slot, zero);
     if (ids_) glClearNamedFramebufferuiv(fbo_.get(), GL_COLOR, OUT_IDS, uzero);
 }
 
 void GBuffer::bind_textures() const {
     glBindTextureUnit(TEX_DEPTH, depth_.get());
+    glBindTextureUnit(TEX_GBUF_EMISSION, emission_.get());
     glBindTextureUnit(TEX_GBUF_BASE, base_.get());
     glBindTextureUnit(TEX_GBUF_PARAMS0, params0_.get());
     glBindTextureUnit(TEX_GBUF_NORMAL, normal_.get());
     if (params1_) glBindTextureUnit(TEX_GBUF_PARAMS1, params1_.get());
     if (ids_) glBindTextureUnit(TEX_GBUF_IDS, ids_.get());
     if (uv_) glBindTextureUnit(TEX_GBUF_UV, uv_.get());
-    if (emit_) glBindTextureUnit(TEX_GBUF_EMIT, emit_.get());
 }
 
 }  // namespace deferred

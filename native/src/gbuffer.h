@@ -1,6 +1,7 @@
 // G-buffer targets and their framebuffer (layout: shaders/gbuffer_lib.glsl).
 // Only the targets a frame needs are allocated: params1 when a material uses
-// sheen or clearcoat, ids for IndexOB/IndexMA, uv for UV, emit for Emit.
+// sheen or clearcoat, ids for IndexOB/IndexMA, uv for UV. The G-buffer holds
+// one film sample; the accumulations live in the Film's targets.
 #pragma once
 
 #include "gl_util.h"
@@ -10,9 +11,9 @@
 namespace deferred {
 
 struct GBufferFeatures {
-    bool params1 = false, ids = false, uv = false, emit = false;
+    bool params1 = false, ids = false, uv = false;
     bool operator==(const GBufferFeatures& o) const {
-        return params1 == o.params1 && ids == o.ids && uv == o.uv && emit == o.emit;
+        return params1 == o.params1 && ids == o.ids && uv == o.uv;
     }
 };
 
@@ -23,7 +24,6 @@ public:
     void bind_for_geometry() const;   // binds the FBO, clears (depth 0 = far, reversed Z)
     void bind_textures() const;       // binds every target to its TEX_* unit
 
-    GLuint film() const { return film_.get(); }
     std::size_t bytes() const { return bytes_; }
     int width() const { return width_; }
     int height() const { return height_; }
@@ -34,7 +34,7 @@ private:
     GBufferFeatures features_;
     bool allocated_ = false;
     std::size_t bytes_ = 0;
-    Texture depth_, film_, base_, params0_, normal_, params1_, ids_, uv_, emit_;
+    Texture depth_, emission_, base_, params0_, normal_, params1_, ids_, uv_;
     Framebuffer fbo_;
 };
 

@@ -49,9 +49,13 @@ struct RenderSettings {
     PassSet passes;
     bool film_transparent = false;
     Mist mist;
-    // Lighting samples averaged per pixel: each uses a different shift of the
-    // light-shape sample grid, so soft lighting converges as samples grow.
+    // Film samples averaged per pixel. Each is jittered by Blender's pixel
+    // filter (Blackman-Harris of filter_width px, as Cycles) and uses new
+    // points on the light shapes, so edges and soft light converge as the
+    // samples grow. Depth, Position and the indices come from sample 0, the
+    // unjittered pixel centre.
     int samples = 1;
+    float filter_width = 1.5f;
 };
 
 // One pass of a finished frame: rows bottom-up (row 0 is the bottom of the

@@ -1,0 +1,172 @@
+// The converging film: Blackman-Harris pixel filter importance sampling
+// (Cycles' filter_table), anti-aliased edges, sample-0 passes, and error
+// against the oracle falling as samples double.
+#include "film.h"
+#include "test_helpers.h"
+
+#include "cycles_oracle.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+using namespace deferred;
+using deferred::testing::pixel3;
+
+namespace {
+// CDF of Cycles' filter (Blackman-Harris, width doubled) at x pixels.
+double bh_cdf(double x, double filter_width) {
+    const double w = 2.0 * filter_width;
+    const int n = 20000;
+    double total = 0, below = 0;
+    for (int i = 0; i < n; ++i) {
+        const double v = -0.5 * w + w * (i + 0.5) / n;
+        const double f = blackman_harris(v, w);
+        total += f;
+        if (v < x) below += f;
+    }
+    return below / total;
+}
+}  // namespace
+
+TEST(Film, FilterOffsetsFollowBlackmanHarris) {
+    for (float width : {1.5f, 0.75f, 3.0f}) {
+        PixelFilter filter(width);
+        EXPECT_NEAR(filter.offset(0.5f), 0.0f, 1e-4f);
+        EXPECT_FLOAT_EQ(filter.support(), width);
+        // Kolmogorov-Smirnov distance between the offsets of a uniform grid of
+        // u and the filter's CDF.
+        const int n = 4000;
+        std::vector<double> offsets;
+        for (int i = 0; i < n; ++i) offsets.push_back(filter.offset((i + 0.5f) / n));
+        double ks = 0;
+        for (int i = 0; i < n; i += 20) {
+            const double x = offsets[std::size_t(i)];
+            EXPECT_LE(std::abs(x), width + 1e-5);
+            ks = std::max(ks, std::abs(bh_cdf(x, width) - (i + 0.5) / n));
+        }
+        std::printf("filter width %.2f: KS distance %.2e\n", width, ks);
+        EXPECT_LT(ks, 2e-3);
+    }
+}
+
+TEST(Film, EdgeCoverageMatchesFilterIntegral) {
+    // A plane covering x > x_edge, seen from above with a transparent film:
+    // alpha of pixel i = P(x_centre + offset > x_edge) under the filter.
+    Renderer r;
+    tools::MeshArrays plane = tools::make_plane(10.0f);
+    const std::uint32_t mesh = r.add_mesh(plane.view());
+    const std::uint32_t mat = r.add_material(Material{});
+    // In pixels from the left of a 32 px image; a multiple of 1/256 px so the
+    // rasteriser's sub-pixel snapping (8 bits on llvmpipe) does not move it.
+    const double x_edge_px = 16.25;
+    const double metres_per_px = 4.0 / 32.0;
+    Mat4d t = tools::translation(-2.0 + x_edge_px * metres_per_px + 10.0, 0, 0);
+    r.add_instances(mesh, t.data(), 1, nullptr, {mat});
+    RenderSettings s;
+    s.width = 32;
+    s.height = 8;
+    s.samples = 1024;
+    s.film_transparent = true;
+    Camera cam = deferred::testing::top_down_ortho(5.0, 4.0f);
+    FrameResult f = r.render(cam, s);
+    const PassImage& c = *f.find(Pass::Combined);
+    double worst = 0;
+    for (int x = 10; x < 23; ++x) {
+        const double alpha = c.pixels[(std::size_t(4) * 32 + x) * 4 + 3];
+        const double expect = 1.0 - bh_cdf(x_edge_px - (x + 0.5), 1.5);
+        worst = std::max(worst, std::abs(alpha - expect));
+    }
+    std::printf("edge coverage vs Blackman-Harris integral: max error %.2e (1024 samples)\n", worst);
+    EXPECT_LT(worst, 5e-3);
+}
+
+TEST(Film, DepthPositionAndIndexComeFromTheFirstSample) {
+    // A tilted plane: jittered samples see other depths, but Depth must be
+    // the pixel centre's, the same at 1 and 16 samples.
+    Renderer r;
+    tools::MeshArrays plane = tools::make_plane(10.0f);
+    const std::uint32_t mesh = r.add_mesh(plane.view());
+    const std::uint32_t mat = r.add_material(Material{});
+    Mat4d m = identity_matrix();
+    m[5] = std::cos(0.6); m[6] = std::sin(0.6); m[9] = -std::sin(0.6); m[10] = std::cos(0.6);
+    const std::uint32_t ob = 5;
+    r.add_instances(mesh, m.data(), 1, &ob, {mat});
+    RenderSettings s;
+    s.width = 24;
+    s.height = 24;
+    s.passes = {Pass::Depth, Pass::Position, Pass::IndexOB};
+    Camera cam;
+    cam.matrix = tools::translation(0, 0, 6);
+    FrameResult one = r.render(cam, s);
+    s.samples = 16;
+    FrameResult many = r.render(cam, s);
+    for (Pass p : {Pass::Depth, Pass::Position, Pass::IndexOB}) {
+        const PassImage& a = *one.find(p);
+        const PassImage& b = *many.find(p);
+        double worst = 0;
+        for (std::size_t i = 0; i < a.pixels.size(); ++i)
+            worst = std::max(worst, double(std::abs(a.pixels[i] - b.pixels[i])));
+        EXPECT_EQ(worst, 0.0) << pass_info(p).name;
+    }
+}
+
+TEST(Film, DoublingSamplesLowersErrorUnderAnAreaLight) {
+    // Unoccluded glossy plane under a square light: RMSE against the oracle
+    // (point-sampled pixel centres) for 2, 4, ..., 64 samples.
+    Renderer r;
+    tools::MeshArrays plane = tools::make_plane(20.0f);
+    const std::uint32_t mesh = r.add_mesh(plane.view());
+    Material mat;
+    mat.base_color = {0.5f, 0.5f, 0.5f};
+    mat.roughness = 0.25f;
+    mat.specular = 0.5f;
+    const std::uint32_t mid = r.add_material(mat);
+    Mat4d I = identity_matrix();
+    r.add_instances(mesh, I.data(), 1, nullptr, {mid});
+    Light light;
+    light.type = LightType::Area;
+    light.matrix = tools::translation(0.2, 0.0, 1.0);
+    light.size = 1.0f;
+    light.energy = 200.0f;
+    r.add_light(light);
+    World black;
+    black.color = {0, 0, 0};
+    r.set_world(black);
+    Camera cam;
+    cam.matrix = tools::translation(0, -1.0, 4.0);
+    RenderSettings s;
+    s.width = 24;
+    s.height = 24;
+    s.filter_width = 0.01f;
+    s.passes = {Pass::Position, Pass::Normal};
+    std::vector<double> reference;
+    std::vector<double> errors;
+    for (int samples : {2, 4, 8, 16, 32, 64}) {
+        s.samples = samples;
+        FrameResult f = r.render(cam, s);
+        const PassImage& c = *f.find(Pass::Combined);
+        if (reference.empty()) {
+            const PassImage& pos = *f.find(Pass::Position);
+            const PassImage& nrm = *f.find(Pass::Normal);
+            for (int y = 0; y < s.height; y += 2)
+                for (int x = 0; x < s.width; x += 2) {
+                    const glm::dvec3 P = pixel3(pos, x, y);
+                    const glm::dvec3 V = glm::normalize(glm::dvec3(0, -1, 4) - P);
+                    const oracle::Shade o = oracle::shade(light, mat, P, glm::normalize(pixel3(nrm, x, y)), V, 128);
+                    reference.push_back((o.diffuse + o.glossy).x);
+                }
+        }
+        double se = 0;
+        std::size_t k = 0;
+        for (int y = 0; y < s.height; y += 2)
+            for (int x = 0; x < s.width; x += 2, ++k) {
+                const double d = pixel3(c, x, y).x - reference[k];
+                se += d * d;
+            }
+        errors.push_back(std::sqrt(se / double(k)));
+        std::printf("area light, %2d samples: RMSE %.3e\n", samples, errors.back());
+    }
+    for (std::size_t i = 1; i < errors.size(); ++i) EXPECT_LT(errors[i], errors[i - 1]) << "step " << i;
+}

@@ -124,14 +124,26 @@ vec2 concentric_disk(vec2 u) {
 /* Shade one planar emitter: outline c + a, b (relative to the shading point),
  * radiance `radiance` x a spot attenuation that Cycles evaluates per sampled
  * point (att_center at the centre; spot lights only, 1 otherwise), emitting
- * along `emit_dir` (unit). */
-LightContribution shade_planar_light(vec3 c, vec3 a, vec3 b, bool ellipse, vec3 emit_dir, vec3 radiance,
-                                     GpuLight light, bool spot, float att_center,
+ * along `emit_dir` (unit). `sphere_disk`: the disk a sphere light presents,
+ * facing the shading point. */
+LightContribution shade_planar_light(vec3 c, vec3 a, vec3 b, bool ellipse, bool sphere_disk, vec3 emit_dir,
+                                     vec3 radiance, GpuLight light, bool spot, float att_center,
                                      SurfaceParams s, PrincipledWeights w, vec3 N, vec3 V) {
     LightContribution r;
     r.diffuse = vec3(0.0);
     r.glossy = vec3(0.0);
-    vec3 J2 = ellipse ? ellipse_vector_irradiance(c, a, b, N) : rect_vector_irradiance(c, a, b, N);
+    vec3 J2;
+    float c2 = dot(c, c);
+    float radius2 = dot(a, a);
+    float NdotC = dot(N, c);
+    if (sphere_disk && NdotC > 0.0 && NdotC * NdotC >= radius2 * (c2 - NdotC * NdotC) / c2) {
+        /* A disk facing the point and wholly above its horizon (a sphere
+         * light's disk, R sin <= d cos): J is along c, and the projected solid
+         * angle is pi R^2 cos / (d^2 + R^2) in closed form. */
+        J2 = c * (2.0 * M_PI_F * radius2 / ((c2 + radius2) * sqrt(c2)));
+    } else {
+        J2 = ellipse ? ellipse_vector_irradiance(c, a, b, N) : rect_vector_irradiance(c, a, b, N);
+    }
     float proj = 0.5 * dot(N, J2); /* projected solid angle, sign from the outline's orientation */
     vec3 Jdir = proj < 0.0 ? -J2 : J2;
     proj = abs(proj);
@@ -146,10 +158,14 @@ LightContribution shade_planar_light(vec3 c, vec3 a, vec3 b, bool ellipse, vec3 
     }
     r.diffuse = diffuse_at_J * (proj * att_center);
 
-    uint K = max(frame.counts.z, 1u);
-    uint G = uint(sqrt(float(K)) + 0.5);
-    G = max(G, 1u);
+    /* Points per sample: up to the full G x G grid (frame.counts.z = G^2) for
+     * lights that look large from here, fewer for small ones, where the BSDF
+     * barely varies across the light (the estimate stays unbiased). */
     float area = ellipse ? M_PI_F * length(a) * length(b) : 4.0 * length(a) * length(b);
+    uint G = max(uint(sqrt(float(max(frame.counts.z, 1u))) + 0.5), 1u);
+    float angular_size2 = area / max(c2, 1e-20); /* ~ solid angle */
+    if (angular_size2 < 0.01) G = 1u;
+    else if (angular_size2 < 0.2) G = min(G, 2u);
     float weight = area / float(G * G);
     vec3 mc_diffuse = vec3(0.0), mc_glossy = vec3(0.0);
     for (uint j = 0u; j < G; ++j) {
@@ -209,7 +225,7 @@ LightContribution shade_light(GpuLight light, SurfaceParams s, PrincipledWeights
         make_basis(L, a, b);
         /* Spot attenuation per sampled disk point, as Cycles 3.4 does. */
         vec3 radiance = S / (4.0 * M_PI_F * M_PI_F * R * R);
-        return shade_planar_light(to_light, a * R, b * R, true, -L, radiance, light, spot, att, s, w, N, V);
+        return shade_planar_light(to_light, a * R, b * R, true, true, -L, radiance, light, spot, att, s, w, N, V);
     }
 #endif
 #ifdef HAS_SUN_LIGHTS
@@ -239,7 +255,7 @@ LightContribution shade_light(GpuLight light, SurfaceParams s, PrincipledWeights
         float A = light.params.x;
         if (A <= 0.0) return r;
         vec3 radiance = S / (4.0 * A);
-        return shade_planar_light(c, light.axis_x.xyz, light.axis_y.xyz, int(light.axis_y.w) == AREA_ELLIPSE,
+        return shade_planar_light(c, light.axis_x.xyz, light.axis_y.xyz, int(light.axis_y.w) == AREA_ELLIPSE, false,
                                   light.direction.xyz, radiance, light, false, 1.0, s, w, N, V);
     }
 #endif

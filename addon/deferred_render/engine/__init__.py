@@ -1,0 +1,45 @@
+"""The RenderEngine "Deferred" (bl_idname DEFERRED_RENDER).
+
+Thin: pass registration is in ``passes.py``, the final render in
+``final.py``; scene export in ``..export``.
+"""
+
+import bpy
+
+from .. import native
+from . import final, passes
+
+
+class DeferredRenderEngine(bpy.types.RenderEngine):
+    bl_idname = "DEFERRED_RENDER"
+    bl_label = "Deferred"
+    bl_use_preview = False
+    # Principled BSDF and the other Cycles/EEVEE shader nodes stay visible.
+    bl_use_shading_nodes_custom = False
+    # The compositor runs on our result (Render Layers node, Composite, File Output).
+    bl_use_postprocess = True
+    # Viewport "Material Preview" uses EEVEE; there is no interactive viewport render.
+    bl_use_eevee_viewport = True
+
+    def update_render_passes(self, scene=None, renderlayer=None):
+        """Register the passes the renderer produces whose checkbox is on."""
+        mod = native.try_load()
+        native_passes = mod.PASSES if mod is not None else passes.COMBINED_ONLY
+        for spec in passes.enabled_passes(renderlayer, native_passes):
+            self.register_pass(scene, renderlayer, spec.name, spec.channels, spec.chan_id, spec.type)
+
+    def render(self, depsgraph):
+        final.render(self, depsgraph)
+
+
+classes = (DeferredRenderEngine,)
+
+
+def register():
+    for cls in classes:
+        bpy.utils.register_class(cls)
+
+
+def unregister():
+    for cls in reversed(classes):
+        bpy.utils.unregister_class(cls)

@@ -1,0 +1,224 @@
+"""Final render (F12, ``blender -b -f/-a``): one call per view layer.
+
+Stages, with ``test_break()`` between each:
+  1. begin the render result (so every exit leaves a valid result)
+  2. start the native renderer (own EGL context on its own thread)
+  3. export the depsgraph (export/)
+  4. render the passes registered for this view layer
+  5. write every pass with ONE ``layer.passes.foreach_set("rect", flat)``
+     (the per-pass ``rect.foreach_set`` is broken on 3.4.1)
+
+Any exception becomes ``report({'ERROR'}, ...)`` and the (zero-filled)
+result is still ended, so Blender writes an empty but valid image and goes
+on; the native session is released in ``finally``.
+"""
+
+import collections
+import sys
+import time
+import traceback
+
+from .. import native
+from ..export import camera as camera_export
+from ..export import world as world_export
+from ..export import export_scene
+from .frame import FrameRect, flatten_passes
+
+LOG_PREFIX = "Deferred"
+
+
+# (level, message) of recent reports, newest last: lets tests and scripts see
+# warnings that Blender only prints. Bounded, so long sessions do not grow.
+last_messages = collections.deque(maxlen=256)
+
+
+class RenderCancelled(Exception):
+    pass
+
+
+class RenderSettingsError(RuntimeError):
+    """The renderer refused the frame settings (e.g. resolution beyond the GPU)."""
+
+
+def _settings(scene):
+    settings = getattr(scene, "deferred_render", None)
+    samples = int(getattr(settings, "samples", 16)) if settings is not None else 16
+    device_index = int(getattr(settings, "device_index", -1)) if settings is not None else -1
+    return max(1, samples), device_index
+
+
+def _format_timings(timings):
+    if not timings:
+        return ""
+    parts = [f"{k.replace('_ms', '')} {v:.1f}" for k, v in timings.items()
+             if isinstance(v, (int, float)) and k.endswith("_ms") and k != "total_ms"]
+    total = timings.get("total_ms")
+    text = ", ".join(parts)
+    if total is not None:
+        text = f"{total:.1f} ms ({text})" if text else f"{total:.1f} ms"
+    return text
+
+
+def _is_user_facing(ex):
+    """Errors whose message says all (bad scene, missing module, GPU limits)."""
+    if isinstance(ex, (native.NativeUnavailable, camera_export.CameraError, RenderSettingsError)):
+        return True
+    mod = native.try_load()
+    error_type = getattr(mod, "Error", None) if mod is not None else None
+    return error_type is not None and isinstance(ex, error_type) and not isinstance(ex, ValueError)
+
+
+class FinalRender:
+    """State of one render() call; created and dropped by the engine."""
+
+    def __init__(self, engine, depsgraph):
+        self.engine = engine
+        self.depsgraph = depsgraph
+        self.scene = depsgraph.scene
+        self.view_layer = depsgraph.view_layer
+        self.gl_name = "?"
+        self.t0 = time.perf_counter()
+
+    # -- status bar -------------------------------------------------------
+    def status(self, text, progress=None):
+        self.engine.update_stats("", f"{LOG_PREFIX} | {self.gl_name} | {self.view_layer.name} | {text}")
+        if progress is not None:
+            self.engine.update_progress(progress)
+
+    def report(self, level, message):
+        text = f"{LOG_PREFIX}: {message}"
+        last_messages.append((level, text))
+        self.engine.report({level}, text)
+
+    def warn(self, message):
+        self.report('WARNING', message)
+
+    def check_break(self):
+        if self.engine.test_break():
+            raise RenderCancelled()
+
+    # -- the render -------------------------------------------------------
+    def run(self):
+        try:
+            self._run()
+        except Exception as ex:  # last resort: nothing may propagate into Blender
+            self.report('ERROR', str(ex) or type(ex).__name__)
+            traceback.print_exc()
+
+    def _run(self):
+        engine = self.engine
+        scene = self.scene
+        frame = FrameRect.from_render_settings(scene.render, engine.resolution_x, engine.resolution_y)
+        if frame.width <= 0 or frame.height <= 0:
+            self.report('ERROR', f"empty render region {frame}")
+            return
+        result = engine.begin_result(0, 0, frame.width, frame.height, layer=self.view_layer.name)
+        if result is None:
+            self.report('ERROR', f"Blender gave no render result for view layer "
+                                 f"'{self.view_layer.name}' ({frame})")
+            return
+        frame.fit_to_result(result.resolution_x, result.resolution_y)
+        renderer = None
+        cancelled = False
+        try:
+            renderer = self._render_into(result, frame)
+        except RenderCancelled:
+            cancelled = True
+        except Exception as ex:  # every failure is reported, never raised into Blender
+            message = str(ex) or type(ex).__name__
+            self.report('ERROR', message)
+            if not _is_user_facing(ex):
+                # An unexpected failure (a bug): keep the traceback for the log.
+                print(f"{LOG_PREFIX}: render failed:", file=sys.stderr)
+                traceback.print_exc()
+            try:
+                engine.error_set(f"{LOG_PREFIX}: {message}")
+            except Exception:
+                pass
+            self.status(f"Error: {message}")
+        finally:
+            # Release the native session (joins its GL thread, frees the GL
+            # context) before handing the result back.
+            renderer = None  # noqa: F841
+            engine.end_result(result, cancel=cancelled)
+
+    def _render_into(self, result, frame):
+        engine = self.engine
+        scene = self.scene
+        samples, device_index = _settings(scene)
+
+        self.status("loading the native renderer", 0.0)
+        mod = native.load()
+        self.check_break()
+
+        # Resolve the camera before starting the GL context: a scene without
+        # camera fails fast with a clear message.
+        camera_object = engine.camera_override or scene.camera
+        if camera_object is not None:
+            camera_object = camera_object.original.evaluated_get(self.depsgraph)
+        cam_params, cam_warnings = camera_export.camera_params(scene, camera_object, engine)
+        for message in cam_warnings:
+            self.warn(message)
+
+        self.status("starting GL", 0.02)
+        renderer = mod.Renderer(device_index=device_index)
+        try:
+            self.gl_name = renderer.gl_info.get("renderer", "?")
+        except Exception:
+            self.gl_name = "?"
+        self.check_break()
+
+        self.status("exporting scene", 0.05)
+        t_export = time.perf_counter()
+        stats, cancelled = export_scene(self.depsgraph, renderer, warn=self.warn,
+                                        test_break=engine.test_break)
+        if cancelled:
+            raise RenderCancelled()
+        t_export = time.perf_counter() - t_export
+        self.status(f"exported {stats.summary()} in {t_export:.2f} s", 0.3)
+        self.check_break()
+
+        layer = result.layers[0]
+        pass_names = []
+        for render_pass in layer.passes:
+            if render_pass.name not in pass_names:
+                pass_names.append(render_pass.name)
+        produced = {entry[0] for entry in mod.PASSES}
+        requested = [name for name in pass_names if name in produced]
+        if "Combined" not in requested:
+            requested.insert(0, "Combined")
+
+        camera = mod.Camera(**cam_params)
+        mist = world_export.mist_params(scene.world)
+        self.status(f"rendering {frame.full_width}x{frame.full_height}, {samples} samples, "
+                    f"{len(requested)} passes", 0.35)
+        t_render = time.perf_counter()
+        try:
+            images = renderer.render(camera, frame.full_width, frame.full_height, passes=requested,
+                                     film_transparent=bool(scene.render.film_transparent),
+                                     samples=samples, filter_width=float(scene.render.filter_size),
+                                     **mist)
+        except ValueError as ex:  # size/settings validation: the message says it all
+            raise RenderSettingsError(str(ex)) from ex
+        t_render = time.perf_counter() - t_render
+        self.check_break()
+
+        self.status("writing passes", 0.9)
+        flat, missing = flatten_passes(layer.passes, images, frame)
+        if missing:
+            self.warn("passes not produced by the renderer (left at zero): " + ", ".join(missing))
+        layer.passes.foreach_set("rect", flat)
+        engine.update_result(result)
+
+        try:
+            timings = _format_timings(dict(renderer.last_timings))
+        except Exception:
+            timings = ""
+        total = time.perf_counter() - self.t0
+        self.status(f"done in {total:.2f} s: export {t_export:.2f} s, render {t_render:.2f} s"
+                    + (f" [{timings}]" if timings else ""), 1.0)
+        return renderer
+
+
+def render(engine, depsgraph):
+    FinalRender(engine, depsgraph).run()

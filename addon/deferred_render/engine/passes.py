@@ -1,0 +1,82 @@
+"""Render passes: which ones are registered for a view layer.
+
+Names, channel ids and types are Cycles' (shared/REFERENCE.md section 1).
+The channel ids and counts come from ``deferred_native.PASSES`` (what the
+renderer produces); this table adds the Blender side: the pass type and the
+view-layer checkbox that turns the pass on. A pass is registered only when
+the renderer produces it *and* its checkbox is on, so the compositor's
+Render Layers node shows exactly the passes that will hold pixels.
+"""
+
+# name -> (type for register_pass, ViewLayer flag; None = always registered)
+PASS_TABLE = {
+    "Combined": ("COLOR", None),
+    "Depth": ("VALUE", "use_pass_z"),
+    "Mist": ("VALUE", "use_pass_mist"),
+    "Position": ("VECTOR", "use_pass_position"),
+    "Normal": ("VECTOR", "use_pass_normal"),
+    "Vector": ("VECTOR", "use_pass_vector"),
+    "UV": ("VECTOR", "use_pass_uv"),
+    "IndexOB": ("VALUE", "use_pass_object_index"),
+    "IndexMA": ("VALUE", "use_pass_material_index"),
+    "DiffDir": ("COLOR", "use_pass_diffuse_direct"),
+    "DiffInd": ("COLOR", "use_pass_diffuse_indirect"),
+    "DiffCol": ("COLOR", "use_pass_diffuse_color"),
+    "GlossDir": ("COLOR", "use_pass_glossy_direct"),
+    "GlossInd": ("COLOR", "use_pass_glossy_indirect"),
+    "GlossCol": ("COLOR", "use_pass_glossy_color"),
+    "Emit": ("COLOR", "use_pass_emit"),
+    "Env": ("COLOR", "use_pass_environment"),
+    "Shadow": ("COLOR", "use_pass_shadow"),
+    "AO": ("COLOR", "use_pass_ambient_occlusion"),
+}
+
+# What is registered when the native module cannot be imported: the render
+# fails with a clear message anyway, and Blender needs a Combined pass.
+COMBINED_ONLY = (("Combined", "RGBA", 4),)
+
+
+class PassSpec:
+    __slots__ = ("name", "chan_id", "channels", "type", "flag")
+
+    def __init__(self, name, chan_id, channels, type, flag):
+        self.name = name
+        self.chan_id = chan_id
+        self.channels = channels
+        self.type = type
+        self.flag = flag
+
+    def __repr__(self):
+        return f"PassSpec({self.name!r}, {self.chan_id!r}, {self.channels}, {self.type!r})"
+
+
+def supported_passes(native_passes):
+    """PassSpecs for every pass the renderer produces, in its order."""
+    specs = []
+    for entry in native_passes:
+        name, chan_id, channels = entry[0], entry[1], int(entry[2])
+        if name not in PASS_TABLE:
+            continue  # a pass this add-on does not know how to present
+        pass_type, flag = PASS_TABLE[name]
+        specs.append(PassSpec(name, chan_id, channels, pass_type, flag))
+    return specs
+
+
+def enabled_passes(view_layer, native_passes):
+    """PassSpecs to register for ``view_layer`` (Combined always first)."""
+    specs = []
+    for spec in supported_passes(native_passes):
+        if spec.flag is None or (view_layer is not None and getattr(view_layer, spec.flag, False)):
+            specs.append(spec)
+    if not specs or specs[0].name != "Combined":
+        combined = [s for s in specs if s.name == "Combined"]
+        others = [s for s in specs if s.name != "Combined"]
+        if not combined:
+            combined = [PassSpec("Combined", "RGBA", 4, "COLOR", None)]
+        specs = combined + others
+    return specs
+
+
+def supported_flags(native_passes):
+    """The ViewLayer flags this renderer honours (for the Passes panel)."""
+    return [spec.flag for spec in supported_passes(native_passes) if spec.flag]

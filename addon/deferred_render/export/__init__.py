@@ -1,0 +1,28 @@
+"""Blender depsgraph -> native scene, as numpy arrays end to end.
+
+One module per data-block kind (mesh, material, light, camera, world) and
+``instances`` for the depsgraph walk; ``export_scene`` is the only entry
+point the engine uses. The exporter talks to any object with the native
+``Renderer`` scene API, which is how tests check it without a GPU.
+"""
+
+from . import camera, light, material, mesh, world  # noqa: F401
+from .instances import ExportStats, SceneExporter  # noqa: F401
+
+
+def export_scene(depsgraph, renderer, warn=None, test_break=None):
+    """Clear ``renderer`` and sync the evaluated scene into it.
+
+    Returns (stats, cancelled). ``warn(message)`` receives every warning
+    once; ``test_break()`` is polled during the walk.
+    """
+    renderer.clear_scene()
+    exporter = SceneExporter(renderer, warn=warn, test_break=test_break)
+    completed = exporter.sync(depsgraph)
+    if completed:
+        color, warnings = world.world_color(depsgraph.scene.world)
+        for message in warnings:
+            if warn:
+                warn(message)
+        renderer.set_world(color=color)
+    return exporter.stats, not completed

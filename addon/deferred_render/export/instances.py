@@ -1,0 +1,206 @@
+"""Walks ``depsgraph.object_instances`` and fills the native scene.
+
+Every visible evaluated object instance is visited once: real objects,
+collection instances, particle and geometry-nodes instances (modifiers are
+already applied in the evaluated data). What is exported:
+
+- one native mesh per mesh data-block, shared by all its instances. The key
+  is the evaluated data (two objects sharing a mesh without modifiers share
+  it; an object with modifiers has evaluated data of its own); non-mesh
+  objects (curves, text, metaballs) are keyed by object;
+- one native material per material data-block (``material.py``);
+- instances grouped by (mesh, material-slot map): one ``add_instances`` call
+  per group with an (N, 4, 4) float64 matrix array, so object- and
+  data-linked materials both work;
+- lights (``light.py``).
+
+Objects that cannot be rendered (no faces, NaN/Inf vertices or matrix) are
+skipped with one warning each; the render goes on. Not warned about: curves
+without geometry (paths) and mesh objects whose modifiers leave no faces
+(e.g. geometry nodes that output only instances), as Cycles does.
+"""
+
+import time
+
+import numpy as np
+
+from . import light as light_export
+from . import material as material_export
+from . import mesh as mesh_export
+
+UNSUPPORTED_GEOMETRY = {"CURVES", "POINTCLOUD", "VOLUME", "GPENCIL"}
+# Larger transform entries overflow float32 positions on the GPU.
+MAX_MATRIX_VALUE = 1e30
+
+
+class ExportStats:
+    def __init__(self):
+        self.meshes = 0
+        self.triangles = 0          # unique (per native mesh)
+        self.instances = 0
+        self.instanced_triangles = 0
+        self.materials = 0
+        self.lights = 0
+        self.skipped_objects = 0
+        self.mesh_bytes = 0
+        self.seconds = 0.0
+
+    def summary(self):
+        return (f"{self.instances} instances of {self.meshes} meshes "
+                f"({self.triangles} unique / {self.instanced_triangles} rendered triangles), "
+                f"{self.materials} materials, {self.lights} lights")
+
+
+class _Group:
+    __slots__ = ("mesh_id", "material_ids", "matrices", "object_indices")
+
+    def __init__(self, mesh_id, material_ids):
+        self.mesh_id = mesh_id
+        self.material_ids = material_ids
+        self.matrices = []
+        self.object_indices = []
+
+
+class SceneExporter:
+    """Streams one depsgraph into anything with the ``Renderer`` scene API
+    (add_mesh, add_material, add_instances, add_light): the native renderer,
+    or a recorder in the tests."""
+
+    def __init__(self, renderer, warn=None, test_break=None):
+        self.renderer = renderer
+        self.warn = warn or (lambda message: None)
+        self.test_break = test_break or (lambda: False)
+        self.stats = ExportStats()
+        self._mesh_ids = {}         # mesh key -> (native id, triangle count) or None if skipped
+        self._material_ids = {}     # material key -> native id
+        self._groups = {}           # (mesh id, material ids) -> _Group
+        self._warned = set()
+        self.cancelled = False
+
+    # -- warnings ---------------------------------------------------------
+    def _warn_once(self, key, message):
+        if key not in self._warned:
+            self._warned.add(key)
+            self.warn(message)
+
+    # -- materials --------------------------------------------------------
+    def material_id(self, material):
+        if material is not None:
+            original = getattr(material, "original", None) or material
+            key = original.as_pointer()
+        else:
+            key = None
+        mat_id = self._material_ids.get(key)
+        if mat_id is None:
+            params, notes = material_export.material_params(material)
+            if notes:
+                self._warn_once(("material", key), material_export.warning_text(material, notes))
+            mat_id = self.renderer.add_material(**params)
+            self._material_ids[key] = mat_id
+            self.stats.materials += 1
+        return mat_id
+
+    def _slot_material_ids(self, ob):
+        slots = ob.material_slots
+        if len(slots) == 0:
+            return (self.material_id(None),)
+        return tuple(self.material_id(slot.material) for slot in slots)
+
+    # -- meshes -----------------------------------------------------------
+    @staticmethod
+    def _mesh_key(ob):
+        if ob.type == "MESH" and ob.data is not None:
+            return ("data", ob.data.as_pointer())
+        return ("object", ob.as_pointer())
+
+    def _mesh_id(self, ob):
+        key = self._mesh_key(ob)
+        if key in self._mesh_ids:
+            return self._mesh_ids[key]
+        entry = None
+        try:
+            arrays = mesh_export.object_mesh_arrays(ob)
+        except mesh_export.MeshSkipped as ex:
+            self.stats.skipped_objects += 1
+            # Silent, as in Cycles: curves without bevel (paths) and meshes
+            # emptied by modifiers (geometry nodes that output only
+            # instances). A mesh object without faces and without modifiers,
+            # or with NaN/Inf vertices, gets a warning.
+            expected_empty = ex.empty and (ob.type != "MESH" or len(ob.modifiers) > 0)
+            if not expected_empty:
+                self._warn_once(("mesh", key), f"Object '{ob.name}' skipped: {ex}")
+        else:
+            mesh_export.clamp_material_indices(arrays, max(1, len(ob.material_slots)))
+            mesh_id = self.renderer.add_mesh(
+                arrays.positions, arrays.indices,
+                corner_normals=arrays.corner_normals,
+                corner_uvs=arrays.corner_uvs,
+                material_indices=arrays.material_indices)
+            entry = (mesh_id, arrays.triangle_count)
+            self.stats.meshes += 1
+            self.stats.triangles += arrays.triangle_count
+            self.stats.mesh_bytes += arrays.nbytes()
+        self._mesh_ids[key] = entry
+        return entry
+
+    # -- the walk ---------------------------------------------------------
+    def sync(self, depsgraph):
+        """Visit every object instance; returns False if cancelled."""
+        start = time.perf_counter()
+        for count, inst in enumerate(depsgraph.object_instances):
+            if count % 256 == 0 and self.test_break():
+                self.cancelled = True
+                return False
+            ob = inst.object
+            kind = ob.type
+            if kind == "LIGHT":
+                self._sync_light(inst, ob)
+            elif kind in mesh_export.MESHABLE_TYPES:
+                if inst.show_self:
+                    self._sync_geometry(inst, ob)
+            elif kind in UNSUPPORTED_GEOMETRY:
+                self._warn_once(("type", kind), f"{kind.title()} objects are not rendered (e.g. '{ob.name}')")
+        self.flush_instances()
+        self.stats.seconds += time.perf_counter() - start
+        return True
+
+    def _sync_geometry(self, inst, ob):
+        matrix = np.array(inst.matrix_world, dtype=np.float64)
+        # Blender clamps an infinite scale to FLT_MAX; that overflows as well.
+        if not (np.isfinite(matrix).all() and np.abs(matrix).max() < MAX_MATRIX_VALUE):
+            self._warn_once(("matrix", ob.name), f"Object '{ob.name}' skipped: NaN/Inf transform")
+            self.stats.skipped_objects += 1
+            return
+        entry = self._mesh_id(ob)
+        if entry is None:
+            return
+        mesh_id, triangles = entry
+        material_ids = self._slot_material_ids(ob)
+        group_key = (mesh_id, material_ids)
+        group = self._groups.get(group_key)
+        if group is None:
+            group = self._groups[group_key] = _Group(mesh_id, material_ids)
+        group.matrices.append(matrix)
+        group.object_indices.append(ob.pass_index)
+        self.stats.instances += 1
+        self.stats.instanced_triangles += triangles
+
+    def _sync_light(self, inst, ob):
+        try:
+            params = light_export.light_params(ob.data, inst.matrix_world, name=ob.name)
+        except light_export.LightSkipped as ex:
+            self._warn_once(("light", ob.name), f"Light skipped: {ex}")
+            return
+        if params is None:
+            return
+        self.renderer.add_light(**params)
+        self.stats.lights += 1
+
+    def flush_instances(self):
+        for group in self._groups.values():
+            matrices = np.ascontiguousarray(np.stack(group.matrices), dtype=np.float64)
+            object_indices = np.asarray(group.object_indices, dtype=np.uint32)
+            self.renderer.add_instances(group.mesh_id, matrices,
+                                        object_indices=object_indices,
+                                        material_slots=list(group.material_ids))
+        self._groups.clear()

@@ -1,0 +1,371 @@
+"""Materials -> the Principled parameter set of ``Renderer.add_material``.
+
+The native renderer shades one constant Principled BSDF (Blender 3.4 inputs)
+per material. The node tree is reduced to that set:
+
+- Principled BSDF: inputs read by *name* through PRINCIPLED_INPUTS (3.x names
+  first, then the 4.x names), never by index. Inputs driven by an RGB or Value
+  node are folded to their constant; any other link is not understood.
+- Diffuse BSDF  -> base colour, metallic 0, specular 0, roughness 1 (the
+  Burley diffuse of the Principled BSDF stands in for Lambert/Oren-Nayar).
+- Glossy BSDF   -> metallic 1 with the node's colour and roughness (Cycles'
+  Glossy has no Fresnel; a metal's Fresnel tends to white at grazing angles).
+- Emission      -> black, non-reflective surface with that emission.
+- Add Shader    -> exact when at most one side reflects: that side's BSDF
+  plus the emission of both.
+- Mix Shader    -> with a constant factor: every parameter interpolated
+  linearly (exact for colours, emission and lobe weights; an approximation
+  when the two sides' roughness differs). Factor 0 or 1 picks one side.
+- Reroute nodes are followed.
+
+Anything else (textures, groups, Transmission, Subsurface, normal maps...)
+is listed in *one* warning per material. If the surface shader itself
+cannot be reduced, the material's viewport display settings are used
+(Material > Viewport Display: colour, metallic, roughness), which is also what
+a material without nodes renders with.
+"""
+
+import math
+
+# Native parameter -> (kind, Principled input names: Blender 3.x first, then 4.x).
+# Every read of a Principled BSDF input goes through this table.
+PRINCIPLED_INPUTS = (
+    ("base_color", "color", ("Base Color",)),
+    ("metallic", "float", ("Metallic",)),
+    ("roughness", "float", ("Roughness",)),
+    ("specular", "float", ("Specular", "Specular IOR Level")),
+    ("specular_tint", "float", ("Specular Tint",)),
+    ("sheen", "float", ("Sheen", "Sheen Weight")),
+    ("sheen_tint", "float", ("Sheen Tint",)),
+    ("clearcoat", "float", ("Clearcoat", "Coat Weight")),
+    ("clearcoat_roughness", "float", ("Clearcoat Roughness", "Coat Roughness")),
+    ("emission", "color", ("Emission", "Emission Color")),
+    ("emission_strength", "float", ("Emission Strength",)),
+    ("alpha", "float", ("Alpha",)),
+)
+
+# Principled inputs the renderer does not model: (names, neutral value). A
+# linked input or a value away from neutral is reported as not understood.
+PRINCIPLED_UNSUPPORTED = (
+    (("Subsurface", "Subsurface Weight"), 0.0),
+    (("Transmission", "Transmission Weight"), 0.0),
+    (("Anisotropic",), 0.0),
+    (("Normal",), None),            # only a link matters
+    (("Clearcoat Normal", "Coat Normal"), None),
+    (("Tangent",), None),
+)
+
+# The renderer's defaults (= native add_material defaults = Blender's default surface).
+DEFAULT_PARAMS = {
+    "base_color": (0.8, 0.8, 0.8),
+    "metallic": 0.0,
+    "roughness": 0.5,
+    "specular": 0.5,
+    "specular_tint": 0.0,
+    "sheen": 0.0,
+    "sheen_tint": 0.5,
+    "clearcoat": 0.0,
+    "clearcoat_roughness": 0.03,
+    "emission": (0.0, 0.0, 0.0),
+    "emission_strength": 1.0,
+    "alpha": 1.0,
+    "pass_index": 0,
+}
+
+_COLOR_PARAMS = ("base_color", "emission")
+
+
+class _Unreduced(Exception):
+    """A shader node that does not reduce to the parameter set."""
+
+
+def _clamp01(x):
+    return min(max(float(x), 0.0), 1.0)
+
+
+def _finite(x, fallback):
+    x = float(x)
+    return x if math.isfinite(x) else fallback
+
+
+def _color(value, fallback=(0.0, 0.0, 0.0)):
+    try:
+        rgb = tuple(float(v) for v in tuple(value)[:3])
+    except TypeError:  # a float socket used where a colour is expected
+        rgb = (float(value),) * 3
+    return tuple(_finite(c, f) for c, f in zip(rgb, fallback))
+
+
+def _scalar(value):
+    try:
+        seq = tuple(value)
+    except TypeError:
+        return float(value)
+    # A colour socket where a float is expected (4.x colour tints): its mean.
+    return sum(float(v) for v in seq[:3]) / 3.0
+
+
+def _find_input(node, names):
+    for name in names:
+        socket = node.inputs.get(name)
+        if socket is not None:
+            return socket
+    return None
+
+
+def _from_socket(link_from_node, link_from_socket, seen):
+    """Follow reroutes; return the node and output socket a link comes from."""
+    node, socket = link_from_node, link_from_socket
+    while node.bl_idname == "NodeReroute":
+        if node in seen:
+            break
+        seen.add(node)
+        if not node.inputs[0].is_linked:
+            return None, None
+        link = node.inputs[0].links[0]
+        node, socket = link.from_node, link.from_socket
+    return node, socket
+
+
+def _input_value(socket, notes, label):
+    """Constant value of an input socket: its default, or the RGB/Value node
+    driving it. Anything else is noted and the socket's own value used."""
+    if not socket.is_linked:
+        return socket.default_value
+    link = socket.links[0]
+    if not link.is_valid or link.is_muted:
+        return socket.default_value
+    node, out = _from_socket(link.from_node, link.from_socket, set())
+    if node is None:
+        return socket.default_value
+    if node.bl_idname in {"ShaderNodeRGB", "ShaderNodeValue"}:
+        return out.default_value
+    notes.append(f"{label} driven by {node.bl_label or node.bl_idname} (used its own value)")
+    return socket.default_value
+
+
+def _principled(node, notes):
+    params = {}
+    for param, kind, names in PRINCIPLED_INPUTS:
+        socket = _find_input(node, names)
+        if socket is None:
+            continue
+        value = _input_value(socket, notes, f"'{socket.name}'")
+        if kind == "color":
+            params[param] = _color(value, DEFAULT_PARAMS[param])
+        else:
+            params[param] = _finite(_scalar(value), DEFAULT_PARAMS[param])
+    for names, neutral in PRINCIPLED_UNSUPPORTED:
+        socket = _find_input(node, names)
+        if socket is None:
+            continue
+        if socket.is_linked:
+            notes.append(f"'{socket.name}' input (linked, ignored)")
+        elif neutral is not None and abs(_scalar(socket.default_value) - neutral) > 1e-6:
+            notes.append(f"'{socket.name}' = {_scalar(socket.default_value):.3g} (not rendered)")
+    # 'MULTI_GGX' has no closed form: shaded as GGX (see shared/REFERENCE.md).
+    return params
+
+
+def _diffuse(node, notes):
+    return {
+        "base_color": _color(_input_value(node.inputs["Color"], notes, "Diffuse 'Color'"), (0.8, 0.8, 0.8)),
+        "metallic": 0.0,
+        "specular": 0.0,
+        "roughness": 1.0,
+    }
+
+
+def _glossy(node, notes):
+    return {
+        "base_color": _color(_input_value(node.inputs["Color"], notes, "Glossy 'Color'"), (0.8, 0.8, 0.8)),
+        "metallic": 1.0,
+        "roughness": _finite(_scalar(_input_value(node.inputs["Roughness"], notes, "Glossy 'Roughness'")), 0.5),
+    }
+
+
+def _emission(node, notes):
+    return {
+        "base_color": (0.0, 0.0, 0.0),
+        "metallic": 0.0,
+        "specular": 0.0,
+        "emission": _color(_input_value(node.inputs["Color"], notes, "Emission 'Color'"), (1.0, 1.0, 1.0)),
+        "emission_strength": _finite(_scalar(_input_value(node.inputs["Strength"], notes, "Emission 'Strength'")), 1.0),
+    }
+
+
+def _full(params):
+    out = dict(DEFAULT_PARAMS)
+    out.update(params)
+    out.pop("pass_index", None)
+    return out
+
+
+def _emitted(params):
+    """Emitted radiance of a parameter set as one colour (emission x strength)."""
+    s = params["emission_strength"]
+    return tuple(c * s for c in params["emission"])
+
+
+def _reflects(params):
+    """True if the set reflects light at all (a pure Emission shader does not)."""
+    base_black = max(params["base_color"]) <= 0.0
+    no_specular = params["specular"] <= 0.0 and params["metallic"] <= 0.0
+    return not (base_black and no_specular and params["sheen"] <= 0.0 and params["clearcoat"] <= 0.0)
+
+
+def _mix(a, b, t):
+    out = {}
+    for key in a:
+        if key in _COLOR_PARAMS:
+            continue
+        out[key] = (1.0 - t) * a[key] + t * b[key]
+    out["base_color"] = tuple((1.0 - t) * x + t * y for x, y in zip(a["base_color"], b["base_color"]))
+    # Emission mixes as radiance, not as colour and strength separately.
+    ea, eb = _emitted(a), _emitted(b)
+    out["emission"] = tuple((1.0 - t) * x + t * y for x, y in zip(ea, eb))
+    out["emission_strength"] = 1.0
+    if not _reflects(a):      # mixing with pure emission scales the BSDF only by its colours
+        for key in ("metallic", "roughness", "specular", "specular_tint", "sheen", "sheen_tint",
+                    "clearcoat", "clearcoat_roughness", "alpha"):
+            out[key] = b[key]
+        out["specular"] = t * b["specular"]
+    elif not _reflects(b):
+        for key in ("metallic", "roughness", "specular", "specular_tint", "sheen", "sheen_tint",
+                    "clearcoat", "clearcoat_roughness", "alpha"):
+            out[key] = a[key]
+        out["specular"] = (1.0 - t) * a["specular"]
+    return out
+
+
+def _add(a, b, notes):
+    if _reflects(a) and _reflects(b):
+        raise _Unreduced("Add Shader of two reflecting BSDFs")
+    base = a if _reflects(a) else b
+    out = dict(base)
+    ea, eb = _emitted(a), _emitted(b)
+    out["emission"] = tuple(x + y for x, y in zip(ea, eb))
+    out["emission_strength"] = 1.0
+    return out
+
+
+def _reduce(node, notes, depth=0):
+    """Parameter set of a shader node (full dict), or raise _Unreduced."""
+    if depth > 32:
+        raise _Unreduced("shader tree too deep")
+    kind = node.bl_idname
+    if kind == "ShaderNodeBsdfPrincipled":
+        return _full(_principled(node, notes))
+    if kind == "ShaderNodeBsdfDiffuse":
+        return _full(_diffuse(node, notes))
+    if kind == "ShaderNodeBsdfGlossy" or kind == "ShaderNodeBsdfAnisotropic":
+        return _full(_glossy(node, notes))
+    if kind == "ShaderNodeEmission":
+        return _full(_emission(node, notes))
+    if kind in {"ShaderNodeMixShader", "ShaderNodeAddShader"}:
+        shader_inputs = [s for s in node.inputs if s.type == "SHADER"]
+        sides = []
+        for socket in shader_inputs[:2]:
+            linked = _linked_node(socket)
+            if linked is None:
+                # An unlinked shader socket is "no closure": black, non-emitting.
+                sides.append(_full({"base_color": (0.0, 0.0, 0.0), "specular": 0.0, "metallic": 0.0}))
+            else:
+                sides.append(_reduce(linked, notes, depth + 1))
+        if kind == "ShaderNodeAddShader":
+            return _add(sides[0], sides[1], notes)
+        fac_socket = node.inputs[0]
+        fac = _clamp01(_scalar(_input_value(fac_socket, notes, "Mix Shader 'Fac'")))
+        if fac <= 0.0:
+            return sides[0]
+        if fac >= 1.0:
+            return sides[1]
+        return _mix(sides[0], sides[1], fac)
+    raise _Unreduced(f"{node.bl_label or kind} shader")
+
+
+def _linked_node(socket):
+    if not socket.is_linked:
+        return None
+    link = socket.links[0]
+    if not link.is_valid or link.is_muted:
+        return None
+    node, _ = _from_socket(link.from_node, link.from_socket, set())
+    if node is not None and node.mute:
+        return None
+    return node
+
+
+def viewport_params(material):
+    """The material's viewport display settings as a parameter set."""
+    if material is None:
+        return dict(DEFAULT_PARAMS)
+    params = _full({
+        "base_color": _color(material.diffuse_color, (0.8, 0.8, 0.8)),
+        "metallic": _clamp01(material.metallic),
+        "roughness": _clamp01(material.roughness),
+    })
+    params["pass_index"] = int(material.pass_index)
+    return params
+
+
+def _sanitize(params):
+    out = dict(params)
+    for key in ("metallic", "roughness", "specular_tint", "sheen", "sheen_tint", "clearcoat",
+                "clearcoat_roughness", "alpha"):
+        out[key] = _clamp01(out[key])
+    out["specular"] = max(0.0, float(out["specular"]))
+    out["emission_strength"] = max(0.0, float(out["emission_strength"]))
+    out["base_color"] = tuple(max(0.0, c) for c in out["base_color"])
+    out["emission"] = tuple(max(0.0, c) for c in out["emission"])
+    return out
+
+
+def material_params(material):
+    """Return (params, not_understood) for a material (None: default surface).
+
+    ``params`` are keyword arguments of ``Renderer.add_material``;
+    ``not_understood`` lists what the reduction could not represent (empty if
+    the material is rendered as Blender describes it).
+    """
+    if material is None:
+        return dict(DEFAULT_PARAMS), []
+    notes = []
+    if not material.use_nodes or material.node_tree is None:
+        return viewport_params(material), notes
+
+    tree = material.node_tree
+    output = None
+    try:
+        output = tree.get_output_node("CYCLES")
+    except (AttributeError, TypeError):
+        pass
+    if output is None:
+        output = next((n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial"), None)
+    if output is None:
+        # Cycles renders a node material without output as black; we keep its viewport colour.
+        notes.append("no Material Output node")
+        return viewport_params(material), notes
+    surface = output.inputs.get("Surface")
+    shader = _linked_node(surface) if surface is not None else None
+    if shader is None:
+        notes.append("nothing linked to the Surface output")
+        return viewport_params(material), notes
+    if output.inputs.get("Volume") is not None and output.inputs["Volume"].is_linked:
+        notes.append("Volume (not rendered)")
+    if output.inputs.get("Displacement") is not None and output.inputs["Displacement"].is_linked:
+        notes.append("Displacement (not rendered)")
+
+    try:
+        params = _reduce(shader, notes)
+    except _Unreduced as ex:
+        notes.insert(0, f"{ex} (used the viewport display colour)")
+        return viewport_params(material), notes
+    params = _sanitize(params)
+    params["pass_index"] = int(material.pass_index)
+    return params, notes
+
+
+def warning_text(material, notes):
+    name = material.name if material is not None else "<default>"
+    return f"Material '{name}': not understood: " + "; ".join(notes)

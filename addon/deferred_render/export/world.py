@@ -1,0 +1,88 @@
+"""The scene world -> a constant background colour and the mist settings.
+
+World colour = Background node Color x Strength (the node linked to the
+active world output). A world without nodes uses World.color, as Cycles
+does; no world is black. Anything else driving the background (sky or
+environment textures, mixes) is not understood: World.color (the viewport
+colour) is used with one warning.
+"""
+
+import math
+
+MIST_FALLOFFS = {"QUADRATIC", "LINEAR", "INVERSE_QUADRATIC"}
+
+
+def _color3(value):
+    c = tuple(float(v) for v in tuple(value)[:3])
+    return tuple(v if math.isfinite(v) else 0.0 for v in c)
+
+
+def _linked(socket):
+    if socket is None or not socket.is_linked:
+        return None
+    link = socket.links[0]
+    if not link.is_valid or link.is_muted:
+        return None
+    node = link.from_node
+    seen = set()
+    while node.bl_idname == "NodeReroute" and node not in seen:
+        seen.add(node)
+        if not node.inputs[0].is_linked:
+            return None
+        node = node.inputs[0].links[0].from_node
+    return None if node.mute else node
+
+
+def world_color(world):
+    """Return ((r, g, b), warnings)."""
+    if world is None:
+        return (0.0, 0.0, 0.0), []
+    if not world.use_nodes or world.node_tree is None:
+        return _color3(world.color), []
+    tree = world.node_tree
+    output = None
+    try:
+        output = tree.get_output_node("CYCLES")
+    except (AttributeError, TypeError):
+        output = None
+    if output is None:
+        output = next((n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputWorld"), None)
+    if output is None:
+        return (0.0, 0.0, 0.0), []
+    node = _linked(output.inputs.get("Surface"))
+    if node is None:
+        return (0.0, 0.0, 0.0), []
+    if node.bl_idname == "ShaderNodeBackground":
+        warnings = []
+        color_socket, strength_socket = node.inputs["Color"], node.inputs["Strength"]
+        color = color_socket.default_value
+        if color_socket.is_linked:
+            src = _linked(color_socket)
+            if src is not None and src.bl_idname == "ShaderNodeRGB":
+                color = src.outputs[0].default_value
+            else:
+                label = src.bl_label if src is not None else "a link"
+                warnings.append(f"World '{world.name}': background colour driven by {label} "
+                                "(not understood, used the viewport colour)")
+                color = world.color
+        strength = float(strength_socket.default_value)
+        if strength_socket.is_linked:
+            src = _linked(strength_socket)
+            if src is not None and src.bl_idname == "ShaderNodeValue":
+                strength = float(src.outputs[0].default_value)
+            else:
+                warnings.append(f"World '{world.name}': background strength driven by a node (used its own value)")
+        if not math.isfinite(strength):
+            strength = 0.0
+        return tuple(max(0.0, c * strength) for c in _color3(color)), warnings
+    return _color3(world.color), [
+        f"World '{world.name}': {node.bl_label} shader is not understood (used the viewport colour)"]
+
+
+def mist_params(world):
+    """Keyword arguments of render() for the Mist pass (World > Mist Pass)."""
+    if world is None:
+        return {"mist_start": 5.0, "mist_depth": 25.0, "mist_falloff": "QUADRATIC"}
+    mist = world.mist_settings
+    falloff = mist.falloff if mist.falloff in MIST_FALLOFFS else "QUADRATIC"
+    return {"mist_start": float(mist.start), "mist_depth": float(mist.depth), "mist_falloff": falloff}

@@ -1,0 +1,49 @@
+"""Settings of the engine: one PointerProperty group, ``scene.deferred_render``.
+
+Only what the renderer adds is here. Everything Blender already has a setting
+for (resolution and percentage, border/crop, film transparent, frame range,
+view layers and their pass checkboxes, mist, pass indices, light use_shadow,
+render visibility) is read from Blender's own properties, not duplicated.
+"""
+
+import bpy
+from bpy.props import IntProperty, PointerProperty
+
+
+class DeferredRenderSettings(bpy.types.PropertyGroup):
+    samples: IntProperty(
+        name="Samples",
+        description="Number of jittered samples accumulated per pixel (anti-aliasing and soft shadows)",
+        default=16,
+        min=1,
+        soft_max=256,
+        max=4096,
+    )
+    device_index: IntProperty(
+        name="Device",
+        description=(
+            "EGL device index used for rendering; -1 picks automatically (first hardware "
+            "device, else Mesa surfaceless, else the default display). The environment "
+            "variable DEFERRED_EGL_DEVICE overrides -1"
+        ),
+        default=-1,
+        min=-1,
+        max=64,
+    )
+
+
+classes = (DeferredRenderSettings,)
+
+
+def register():
+    for cls in classes:
+        bpy.utils.register_class(cls)
+    bpy.types.Scene.deferred_render = PointerProperty(
+        type=DeferredRenderSettings, name="Deferred Render Settings"
+    )
+
+
+def unregister():
+    del bpy.types.Scene.deferred_render
+    for cls in reversed(classes):
+        bpy.utils.unregister_class(cls)

@@ -1,0 +1,178 @@
+"""The engine's own panels, named DEFERRED_RENDER_PT_<name>.
+
+They show only what Blender has no suitable panel for when this engine is
+active: the add-on settings (samples, device), Film > Transparent, the pass
+checkboxes the renderer honours, the light settings it reads (incl. Cast
+Shadow) and the material pass index.
+"""
+
+import bpy
+
+from .. import native
+from ..engine import passes as pass_table
+
+ENGINE = "DEFERRED_RENDER"
+
+
+class _EnginePanel:
+    bl_space_type = 'PROPERTIES'
+    bl_region_type = 'WINDOW'
+    COMPAT_ENGINES = {ENGINE}
+
+    @classmethod
+    def poll(cls, context):
+        return context.engine in cls.COMPAT_ENGINES
+
+
+class DEFERRED_RENDER_PT_sampling(_EnginePanel, bpy.types.Panel):
+    bl_label = "Sampling"
+    bl_context = "render"
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        settings = context.scene.deferred_render
+        layout.prop(settings, "samples")
+
+
+class DEFERRED_RENDER_PT_film(_EnginePanel, bpy.types.Panel):
+    bl_label = "Film"
+    bl_context = "render"
+    bl_options = {'DEFAULT_CLOSED'}
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        layout.prop(context.scene.render, "film_transparent", text="Transparent")
+
+
+class DEFERRED_RENDER_PT_device(_EnginePanel, bpy.types.Panel):
+    bl_label = "Device"
+    bl_context = "render"
+    bl_options = {'DEFAULT_CLOSED'}
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        layout.prop(context.scene.deferred_render, "device_index")
+        error = native.error_message()
+        if error:
+            col = layout.column(align=True)
+            col.alert = True
+            col.label(text="Native renderer not available:", icon='ERROR')
+            for line in _wrap(error, 60):
+                col.label(text=line)
+
+
+def _wrap(text, width):
+    words, line, lines = text.split(), "", []
+    for word in words:
+        if line and len(line) + 1 + len(word) > width:
+            lines.append(line)
+            line = word
+        else:
+            line = f"{line} {word}" if line else word
+    if line:
+        lines.append(line)
+    return lines
+
+
+_PASS_LABELS = {
+    "use_pass_z": "Z",
+    "use_pass_mist": "Mist",
+    "use_pass_position": "Position",
+    "use_pass_normal": "Normal",
+    "use_pass_vector": "Vector",
+    "use_pass_uv": "UV",
+    "use_pass_object_index": "Object Index",
+    "use_pass_material_index": "Material Index",
+    "use_pass_diffuse_direct": "Diffuse Direct",
+    "use_pass_diffuse_color": "Diffuse Color",
+    "use_pass_glossy_direct": "Glossy Direct",
+    "use_pass_glossy_color": "Glossy Color",
+    "use_pass_emit": "Emission",
+    "use_pass_environment": "Environment",
+    "use_pass_shadow": "Shadow",
+    "use_pass_ambient_occlusion": "Ambient Occlusion",
+}
+
+
+class DEFERRED_RENDER_PT_passes(_EnginePanel, bpy.types.Panel):
+    bl_label = "Passes"
+    bl_context = "view_layer"
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        view_layer = context.view_layer
+        mod = native.try_load()
+        if mod is None:
+            layout.label(text="Native renderer not available (see Render > Device)", icon='ERROR')
+            return
+        col = layout.column(heading="Include", align=True)
+        # Combined is always produced (Blender's image output needs it).
+        for flag in pass_table.supported_flags(mod.PASSES):
+            col.prop(view_layer, flag, text=_PASS_LABELS.get(flag, flag))
+
+
+class DEFERRED_RENDER_PT_light(_EnginePanel, bpy.types.Panel):
+    bl_label = "Light"
+    bl_context = "data"
+
+    @classmethod
+    def poll(cls, context):
+        return context.light is not None and context.engine in cls.COMPAT_ENGINES
+
+    def draw(self, context):
+        layout = self.layout
+        light = context.light
+        layout.row().prop(light, "type", expand=True)
+        layout.use_property_split = True
+        col = layout.column()
+        col.prop(light, "color")
+        col.prop(light, "energy")
+        col.separator()
+        if light.type in {'POINT', 'SPOT'}:
+            col.prop(light, "shadow_soft_size", text="Radius")
+        elif light.type == 'SUN':
+            col.prop(light, "angle")
+        elif light.type == 'AREA':
+            col.prop(light, "shape")
+            sub = col.column(align=True)
+            if light.shape in {'SQUARE', 'DISK'}:
+                sub.prop(light, "size")
+            else:
+                sub.prop(light, "size", text="Size X")
+                sub.prop(light, "size_y", text="Y")
+        col.separator()
+        col.prop(light, "use_shadow", text="Cast Shadow")
+
+
+class DEFERRED_RENDER_PT_material_settings(_EnginePanel, bpy.types.Panel):
+    bl_label = "Settings"
+    bl_context = "material"
+
+    @classmethod
+    def poll(cls, context):
+        mat = context.material
+        return mat is not None and not mat.grease_pencil and context.engine in cls.COMPAT_ENGINES
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        layout.prop(context.material, "pass_index")
+
+
+classes = (
+    DEFERRED_RENDER_PT_sampling,
+    DEFERRED_RENDER_PT_film,
+    DEFERRED_RENDER_PT_device,
+    DEFERRED_RENDER_PT_passes,
+    DEFERRED_RENDER_PT_light,
+    DEFERRED_RENDER_PT_material_settings,
+)

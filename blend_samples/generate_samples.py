@@ -1,0 +1,578 @@
+"""Generate the sample scenes in blend_samples/.
+
+    blender -b --factory-startup --python blend_samples/generate_samples.py [-- NAME ...]
+
+writes blend_samples/{showcase,box_room,many_lights,instancing,analytic}.blend
+(all of them, or the NAMEs given after "--").
+
+The files do not select the Deferred engine (the add-on need not be loaded
+while generating); choose it on the command line:
+
+    BLENDER_USER_SCRIPTS=$PWD/build/blender_scripts blender -b blend_samples/showcase.blend \
+        --addons deferred_render -E DEFERRED_RENDER -o /tmp/out/frame_ -F OPEN_EXR_MULTILAYER -f 1
+
+Every scene stores settings that make a comparison with Cycles fair (direct
+light only: max_bounces 0, denoising off, Standard view transform) and with
+EEVEE (light threshold 1e-4, soft shadows, no
+GTAO/SSR/bloom; 1024 cube / 2048 cascade shadow maps, since 4096 crashes EEVEE
+on llvmpipe), turns on every pass the Deferred engine produces, and writes
+32-bit multilayer EXR by default.
+
+The analytic scene is the reference for the pass tests: its geometry is
+listed in ANALYTIC (also stored in the file as scene["analytic"]), so tests
+can compute expected values without parsing meshes.
+"""
+
+import math
+import os
+import random
+import sys
+
+import bpy
+from mathutils import Vector
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+
+# Passes the Deferred renderer produces (deferred_native.PASSES minus Combined).
+PASS_FLAGS = (
+    "use_pass_z", "use_pass_mist", "use_pass_position", "use_pass_normal", "use_pass_uv",
+    "use_pass_object_index", "use_pass_material_index", "use_pass_diffuse_direct",
+    "use_pass_diffuse_color", "use_pass_glossy_direct", "use_pass_glossy_color",
+    "use_pass_emit", "use_pass_environment",
+)
+
+# The analytic scene, in world units (metres). Spheres are smooth UV spheres
+# (64 segments, 32 rings), planes are single quads.
+ANALYTIC = {
+    "camera": {"location": (0.0, -14.0, 5.0), "target": (0.0, 0.0, 1.0), "lens": 50.0},
+    "camera_ortho": {"location": (0.0, -14.0, 5.0), "target": (0.0, 0.0, 1.0), "ortho_scale": 14.0},
+    "floor": {"center": (0.0, 0.0, 0.0), "size": (16.0, 16.0), "normal": (0.0, 0.0, 1.0),
+              "pass_index": 1, "material_pass_index": 11},
+    "wall": {"center": (0.0, 6.0, 2.5), "size": (10.0, 5.0), "normal": (0.0, -1.0, 0.0),
+             "pass_index": 2, "material_pass_index": 12},
+    "spheres": [
+        {"name": "SphereA", "center": (-3.5, 0.0, 1.0), "radius": 1.0, "pass_index": 3, "material_pass_index": 13},
+        {"name": "SphereB", "center": (0.0, 0.5, 1.5), "radius": 1.5, "pass_index": 4, "material_pass_index": 14},
+        {"name": "SphereC", "center": (3.5, -1.0, 1.0), "radius": 1.0, "pass_index": 5, "material_pass_index": 15},
+    ],
+    # A cube with two materials: top face uses slot 1.
+    "box": {"name": "Box", "center": (-1.5, -4.0, 0.5), "size": 1.0, "pass_index": 6,
+            "material_pass_index": (16, 17)},
+}
+
+
+# ---------------------------------------------------------------------------
+# helpers
+# ---------------------------------------------------------------------------
+
+def new_scene(name, resolution=(640, 360)):
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = bpy.context.scene
+    scene.name = name
+    render = scene.render
+    render.resolution_x, render.resolution_y = resolution
+    render.resolution_percentage = 100
+    render.film_transparent = False
+    render.use_border = False
+    scene.frame_start = scene.frame_end = scene.frame_current = 1
+    img = render.image_settings
+    img.file_format = 'OPEN_EXR_MULTILAYER'
+    img.color_depth = '32'
+    img.exr_codec = 'ZIP'
+    render.use_compositing = True
+    scene.view_settings.view_transform = 'Standard'
+    scene.view_settings.look = 'None'
+
+    # Cycles: direct light only, no denoiser (Debian's build has no OIDN).
+    if hasattr(scene, "cycles"):
+        cy = scene.cycles
+        cy.device = 'CPU'
+        cy.samples = 64
+        cy.use_adaptive_sampling = False
+        cy.use_denoising = False
+        cy.max_bounces = 0
+        cy.diffuse_bounces = cy.glossy_bounces = cy.transmission_bounces = 0
+        cy.volume_bounces = cy.transparent_max_bounces = 0
+        cy.caustics_reflective = cy.caustics_refractive = False
+    # EEVEE: the fair-comparison settings of shared/REFERENCE.md.
+    ee = scene.eevee
+    ee.light_threshold = 1e-4
+    ee.use_soft_shadows = True
+    # REFERENCE.md suggests 4096 maps; EEVEE 3.4 on llvmpipe segfaults with
+    # 4096 cube maps and more than a few lights, so 1024/2048 here.
+    ee.shadow_cube_size = '1024'
+    ee.shadow_cascade_size = '2048'
+    ee.use_shadow_high_bitdepth = True
+    ee.use_gtao = False
+    ee.use_ssr = False
+    ee.use_bloom = False
+    ee.taa_render_samples = 16
+
+    layer = scene.view_layers[0]
+    layer.name = "ViewLayer"
+    layer.use_pass_combined = True
+    for flag in PASS_FLAGS:
+        setattr(layer, flag, True)
+    return scene
+
+
+def set_world(scene, color=(0.05, 0.05, 0.05), strength=1.0):
+    world = bpy.data.worlds.new("World")
+    world.use_nodes = True
+    bg = world.node_tree.nodes["Background"]
+    bg.inputs["Color"].default_value = (*color, 1.0)
+    bg.inputs["Strength"].default_value = strength
+    world.color = color
+    world.mist_settings.start = 5.0
+    world.mist_settings.depth = 25.0
+    world.mist_settings.falloff = 'QUADRATIC'
+    scene.world = world
+    return world
+
+
+def principled(name, color=(0.8, 0.8, 0.8), metallic=0.0, roughness=0.5, specular=0.5,
+               emission=None, emission_strength=1.0, pass_index=0, inputs=None):
+    mat = bpy.data.materials.new(name)
+    mat.use_nodes = True
+    bsdf = mat.node_tree.nodes["Principled BSDF"]
+    bsdf.inputs["Base Color"].default_value = (*color, 1.0)
+    bsdf.inputs["Metallic"].default_value = metallic
+    bsdf.inputs["Roughness"].default_value = roughness
+    bsdf.inputs["Specular"].default_value = specular
+    for key, value in (inputs or {}).items():
+        bsdf.inputs[key].default_value = value
+    if emission is not None:
+        bsdf.inputs["Emission"].default_value = (*emission, 1.0)
+        bsdf.inputs["Emission Strength"].default_value = emission_strength
+    mat.diffuse_color = (*color, 1.0)
+    mat.metallic = metallic
+    mat.roughness = roughness
+    mat.pass_index = pass_index
+    return mat
+
+
+def shader_material(name, build, viewport=(0.8, 0.8, 0.8)):
+    """A material whose surface is built by build(nodes, links) -> shader output socket."""
+    mat = bpy.data.materials.new(name)
+    mat.use_nodes = True
+    nodes, links = mat.node_tree.nodes, mat.node_tree.links
+    nodes.remove(nodes["Principled BSDF"])
+    out = nodes["Material Output"]
+    links.new(build(nodes, links), out.inputs["Surface"])
+    mat.diffuse_color = (*viewport, 1.0)
+    return mat
+
+
+def link(obj, collection=None):
+    (collection or bpy.context.scene.collection).objects.link(obj)
+    return obj
+
+
+def mesh_object(name, mesh, location=(0, 0, 0), material=None, pass_index=0, collection=None):
+    obj = bpy.data.objects.new(name, mesh)
+    obj.location = location
+    obj.pass_index = pass_index
+    if material is not None:
+        obj.data.materials.append(material)
+    return link(obj, collection)
+
+
+def primitive(op, name, material=None, pass_index=0, smooth=False, **kwargs):
+    """Create a primitive with bpy.ops (needs a view layer) and return it."""
+    op(**kwargs)
+    obj = bpy.context.active_object
+    obj.name = name
+    obj.data.name = name
+    obj.pass_index = pass_index
+    if material is not None:
+        obj.data.materials.append(material)
+    if smooth:
+        for poly in obj.data.polygons:
+            poly.use_smooth = True
+    return obj
+
+
+def plane_mesh(name, size_x, size_y):
+    hx, hy = size_x / 2.0, size_y / 2.0
+    mesh = bpy.data.meshes.new(name)
+    mesh.from_pydata([(-hx, -hy, 0), (hx, -hy, 0), (hx, hy, 0), (-hx, hy, 0)], [], [(0, 1, 2, 3)])
+    mesh.uv_layers.new(name="UVMap")
+    uv = mesh.uv_layers[0].data
+    for i, co in enumerate(((0, 0), (1, 0), (1, 1), (0, 1))):
+        uv[i].uv = co
+    mesh.update()
+    return mesh
+
+
+def look_at(obj, target):
+    direction = Vector(target) - obj.location
+    obj.rotation_euler = direction.to_track_quat('-Z', 'Y').to_euler()
+
+
+def add_camera(scene, name="Camera", location=(0, -10, 4), target=(0, 0, 1), lens=50.0,
+               ortho_scale=None, active=True):
+    cam = bpy.data.cameras.new(name)
+    cam.lens = lens
+    cam.sensor_width = 36.0
+    cam.sensor_fit = 'AUTO'
+    cam.clip_start = 0.1
+    cam.clip_end = 200.0
+    if ortho_scale is not None:
+        cam.type = 'ORTHO'
+        cam.ortho_scale = ortho_scale
+    obj = link(bpy.data.objects.new(name, cam))
+    obj.location = location
+    look_at(obj, target)
+    if active:
+        scene.camera = obj
+    return obj
+
+
+def add_light(name, kind, location, energy, color=(1, 1, 1), target=None, collection=None, **props):
+    data = bpy.data.lights.new(name, kind)
+    data.energy = energy
+    data.color = color
+    for key, value in props.items():
+        setattr(data, key, value)
+    obj = link(bpy.data.objects.new(name, data), collection)
+    obj.location = location
+    if target is not None:
+        look_at(obj, target)
+    return obj
+
+
+def save(scene, name):
+    bpy.context.view_layer.update()
+    path = os.path.join(HERE, f"{name}.blend")
+    # Keep the files small and deterministic: no UI thumbnails, compressed.
+    bpy.ops.wm.save_as_mainfile(filepath=path, compress=True, check_existing=False)
+    if os.path.exists(path + "1"):  # Blender's backup of the previous version
+        os.remove(path + "1")
+    print(f"generate_samples: wrote {path}")
+
+
+# ---------------------------------------------------------------------------
+# scenes
+# ---------------------------------------------------------------------------
+
+def build_showcase():
+    scene = new_scene("Showcase")
+    set_world(scene, (0.05, 0.05, 0.05))
+
+    floor = mesh_object("Floor", plane_mesh("Floor", 30, 30),
+                        material=principled("Floor", (0.6, 0.6, 0.6), roughness=0.7), pass_index=1)
+    floor.location = (0, 0, 0)
+
+    suzanne = primitive(bpy.ops.mesh.primitive_monkey_add, "Suzanne",
+                        material=principled("Suzanne", (0.8, 0.25, 0.1), roughness=0.35, inputs={"Clearcoat": 0.5}),
+                        pass_index=2, smooth=True, size=2.0, location=(-1.5, 0.5, 1.2))
+    suzanne.rotation_euler = (math.radians(-10), 0, math.radians(15))
+    mod = suzanne.modifiers.new("Subdivision", 'SUBSURF')
+    mod.levels = mod.render_levels = 2
+
+    primitive(bpy.ops.mesh.primitive_cube_add, "Cube",
+              material=principled("Cube", (0.1, 0.3, 0.8), roughness=0.2), pass_index=3,
+              size=1.2, location=(-4.6, 1.5, 0.6))
+    # Diffuse + Glossy through a Mix Shader.
+    def mix_build(nodes, links):
+        diff = nodes.new("ShaderNodeBsdfDiffuse")
+        diff.inputs["Color"].default_value = (0.2, 0.7, 0.2, 1.0)
+        gloss = nodes.new("ShaderNodeBsdfGlossy")
+        gloss.inputs["Roughness"].default_value = 0.25
+        mix = nodes.new("ShaderNodeMixShader")
+        mix.inputs["Fac"].default_value = 0.3
+        links.new(diff.outputs[0], mix.inputs[1])
+        links.new(gloss.outputs[0], mix.inputs[2])
+        return mix.outputs[0]
+    primitive(bpy.ops.mesh.primitive_cylinder_add, "Cylinder",
+              material=shader_material("DiffuseGlossyMix", mix_build, (0.2, 0.7, 0.2)), pass_index=4,
+              smooth=True, radius=0.6, depth=1.6, vertices=48, location=(-4.4, -1.6, 0.8))
+    primitive(bpy.ops.mesh.primitive_cone_add, "Cone",
+              material=principled("Cone", (0.9, 0.8, 0.2), metallic=1.0, roughness=0.3), pass_index=5,
+              radius1=0.7, depth=1.5, vertices=48, location=(-2.2, -2.6, 0.75))
+    # Principled + Emission through an Add Shader.
+    def add_build(nodes, links):
+        bsdf = nodes.new("ShaderNodeBsdfPrincipled")
+        bsdf.inputs["Base Color"].default_value = (0.1, 0.1, 0.1, 1.0)
+        emit = nodes.new("ShaderNodeEmission")
+        emit.inputs["Color"].default_value = (0.2, 0.6, 1.0, 1.0)
+        emit.inputs["Strength"].default_value = 3.0
+        add = nodes.new("ShaderNodeAddShader")
+        links.new(bsdf.outputs[0], add.inputs[0])
+        links.new(emit.outputs[0], add.inputs[1])
+        return add.outputs[0]
+    torus = primitive(bpy.ops.mesh.primitive_torus_add, "Torus",
+                      material=shader_material("GlowingTorus", add_build, (0.2, 0.6, 1.0)), pass_index=6,
+                      smooth=True, major_radius=0.6, minor_radius=0.2, location=(0.2, -3.2, 0.2))
+    torus.data.use_auto_smooth = True
+
+    # 5x5 sphere grid on the right: roughness left -> right, metallic front -> back.
+    sphere_mesh = None
+    for i in range(5):
+        for j in range(5):
+            mat = principled(f"Grid_r{i}_m{j}", (0.9, 0.6, 0.3), metallic=j / 4.0, roughness=i / 4.0)
+            if sphere_mesh is None:
+                bpy.ops.mesh.primitive_uv_sphere_add(segments=32, ring_count=16, radius=0.35)
+                proto = bpy.context.active_object
+                for poly in proto.data.polygons:
+                    poly.use_smooth = True
+                sphere_mesh = proto.data
+                sphere_mesh.name = "GridSphere"
+                sphere_mesh.materials.append(mat)
+                bpy.data.objects.remove(proto)
+            obj = bpy.data.objects.new(f"Grid_{i}_{j}", sphere_mesh)
+            obj.location = (1.6 + 0.9 * i, -1.8 + 0.9 * j, 0.35)
+            obj.pass_index = 10 + 5 * j + i
+            link(obj)
+            # Object-linked material: all 25 spheres share one mesh.
+            obj.material_slots[0].link = 'OBJECT'
+            obj.material_slots[0].material = mat
+
+    # Every light type, every area shape.
+    add_light("Point", 'POINT', (3.5, -3.5, 3.0), 300.0, (1.0, 0.85, 0.7), shadow_soft_size=0.2)
+    add_light("Spot", 'SPOT', (-4.0, -4.0, 5.0), 800.0, (0.8, 0.9, 1.0), target=(-1.5, 0.5, 1.2),
+              spot_size=math.radians(35), spot_blend=0.2, shadow_soft_size=0.1)
+    add_light("Sun", 'SUN', (0, 0, 10), 1.5, (1.0, 0.95, 0.9), target=(1.5, 1.0, 0), angle=math.radians(2))
+    add_light("AreaSquare", 'AREA', (-1.5, -5, 2.5), 150.0, target=(-1.5, 0.5, 1), shape='SQUARE', size=1.0)
+    add_light("AreaRect", 'AREA', (7, -3, 3), 200.0, (1.0, 0.7, 0.7), target=(3.4, 0, 0), shape='RECTANGLE',
+              size=2.0, size_y=0.5)
+    add_light("AreaDisk", 'AREA', (-7, 2, 3), 150.0, (0.7, 1.0, 0.7), target=(-4.5, 0, 0), shape='DISK', size=1.0)
+    add_light("AreaEllipse", 'AREA', (0, 6, 4), 150.0, (0.7, 0.7, 1.0), target=(0, 0, 0), shape='ELLIPSE',
+              size=1.5, size_y=0.6)
+
+    add_camera(scene, location=(0.0, -12.5, 6.5), target=(0.0, 0.2, 0.6), lens=32.0)
+    save(scene, "showcase")
+
+
+def build_box_room():
+    scene = new_scene("BoxRoom")
+    set_world(scene, (0.0, 0.0, 0.0))
+    white = principled("White", (0.75, 0.75, 0.75), roughness=0.8)
+    red = principled("Red", (0.7, 0.08, 0.06), roughness=0.8)
+    green = principled("Green", (0.1, 0.6, 0.1), roughness=0.8)
+    W, D, H = 6.0, 6.0, 4.0
+    walls = [
+        ("Floor", (0, 0, 0), (0, 0, 0), (W, D), white),
+        ("Ceiling", (0, 0, H), (math.pi, 0, 0), (W, D), white),
+        ("BackWall", (0, D / 2, H / 2), (math.pi / 2, 0, 0), (W, H), white),
+        ("LeftWall", (-W / 2, 0, H / 2), (0, math.pi / 2, 0), (H, D), red),
+        ("RightWall", (W / 2, 0, H / 2), (0, -math.pi / 2, 0), (H, D), green),
+    ]
+    for index, (name, loc, rot, size, mat) in enumerate(walls, start=1):
+        obj = mesh_object(name, plane_mesh(name, *size), location=loc, material=mat, pass_index=index)
+        obj.rotation_euler = rot
+    tall = primitive(bpy.ops.mesh.primitive_cube_add, "TallBox", material=white, pass_index=10,
+                     size=1.0, location=(-1.0, 1.0, 1.25))
+    tall.scale = (1.2, 1.2, 2.5)
+    tall.rotation_euler = (0, 0, math.radians(20))
+    short = primitive(bpy.ops.mesh.primitive_cube_add, "ShortBox", material=white, pass_index=11,
+                      size=1.2, location=(1.2, -0.6, 0.6))
+    short.rotation_euler = (0, 0, math.radians(-18))
+    primitive(bpy.ops.mesh.primitive_uv_sphere_add, "Ball",
+              material=principled("Chrome", (0.9, 0.9, 0.9), metallic=1.0, roughness=0.1), pass_index=12,
+              smooth=True, radius=0.5, location=(1.2, -0.6, 1.7), segments=48, ring_count=24)
+    add_light("CeilingLight", 'AREA', (0, 0, H - 0.01), 400.0, (1.0, 0.9, 0.8), shape='SQUARE', size=1.5)
+    add_light("Bulb", 'POINT', (1.8, -1.8, 3.0), 120.0, (1.0, 0.8, 0.6), shadow_soft_size=0.1)
+    add_camera(scene, location=(0, -10.5, H / 2), target=(0, 0, H / 2), lens=38.0)
+    save(scene, "box_room")
+
+
+def build_many_lights(count_x=32, count_y=32):
+    scene = new_scene("ManyLights")
+    set_world(scene, (0.01, 0.01, 0.01))
+    floor_mat = principled("Floor", (0.5, 0.5, 0.5), roughness=0.4)
+    mesh_object("Floor", plane_mesh("Floor", 50, 50), material=floor_mat, pass_index=1)
+    pillar_mat = principled("Pillar", (0.8, 0.8, 0.8), roughness=0.6)
+    bpy.ops.mesh.primitive_cylinder_add(radius=0.25, depth=2.0, vertices=24)
+    proto = bpy.context.active_object
+    pillar_mesh = proto.data
+    pillar_mesh.name = "Pillar"
+    pillar_mesh.materials.append(pillar_mat)
+    bpy.data.objects.remove(proto)
+    for i in range(8):
+        for j in range(8):
+            obj = bpy.data.objects.new(f"Pillar_{i}_{j}", pillar_mesh)
+            obj.location = (-14 + 4 * i, -14 + 4 * j, 1.0)
+            obj.pass_index = 2
+            link(obj)
+
+    lights = bpy.data.collections.new("Lights")
+    scene.collection.children.link(lights)
+    rng = random.Random(1234)
+    palette = []
+    for k in range(16):
+        hue = k / 16.0
+        r = max(0.0, min(1.0, abs(hue * 6 - 3) - 1))
+        g = max(0.0, min(1.0, 2 - abs(hue * 6 - 2)))
+        b = max(0.0, min(1.0, 2 - abs(hue * 6 - 4)))
+        data = bpy.data.lights.new(f"SmallLight_{k}", 'POINT')
+        data.color = (0.2 + 0.8 * r, 0.2 + 0.8 * g, 0.2 + 0.8 * b)
+        data.energy = 8.0
+        data.shadow_soft_size = 0.05
+        # Small fill lights cast no shadows (1024 shadow maps would dominate
+        # any renderer); the moon below is the one shadowed key light.
+        data.use_shadow = False
+        palette.append(data)
+    spacing = 1.0
+    for i in range(count_x):
+        for j in range(count_y):
+            obj = bpy.data.objects.new(f"L_{i:02d}_{j:02d}", rng.choice(palette))
+            obj.location = ((i - (count_x - 1) / 2) * spacing, (j - (count_y - 1) / 2) * spacing,
+                            0.3 + 0.5 * rng.random())
+            lights.objects.link(obj)
+    add_light("Moon", 'SUN', (0, 0, 20), 0.05, (0.6, 0.7, 1.0), target=(4, 6, 0), angle=math.radians(1.0))
+    add_camera(scene, location=(0, -26, 14), target=(0, 0, 0), lens=35.0)
+    save(scene, "many_lights")
+
+
+def _scatter_node_group(instance_object, grid=(101, 100), size=(50.0, 50.0)):
+    ng = bpy.data.node_groups.new("Scatter", 'GeometryNodeTree')
+    ng.inputs.new('NodeSocketGeometry', "Geometry")
+    ng.outputs.new('NodeSocketGeometry', "Geometry")
+    nodes, links = ng.nodes, ng.links
+    group_out = nodes.new("NodeGroupOutput")
+    nodes.new("NodeGroupInput")
+    grid_node = nodes.new("GeometryNodeMeshGrid")
+    grid_node.inputs["Size X"].default_value = size[0]
+    grid_node.inputs["Size Y"].default_value = size[1]
+    grid_node.inputs["Vertices X"].default_value = grid[0]
+    grid_node.inputs["Vertices Y"].default_value = grid[1]
+    info = nodes.new("GeometryNodeObjectInfo")
+    info.inputs["Object"].default_value = instance_object
+    info.inputs["As Instance"].default_value = True
+    iop = nodes.new("GeometryNodeInstanceOnPoints")
+    rot = nodes.new("FunctionNodeRandomValue")
+    rot.data_type = 'FLOAT_VECTOR'
+    rot.inputs[0].default_value = (0.0, 0.0, 0.0)        # Min (vector)
+    rot.inputs[1].default_value = (0.3, 0.3, 6.2831853)  # Max (vector)
+    rot.inputs["Seed"].default_value = 7
+    scale = nodes.new("FunctionNodeRandomValue")
+    scale.data_type = 'FLOAT'
+    scale.inputs[2].default_value = 0.15                  # Min (float)
+    scale.inputs[3].default_value = 0.35                  # Max (float)
+    scale.inputs["Seed"].default_value = 3
+    links.new(grid_node.outputs["Mesh"], iop.inputs["Points"])
+    links.new(info.outputs["Geometry"], iop.inputs["Instance"])
+    links.new(rot.outputs[0], iop.inputs["Rotation"])
+    links.new(scale.outputs[1], iop.inputs["Scale"])
+    links.new(iop.outputs["Instances"], group_out.inputs[0])
+    return ng
+
+
+def build_instancing():
+    scene = new_scene("Instancing")
+    set_world(scene, (0.05, 0.06, 0.08))
+    mesh_object("Ground", plane_mesh("Ground", 60, 60),
+                material=principled("Ground", (0.35, 0.3, 0.25), roughness=0.9), pass_index=1)
+
+    # Source objects live in a collection that is not linked to the scene:
+    # they render only through their instances.
+    assets = bpy.data.collections.new("Assets")
+    assets.use_fake_user = True
+    bpy.ops.mesh.primitive_ico_sphere_add(subdivisions=2, radius=1.0)
+    rock = bpy.context.active_object
+    rock.name = rock.data.name = "Rock"
+    rock.data.materials.append(principled("Rock", (0.5, 0.45, 0.4), roughness=0.6))
+    rock.pass_index = 2
+    scene.collection.objects.unlink(rock)
+    assets.objects.link(rock)
+
+    tree = bpy.data.collections.new("Tree")
+    tree.use_fake_user = True
+    bpy.ops.mesh.primitive_cylinder_add(radius=0.15, depth=1.0, vertices=12, location=(0, 0, 0.5))
+    trunk = bpy.context.active_object
+    trunk.name = trunk.data.name = "Trunk"
+    trunk.data.materials.append(principled("Bark", (0.3, 0.18, 0.08), roughness=0.8))
+    trunk.pass_index = 3
+    bpy.ops.mesh.primitive_cone_add(radius1=0.8, depth=2.0, vertices=16, location=(0, 0, 2.0))
+    crown = bpy.context.active_object
+    crown.name = crown.data.name = "Crown"
+    crown.data.materials.append(principled("Leaves", (0.1, 0.45, 0.12), roughness=0.7))
+    crown.pass_index = 4
+    for obj in (trunk, crown):
+        scene.collection.objects.unlink(obj)
+        tree.objects.link(obj)
+
+    # >= 10 000 geometry-nodes instances of the rock.
+    scatter = mesh_object("Scatter", bpy.data.meshes.new("ScatterBase"), pass_index=5)
+    mod = scatter.modifiers.new("Scatter", 'NODES')
+    mod.node_group = _scatter_node_group(rock)
+
+    # Plus collection instances of the tree on a ring.
+    for k in range(24):
+        angle = 2 * math.pi * k / 24
+        empty = bpy.data.objects.new(f"Tree_{k:02d}", None)
+        empty.instance_type = 'COLLECTION'
+        empty.instance_collection = tree
+        empty.location = (18 * math.cos(angle), 18 * math.sin(angle), 0)
+        empty.scale = (1.5, 1.5, 1.5)
+        link(empty)
+
+    add_light("Sun", 'SUN', (0, 0, 20), 3.0, (1.0, 0.95, 0.85), target=(3, 2, 0), angle=math.radians(1.0))
+    add_light("Fill", 'POINT', (-10, -10, 8), 2000.0, (0.7, 0.8, 1.0), shadow_soft_size=1.0)
+    add_camera(scene, location=(0, -38, 22), target=(0, 0, 0), lens=35.0)
+
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    count = sum(1 for inst in depsgraph.object_instances if inst.is_instance)
+    print(f"generate_samples: instancing scene has {count} instances")
+    assert count >= 10000, count
+    save(scene, "instancing")
+
+
+def build_analytic():
+    A = ANALYTIC
+    scene = new_scene("Analytic", resolution=(320, 180))
+    set_world(scene, (0.05, 0.05, 0.05))
+    scene.frame_end = 3
+
+    floor = A["floor"]
+    mesh_object("Floor", plane_mesh("Floor", *floor["size"]), location=floor["center"],
+                material=principled("MatFloor", (0.6, 0.6, 0.6), pass_index=floor["material_pass_index"]),
+                pass_index=floor["pass_index"])
+    wall = A["wall"]
+    obj = mesh_object("Wall", plane_mesh("Wall", *wall["size"]), location=wall["center"],
+                      material=principled("MatWall", (0.7, 0.7, 0.5), pass_index=wall["material_pass_index"]),
+                      pass_index=wall["pass_index"])
+    obj.rotation_euler = (math.pi / 2, 0, 0)   # plane normal +Z -> -Y
+    for s in A["spheres"]:
+        mat = principled("Mat" + s["name"], (0.2, 0.4, 0.8), roughness=0.3, pass_index=s["material_pass_index"])
+        primitive(bpy.ops.mesh.primitive_uv_sphere_add, s["name"], material=mat, pass_index=s["pass_index"],
+                  smooth=True, segments=64, ring_count=32, radius=s["radius"], location=s["center"])
+    box = A["box"]
+    cube = primitive(bpy.ops.mesh.primitive_cube_add, box["name"], pass_index=box["pass_index"],
+                     size=box["size"], location=box["center"])
+    cube.data.materials.append(principled("MatBoxSide", (0.8, 0.2, 0.2), pass_index=box["material_pass_index"][0]))
+    cube.data.materials.append(principled("MatBoxTop", (0.2, 0.8, 0.2), pass_index=box["material_pass_index"][1]))
+    for poly in cube.data.polygons:
+        poly.material_index = 1 if poly.normal.z > 0.5 else 0
+
+    add_light("Sun", 'SUN', (0, 0, 10), 3.0, target=(1, 2, 0), angle=math.radians(0.526))
+    add_light("Point", 'POINT', (2, -4, 4), 500.0, shadow_soft_size=0.25)
+    cam = A["camera"]
+    add_camera(scene, "Camera", cam["location"], cam["target"], lens=cam["lens"])
+    ortho = A["camera_ortho"]
+    add_camera(scene, "CameraOrtho", ortho["location"], ortho["target"], ortho_scale=ortho["ortho_scale"],
+               active=False)
+    scene["analytic"] = repr(A)
+    save(scene, "analytic")
+
+
+BUILDERS = {
+    "showcase": build_showcase,
+    "box_room": build_box_room,
+    "many_lights": build_many_lights,
+    "instancing": build_instancing,
+    "analytic": build_analytic,
+}
+
+
+def main():
+    argv = sys.argv[sys.argv.index("--") + 1:] if "--" in sys.argv else []
+    names = argv or list(BUILDERS)
+    for name in names:
+        if name not in BUILDERS:
+            raise SystemExit(f"unknown sample '{name}', choose from {', '.join(BUILDERS)}")
+        BUILDERS[name]()
+
+
+main()

@@ -22,3 +22,10 @@ vec3 frame_position_from_depth(ivec2 pixel, float depth) {
 
 /* Positive camera-space Z (Cycles' Depth pass) of a camera-relative position. */
 float frame_view_depth(vec3 P) { return -(frame.view * vec4(P, 1.0)).z; }
+
+/* Bin of view depth d in a tile's [dmin, dmax] (2.5D culling masks); the
+ * culling and lighting passes must agree bit for bit, hence one function. */
+uint depth_bin(float d, float dmin, float dmax) {
+    float t = (d - dmin) / max(dmax - dmin, 1e-30);
+    return uint(clamp(t * float(DEPTH_BINS), 0.0, float(DEPTH_BINS - 1)));
+}

@@ -11,7 +11,19 @@
 
 layout(local_size_x = LIGHTING_GROUP_SIZE, local_size_y = LIGHTING_GROUP_SIZE) in;
 
+/* This dispatch shades entries [x, y) of each pixel's light sequence (its
+ * tile's list, or every light). The host splits the lights into batches so
+ * no invocation runs more than a bounded number of loop iterations: Mesa's
+ * llvmpipe silently ends every loop of an invocation after 65535 iterations
+ * in total (LP_MAX_TGSI_LOOP_ITERATIONS), which would drop lights. Emission,
+ * world light and background belong to the batch starting at 0. */
+layout(location = 0) uniform uvec2 light_batch;
+
 layout(std430, binding = SSBO_LIGHTS) readonly buffer Lights { GpuLight lights[]; };
+#ifdef LIGHT_CULLING
+layout(std430, binding = SSBO_TILES) readonly buffer Tiles { GpuTile tiles[]; };
+layout(std430, binding = SSBO_TILE_LIGHTS) readonly buffer TileLights { uint tile_lights[]; };
+#endif
 
 layout(binding = TEX_DEPTH) uniform sampler2D gbuf_depth;
 layout(binding = TEX_GBUF_EMISSION) uniform sampler2D gbuf_emission;
@@ -53,7 +65,9 @@ void main() {
     /* Each sample adds its share (1/samples) to the accumulations. */
     float share = 1.0 / float(max(frame.counts.w, 1u));
     float depth = texelFetch(gbuf_depth, pixel, 0).r;
+    const bool first_batch = light_batch.x == 0u;
     if (depth <= 0.0) {
+        if (!first_batch) return;
         /* Background: the world colour, or transparent (Cycles film_transparent). */
         bool transparent = frame.world_color.w > 0.5;
         vec4 bg = transparent ? vec4(0.0) : vec4(frame.world_color.rgb, 1.0);
@@ -72,15 +86,39 @@ void main() {
     vec3 V = frame_view_vector(P);
     vec3 N = s.N;
 
-    LightContribution total = world_light(w, s, dot(N, V));
-    const uint light_count = frame.counts.x;
-    for (uint i = 0u; i < light_count; ++i) {
+    LightContribution total;
+    total.diffuse = vec3(0.0);
+    total.glossy = vec3(0.0);
+    if (first_batch) total = world_light(w, s, dot(N, V));
+    /* The tile's list when this sample's point lies inside the depth range
+     * and occupied bins the list was culled for, every light otherwise (a
+     * jittered sample can see a sliver no pixel centre saw). */
+    uint first = 0u, count = frame.counts.x;
+    bool from_list = false;
+#ifdef LIGHT_CULLING
+    GpuTile tile = tiles[(uint(pixel.y) / uint(TILE_SIZE)) * frame.tiles.x + uint(pixel.x) / uint(TILE_SIZE)];
+    float d = frame_view_depth(P);
+    if (tile.list.w != 0u && d >= tile.depth.x && d <= tile.depth.y &&
+        ((tile.list.z >> depth_bin(d, tile.depth.x, tile.depth.y)) & 1u) != 0u) {
+        first = tile.list.x;
+        count = tile.list.y;
+        from_list = true;
+    }
+#endif
+    const uint end = min(count, light_batch.y);
+    if (!first_batch && light_batch.x >= end) return;
+    for (uint k = light_batch.x; k < end; ++k) {
+#ifdef LIGHT_CULLING
+        uint i = from_list ? tile_lights[first + k] : k;
+#else
+        uint i = k;
+#endif
         LightContribution c = shade_light(lights[i], s, w, P, N, V);
         total.diffuse += c.diffuse;
         total.glossy += c.glossy;
     }
 
-    vec4 emission = texelFetch(gbuf_emission, pixel, 0);
+    vec4 emission = first_batch ? texelFetch(gbuf_emission, pixel, 0) : vec4(0.0);
     vec4 sample_value = vec4(emission.rgb + total.diffuse + total.glossy, emission.a);
     imageStore(film, pixel, imageLoad(film, pixel) + sample_value * share);
 #ifdef OUT_LIGHT_SPLIT

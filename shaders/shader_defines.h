@@ -16,6 +16,9 @@
 #define SSBO_MATERIAL_SLOTS 6
 #define SSBO_MATERIALS 7
 #define SSBO_LIGHTS 8
+#define SSBO_TILES 9
+#define SSBO_TILE_LIGHTS 10
+#define SSBO_CULL_COUNTER 11
 
 /* Textures sampled by compute passes (G-buffer inputs) */
 #define TEX_DEPTH 0
@@ -62,5 +65,9 @@
 
 /* Compute workgroup size (8x8 pixels) */
 #define LIGHTING_GROUP_SIZE 8
+/* Light-culling tiles: TILE_SIZE x TILE_SIZE pixels, one workgroup each; the
+ * 2.5D depth mask has 32 bins (Harada 2012) */
+#define TILE_SIZE 16
+#define DEPTH_BINS 32
 
 #endif

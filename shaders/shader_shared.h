@@ -36,7 +36,9 @@ struct alignas(16) mat4 { vec4 cols[4]; };
  *   direction     : xyz = the light's -Z axis (unit), w = cos(spot_size/2)
  *   axis_x        : xyz = area half-extent along the light's X axis (size/2 x X scale), w = spot blend width (1-cs)*blend
  *   axis_y        : xyz = area half-extent along the light's Y axis, w = AREA_* shape
- *   params        : x = area A (m^2, pi/4 factor for ellipses), y = cast shadow (0/1), zw unused */
+ *   params        : x = area A (m^2, pi/4 factor for ellipses), y = cast shadow (0/1),
+ *                   z = influence radius (m) beyond which the light is culled, < 0: infinite
+ *                   (sun), w unused */
 SHARED_STRUCT(GpuLight) {
     vec4 position_type;
     vec4 strength;
@@ -82,7 +84,9 @@ SHARED_ASSERT_SIZE(GpuInstance, 144);
  *   mist            : start, 1/depth, falloff (0 quadratic, 1 linear, 2 inverse quadratic), unused
  *   counts          : x light count, y requested pass bits, z light-shape points K per sample, w samples
  *   sample_shift    : xy this sample's point in [0,1)^2 inside every cell of the light-shape
- *                     grid and on the sun's disk (0.5: the centre, sample 0), zw unused */
+ *                     grid and on the sun's disk (0.5: the centre, sample 0), zw unused
+ *   tiles           : x tiles per row, y tile rows, z 1 if light culling is on, w the pixel
+ *                     filter's reach in whole pixels (tile frusta are widened by it) */
 SHARED_STRUCT(FrameConstants) {
     mat4 view;
     mat4 projection;
@@ -94,8 +98,21 @@ SHARED_STRUCT(FrameConstants) {
     vec4 mist;
     uvec4 counts;
     vec4 sample_shift;
+    uvec4 tiles;
 };
-SHARED_ASSERT_SIZE(FrameConstants, 352);
+SHARED_ASSERT_SIZE(FrameConstants, 368);
+
+/* One screen tile's light list, written by light_cull_comp.glsl.
+ *   list  : x offset of the tile's light indices in the index buffer, y count,
+ *           z 2.5D depth mask (bit i: some pixel of the tile lies in depth bin i
+ *           of [depth.x, depth.y]), w 1 if the tile has geometry
+ *   depth : x, y nearest/farthest positive view depth of the tile's pixels
+ *           (widened by the pixel filter's reach), zw unused */
+SHARED_STRUCT(GpuTile) {
+    uvec4 list;
+    vec4 depth;
+};
+SHARED_ASSERT_SIZE(GpuTile, 32);
 
 #ifdef __cplusplus
 }  // namespace deferred::gpu

@@ -98,7 +98,9 @@ void declare_renderer(py::module_& m) {
             py::dict d;
             d["upload_ms"] = self.last.upload_ms;
             d["geometry_ms"] = self.last.geometry_ms;
+            d["culling_ms"] = self.last.culling_ms;
             d["lighting_ms"] = self.last.lighting_ms;
+            d["tile_light_pairs"] = self.last.tile_light_pairs;
             d["passes_ms"] = self.last.passes_ms;
             d["readback_ms"] = self.last.readback_ms;
             d["total_ms"] = self.last.total_ms;
@@ -229,7 +231,7 @@ void declare_renderer(py::module_& m) {
         .def("render",
              [](PyRenderer& self, const Camera& camera, int width, int height, const std::vector<std::string>& passes,
                 bool film_transparent, float mist_start, float mist_depth, const std::string& mist_falloff,
-                int samples, float filter_width) {
+                int samples, float filter_width, bool light_culling, float light_threshold) {
                  RenderSettings s;
                  s.width = width;
                  s.height = height;
@@ -247,6 +249,8 @@ void declare_renderer(py::module_& m) {
                  else throw py::value_error("render: mist_falloff '" + mist_falloff + "' is not one of QUADRATIC, LINEAR, INVERSE_QUADRATIC");
                  s.samples = samples;
                  s.filter_width = filter_width;
+                 s.light_culling = light_culling;
+                 s.light_threshold = light_threshold;
                  FrameResult frame;
                  {
                      py::gil_scoped_release release;
@@ -263,7 +267,8 @@ void declare_renderer(py::module_& m) {
              py::arg("camera"), py::arg("width"), py::arg("height"), py::kw_only(),
              py::arg("passes") = std::vector<std::string>{"Combined"}, py::arg("film_transparent") = false,
              py::arg("mist_start") = 5.0f, py::arg("mist_depth") = 25.0f, py::arg("mist_falloff") = "QUADRATIC",
-             py::arg("samples") = 1, py::arg("filter_width") = 1.5f);
+             py::arg("samples") = 1, py::arg("filter_width") = 1.5f, py::arg("light_culling") = true,
+             py::arg("light_threshold") = 1e-3f);
 }
 
 }  // namespace deferred::python

@@ -2,6 +2,7 @@
 
 #include "../../shaders/shader_defines.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace deferred {
@@ -12,7 +13,21 @@ gpu::vec4 v4(const glm::dvec3& v, double w) {
 }
 }  // namespace
 
-gpu::GpuLight pack_light(const Light& l, const glm::dvec3& camera_position) {
+double influence_radius(const Light& l, double threshold) {
+    if (l.type == LightType::Sun || !(threshold > 0.0)) return -1.0;
+    const double S = std::abs(double(l.energy)) *
+                     std::max({std::abs(double(l.color[0])), std::abs(double(l.color[1])), std::abs(double(l.color[2]))});
+    if (l.type == LightType::Area) {
+        const glm::dmat4 m = to_glm(l.matrix);
+        const bool separate_y = l.shape == AreaShape::Rectangle || l.shape == AreaShape::Ellipse;
+        const double hx = 0.5 * l.size * glm::length(glm::dvec3(m[0]));
+        const double hy = 0.5 * (separate_y ? l.size_y : l.size) * glm::length(glm::dvec3(m[1]));
+        return std::sqrt(hx * hx + hy * hy) + std::sqrt(S / (4.0 * M_PI * threshold));
+    }
+    return double(l.radius) + std::sqrt(S / (4.0 * M_PI * M_PI * threshold));
+}
+
+gpu::GpuLight pack_light(const Light& l, const glm::dvec3& camera_position, double threshold) {
     const glm::dmat4 m = to_glm(l.matrix);
     const glm::dvec3 position = glm::dvec3(m[3]) - camera_position;  // camera-relative, in double
     const glm::dvec3 x_axis(m[0]), y_axis(m[1]), z_axis(m[2]);
@@ -35,11 +50,11 @@ gpu::GpuLight pack_light(const Light& l, const glm::dvec3& camera_position) {
     g.axis_x = v4(half_x, (1.0 - cs) * double(l.spot_blend));
     g.axis_y = v4(half_y, ellipse ? AREA_ELLIPSE : AREA_RECT);
     const double area = 4.0 * glm::length(half_x) * glm::length(half_y) * (ellipse ? M_PI / 4.0 : 1.0);
-    g.params = {float(area), l.cast_shadow ? 1.0f : 0.0f, 0.0f, 0.0f};
+    g.params = {float(area), l.cast_shadow ? 1.0f : 0.0f, float(influence_radius(l, threshold)), 0.0f};
     return g;
 }
 
-void LightModule::sync(const std::vector<Light>& lights, const glm::dvec3& camera_position) {
+void LightModule::sync(const std::vector<Light>& lights, const glm::dvec3& camera_position, double threshold) {
     std::vector<gpu::GpuLight> packed;
     packed.reserve(lights.size());
     for (auto& t : has_type_) t = false;
@@ -49,7 +64,7 @@ void LightModule::sync(const std::vector<Light>& lights, const glm::dvec3& camer
         if (l.type == LightType::Area && (l.size <= 0 || (l.shape == AreaShape::Rectangle && l.size_y <= 0) ||
                                           (l.shape == AreaShape::Ellipse && l.size_y <= 0)))
             continue;  // zero-size area light: no emitting surface (Cycles renders nothing either)
-        packed.push_back(pack_light(l, camera_position));
+        packed.push_back(pack_light(l, camera_position, threshold));
         has_type_[static_cast<int>(l.type)] = true;
     }
     count_ = static_cast<std::uint32_t>(packed.size());

@@ -8,6 +8,7 @@
 #include "film.h"
 #include "gbuffer.h"
 #include "gl_util.h"
+#include "light_culling.h"
 #include "light_module.h"
 #include "render_thread.h"
 #include "scene_store.h"
@@ -30,6 +31,10 @@ namespace {
 // Points per light shape (a 4x4 grid) per sample for the Monte Carlo parts
 // of disk and area lights (shaders/light_lib.glsl).
 constexpr std::uint32_t kLightShapePoints = 16;
+// Lights per lighting dispatch. A light runs at most ~40 loop iterations
+// (quadrature + light points); llvmpipe ends all loops of an invocation after
+// 65535 iterations in total, so 512 lights per dispatch stay well inside.
+constexpr std::uint32_t kLightBatch = 512;
 
 gpu::mat4 to_gpu(const glm::dmat4& m) {
     gpu::mat4 r{};
@@ -73,6 +78,7 @@ struct Renderer::Impl {
     SceneStore scene;
     GBuffer gbuffer;
     LightModule lights;
+    LightCulling culling;
     VertexArray empty_vao;
     Buffer dummy_ssbo;
     GLint max_texture_size = 0, max_fb_width = 0, max_fb_height = 0;
@@ -82,6 +88,7 @@ struct Renderer::Impl {
             // Release every GL object while the context is still current.
             gbuffer = GBuffer();
             lights = LightModule();
+            culling = LightCulling();
             scene.clear();
             shaders.reset();
             empty_vao.reset();
@@ -149,6 +156,8 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         throw InvalidInput("samples must be in 1..65536, got " + std::to_string(settings.samples));
     if (!(settings.filter_width > 0.0f && settings.filter_width <= 100.0f))
         throw InvalidInput("filter_width must be in (0, 100] pixels");
+    if (!(settings.light_threshold >= 0.0f) || !std::isfinite(settings.light_threshold))
+        throw InvalidInput("light_threshold must be a finite number >= 0");
 
     // Memory check before any allocation: G-buffer (depth 4, emission 8,
     // base 8, params0 8, normal 4, optional params1 8, ids 8, uv 8), the
@@ -205,7 +214,8 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     Buffer instance_buffer = make_storage_buffer(instances.data(), instances.size() * sizeof(gpu::GpuInstance), "instances");
     Buffer slot_buffer = make_storage_buffer(slots.data(), slots.size() * sizeof(std::uint32_t), "material slots");
     Buffer material_buffer = make_storage_buffer(materials.data(), materials.size() * sizeof(gpu::GpuMaterial), "materials");
-    lights.sync(scene.lights(), cam.position);
+    lights.sync(scene.lights(), cam.position, settings.light_threshold);
+    const bool culled = settings.light_culling && lights.count() > 0;
 
     gpu::FrameConstants fc{};
     fc.view = to_gpu(cam.view);
@@ -219,6 +229,12 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     const float mist_depth = settings.mist.depth > 0 ? settings.mist.depth : 1e-6f;
     fc.mist = {settings.mist.start, 1.0f / mist_depth, float(static_cast<std::uint32_t>(settings.mist.falloff)), 0};
     fc.counts = {lights.count(), wanted.bits(), kLightShapePoints, std::uint32_t(settings.samples)};
+    const PixelFilter filter(settings.filter_width);
+    const std::uint32_t tiles_x = std::uint32_t((settings.width + TILE_SIZE - 1) / TILE_SIZE);
+    const std::uint32_t tiles_y = std::uint32_t((settings.height + TILE_SIZE - 1) / TILE_SIZE);
+    // How far (whole pixels) a jittered sample can look from its pixel centre.
+    const std::uint32_t reach = settings.samples > 1 ? std::uint32_t(std::ceil(filter.support())) : 0u;
+    fc.tiles = {tiles_x, tiles_y, culled ? 1u : 0u, reach};
     Buffer frame_buffer = make_storage_buffer(nullptr, sizeof(fc), "frame constants");
     glBindBufferBase(GL_UNIFORM_BUFFER, UBO_FRAME, frame_buffer.get());
 
@@ -249,6 +265,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     ShaderVariant lighting_variant = base_variant;
     lights.add_defines(lighting_variant);
     if (light_split) lighting_variant.defines.push_back("OUT_LIGHT_SPLIT");
+    if (culled) lighting_variant.defines.push_back("LIGHT_CULLING");
     const GLuint geometry = shaders->graphics_program("geometry_vert.glsl", "geometry_frag.glsl", base_variant);
     const GLuint lighting = shaders->compute_program("lighting_comp.glsl", lighting_variant);
     auto pass_program = [&](Pass p, const char* mode) {
@@ -260,10 +277,9 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     check_gl("frame sync");
     result.timings.upload_ms = timer.lap_ms();
 
-    const PixelFilter filter(settings.filter_width);
     const GLuint groups_x = GLuint((settings.width + LIGHTING_GROUP_SIZE - 1) / LIGHTING_GROUP_SIZE);
     const GLuint groups_y = GLuint((settings.height + LIGHTING_GROUP_SIZE - 1) / LIGHTING_GROUP_SIZE);
-    double geometry_ms = 0, lighting_ms = 0, passes_ms = 0;
+    double geometry_ms = 0, lighting_ms = 0, passes_ms = 0, culling_ms = 0;
 
     for (int sample = 0; sample < settings.samples; ++sample) {
         // Jitter: one pixel-filter offset for the whole image (sample 0: none).
@@ -311,18 +327,29 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         check_gl("geometry pass");
         geometry_ms += timer.lap_ms();
 
-        // Lighting pass: adds this sample's share to the film.
+        // Light lists, once per frame from sample 0's depth (later samples
+        // fall back to every light where they see outside a tile's bounds).
         glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
-        glUseProgram(lighting);
         gbuffer.bind_textures();
         lights.bind();
+        if (culled && sample == 0) {
+            culling.build(*shaders, tiles_x, tiles_y);
+            culling_ms += timer.lap_ms();
+        }
+
+        // Lighting pass: adds this sample's share to the film.
+        glUseProgram(lighting);
+        if (culled) culling.bind();
         glBindImageTexture(IMG_FILM, film.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
         if (light_split) {
             glBindImageTexture(IMG_DIFF_LIGHT, diffuse_light.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
             glBindImageTexture(IMG_GLOSS_LIGHT, glossy_light.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
         }
-        glDispatchCompute(groups_x, groups_y, 1);
-        glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+        for (std::uint32_t begin = 0; begin == 0 || begin < lights.count(); begin += kLightBatch) {
+            glUniform2ui(0, begin, begin + kLightBatch);
+            glDispatchCompute(groups_x, groups_y, 1);
+            glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+        }
         check_gl("lighting pass");
         lighting_ms += timer.lap_ms();
 
@@ -373,8 +400,10 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     result.timings.readback_ms = timer.lap_ms();
     result.timings.geometry_ms = geometry_ms;
     result.timings.lighting_ms = lighting_ms;
+    result.timings.culling_ms = culling_ms;
+    result.timings.tile_light_pairs = culled ? culling.last_index_count() : 0;
     result.timings.passes_ms = passes_ms;
-    result.timings.total_ms = result.timings.upload_ms + geometry_ms + lighting_ms + passes_ms +
+    result.timings.total_ms = result.timings.upload_ms + geometry_ms + culling_ms + lighting_ms + passes_ms +
                               result.timings.readback_ms;
     return result;
 }

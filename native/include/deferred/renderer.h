@@ -56,6 +56,14 @@ struct RenderSettings {
     // unjittered pixel centre.
     int samples = 1;
     float filter_width = 1.5f;
+    // Light culling (tiled, 2.5D depth masks). Blender's lights reach to
+    // infinity; a light is cut off where even a white Lambertian surface
+    // facing it would reflect less than `light_threshold` (scene-linear
+    // radiance, the units of the Combined pass; the add-on divides it by
+    // 2^exposure so it is relative to what the view shows). Off: every pixel
+    // evaluates every light (the reference the culling is tested against).
+    bool light_culling = true;
+    float light_threshold = 1e-3f;
 };
 
 // One pass of a finished frame: rows bottom-up (row 0 is the bottom of the
@@ -69,8 +77,9 @@ struct PassImage {
 // Wall-clock split of the last render, in milliseconds (GPU work is fenced
 // per stage, so the numbers are what each stage really cost).
 struct FrameTimings {
-    double upload_ms = 0, geometry_ms = 0, lighting_ms = 0, passes_ms = 0, readback_ms = 0;
+    double upload_ms = 0, geometry_ms = 0, culling_ms = 0, lighting_ms = 0, passes_ms = 0, readback_ms = 0;
     double total_ms = 0;
+    std::uint64_t tile_light_pairs = 0;  // entries in the culled per-tile light lists
     std::size_t gbuffer_bytes = 0;  // G-buffer + pass targets allocated for the frame
 };
 

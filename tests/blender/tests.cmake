@@ -29,6 +29,7 @@ set(DEFERRED_BLENDER_TESTS
     alignment_cycles
     bad_scenes
     memory
+    light_culling
 )
 
 foreach(_name IN LISTS DEFERRED_BLENDER_TESTS)

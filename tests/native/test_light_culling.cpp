@@ -140,7 +140,10 @@ TEST(LightCulling, LightOnTileBoundaryAndThroughNearPlane) {
     std::vector<Light> lights;
     // 64 px over 8 m: tile borders (16 px) every 2 m; a light right above one,
     // one above a tile corner, a light at the camera (through the near plane).
-    for (auto [x, y, z] : {std::tuple{0.0, 1.3, 0.5}, std::tuple{2.0, 2.0, 0.3}, std::tuple{0.0, 0.0, 10.0}}) {
+    // Five more far lights so the scene has enough lights to be culled.
+    for (auto [x, y, z] : {std::tuple{0.0, 1.3, 0.5}, std::tuple{2.0, 2.0, 0.3}, std::tuple{0.0, 0.0, 10.0},
+                           std::tuple{25.0, 25.0, 1.0}, std::tuple{-25.0, 25.0, 1.0}, std::tuple{25.0, -25.0, 1.0},
+                           std::tuple{-25.0, -25.0, 1.0}, std::tuple{0.0, 28.0, 1.0}}) {
         Light l;
         l.type = LightType::Point;
         l.matrix = tools::translation(x, y, z);
@@ -150,6 +153,7 @@ TEST(LightCulling, LightOnTileBoundaryAndThroughNearPlane) {
     }
     const Comparison c = compare(lights, cam, 64, 1e-3f);
     std::printf("boundary/near-plane lights: max |culled - brute| %.2e, beyond bound %.2e\n", c.max_diff, c.max_excess);
+    EXPECT_GT(c.pairs, 0u);  // the lists were built
     EXPECT_LE(c.max_excess, 0.0);
 }
 

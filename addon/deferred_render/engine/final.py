@@ -47,6 +47,16 @@ def _settings(scene):
     return max(1, samples), device_index
 
 
+def _light_settings(scene):
+    """Culling switch and threshold; the threshold is relative to what the
+    view shows, so a brighter exposure lowers it (radiance x 2^exposure)."""
+    settings = getattr(scene, "deferred_render", None)
+    culling = bool(getattr(settings, "light_culling", True)) if settings is not None else True
+    threshold = float(getattr(settings, "light_threshold", 1e-3)) if settings is not None else 1e-3
+    exposure = float(getattr(scene.view_settings, "exposure", 0.0))
+    return {"light_culling": culling, "light_threshold": threshold / (2.0 ** exposure)}
+
+
 def _format_timings(timings):
     if not timings:
         return ""
@@ -197,7 +207,7 @@ class FinalRender:
             images = renderer.render(camera, frame.full_width, frame.full_height, passes=requested,
                                      film_transparent=bool(scene.render.film_transparent),
                                      samples=samples, filter_width=float(scene.render.filter_size),
-                                     **mist)
+                                     **_light_settings(scene), **mist)
         except ValueError as ex:  # size/settings validation: the message says it all
             raise RenderSettingsError(str(ex)) from ex
         t_render = time.perf_counter() - t_render

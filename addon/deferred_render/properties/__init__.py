@@ -7,7 +7,7 @@ render visibility) is read from Blender's own properties, not duplicated.
 """
 
 import bpy
-from bpy.props import IntProperty, PointerProperty
+from bpy.props import BoolProperty, FloatProperty, IntProperty, PointerProperty
 
 
 class DeferredRenderSettings(bpy.types.PropertyGroup):
@@ -18,6 +18,25 @@ class DeferredRenderSettings(bpy.types.PropertyGroup):
         min=1,
         soft_max=256,
         max=4096,
+    )
+    light_culling: BoolProperty(
+        name="Light Culling",
+        description=(
+            "Give each screen tile only the lights that can reach it (tiled culling). Off: "
+            "every pixel evaluates every light (exact, slow with many lights)"
+        ),
+        default=True,
+    )
+    light_threshold: FloatProperty(
+        name="Light Threshold",
+        description=(
+            "A light is cut off where it would make a white diffuse surface reflect less than "
+            "this (scene-linear radiance at exposure 0; scaled by the view's exposure)"
+        ),
+        default=1e-3,
+        min=0.0,
+        soft_max=0.1,
+        precision=5,
     )
     device_index: IntProperty(
         name="Device",

@@ -36,6 +36,22 @@ class DEFERRED_RENDER_PT_sampling(_EnginePanel, bpy.types.Panel):
         layout.prop(settings, "samples")
 
 
+class DEFERRED_RENDER_PT_lights(_EnginePanel, bpy.types.Panel):
+    bl_label = "Lights"
+    bl_context = "render"
+    bl_options = {'DEFAULT_CLOSED'}
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
+        settings = context.scene.deferred_render
+        layout.prop(settings, "light_culling")
+        row = layout.row()
+        row.active = settings.light_culling
+        row.prop(settings, "light_threshold")
+
+
 class DEFERRED_RENDER_PT_film(_EnginePanel, bpy.types.Panel):
     bl_label = "Film"
     bl_context = "render"
@@ -170,6 +186,7 @@ class DEFERRED_RENDER_PT_material_settings(_EnginePanel, bpy.types.Panel):
 
 classes = (
     DEFERRED_RENDER_PT_sampling,
+    DEFERRED_RENDER_PT_lights,
     DEFERRED_RENDER_PT_film,
     DEFERRED_RENDER_PT_device,
     DEFERRED_RENDER_PT_passes,

@@ -62,6 +62,7 @@ struct RenderSettings {
     // radiance, the units of the Combined pass; the add-on divides it by
     // 2^exposure so it is relative to what the view shows). Off: every pixel
     // evaluates every light (the reference the culling is tested against).
+    // Scenes with fewer than 8 lights are never culled (it would cost more).
     bool light_culling = true;
     float light_threshold = 1e-3f;
 };

@@ -23,6 +23,17 @@ vec3 frame_position_from_depth(ivec2 pixel, float depth) {
 /* Positive camera-space Z (Cycles' Depth pass) of a camera-relative position. */
 float frame_view_depth(vec3 P) { return -(frame.view * vec4(P, 1.0)).z; }
 
+/* Positive view depth of a pixel straight from its depth-buffer value: two
+ * rows of the inverse projection instead of rebuilding the position (the
+ * culling passes run this for every pixel). */
+float frame_view_depth_from_buffer(ivec2 pixel, float depth) {
+    vec4 ndc = vec4((vec2(pixel) + 0.5) * frame.viewport.zw * 2.0 - 1.0, depth, 1.0);
+    mat4 m = frame.inv_projection;
+    float z = m[0][2] * ndc.x + m[1][2] * ndc.y + m[2][2] * ndc.z + m[3][2];
+    float w = m[0][3] * ndc.x + m[1][3] * ndc.y + m[2][3] * ndc.z + m[3][3];
+    return -z / w;
+}
+
 /* Bin of view depth d in a tile's [dmin, dmax] (2.5D culling masks); the
  * culling and lighting passes must agree bit for bit, hence one function. */
 uint depth_bin(float d, float dmin, float dmax) {

@@ -30,7 +30,7 @@ shared uint s_min_depth, s_max_depth, s_mask, s_count, s_offset;
 float pixel_view_depth(ivec2 p) {
     float depth = texelFetch(gbuf_depth, p, 0).r;
     if (depth <= 0.0) return -1.0;
-    return frame_view_depth(frame_position_from_depth(p, depth));
+    return frame_view_depth_from_buffer(p, depth);
 }
 
 /* Plane through the origin-side rays of two screen points (view space). */
@@ -59,13 +59,23 @@ void main() {
     const int reach = int(frame.tiles.w);
     const ivec2 size = ivec2(frame.viewport.xy);
     if (gl_LocalInvocationIndex == 0u) {
+#ifdef CULL_WRITE
+        /* The count pass stored the bounds and mask: no need to read depth again. */
+        GpuTile t = tiles[tile_index];
+        s_min_depth = floatBitsToUint(t.depth.x);
+        s_max_depth = floatBitsToUint(t.depth.y);
+        s_mask = t.list.z;
+        if (t.list.w == 0u) { s_min_depth = 0x7f7fffffu; s_max_depth = 0u; }
+#else
         s_min_depth = 0x7f7fffffu; /* FLT_MAX bits: positive floats order like uints */
         s_max_depth = 0u;
         s_mask = 0u;
+#endif
         s_count = 0u;
     }
     barrier();
 
+#ifdef CULL_COUNT
     /* 1. Depth bounds over the widened tile. */
     ivec2 lo = ivec2(tile_id) * TILE_SIZE - reach;
     ivec2 hi = min(ivec2(tile_id + 1u) * TILE_SIZE + reach, size);
@@ -79,16 +89,21 @@ void main() {
             }
         }
     barrier();
-    const bool has_geometry = s_max_depth != 0u || s_min_depth != 0x7f7fffffu;
-    const float dmin = uintBitsToFloat(s_min_depth), dmax = uintBitsToFloat(s_max_depth);
-    if (has_geometry) {
-        for (int y = lo.y + int(gl_LocalInvocationID.y); y < hi.y; y += TILE_SIZE)
-            for (int x = lo.x + int(gl_LocalInvocationID.x); x < hi.x; x += TILE_SIZE) {
-                float d = pixel_view_depth(ivec2(x, y));
-                if (d >= 0.0) atomicOr(s_mask, 1u << depth_bin(d, dmin, dmax));
-            }
+    {
+        const bool any = s_max_depth != 0u || s_min_depth != 0x7f7fffffu;
+        const float lo_d = uintBitsToFloat(s_min_depth), hi_d = uintBitsToFloat(s_max_depth);
+        if (any) {
+            for (int y = lo.y + int(gl_LocalInvocationID.y); y < hi.y; y += TILE_SIZE)
+                for (int x = lo.x + int(gl_LocalInvocationID.x); x < hi.x; x += TILE_SIZE) {
+                    float d = pixel_view_depth(ivec2(x, y));
+                    if (d >= 0.0) atomicOr(s_mask, 1u << depth_bin(d, lo_d, hi_d));
+                }
+        }
     }
     barrier();
+#endif
+    const bool has_geometry = s_max_depth != 0u || s_min_depth != 0x7f7fffffu;
+    const float dmin = uintBitsToFloat(s_min_depth), dmax = uintBitsToFloat(s_max_depth);
 
     /* 2. The tile's frustum: four side planes through the widened tile's
      * corner rays (valid for perspective and orthographic cameras). */

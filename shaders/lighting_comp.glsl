@@ -97,7 +97,7 @@ void main() {
     bool from_list = false;
 #ifdef LIGHT_CULLING
     GpuTile tile = tiles[(uint(pixel.y) / uint(TILE_SIZE)) * frame.tiles.x + uint(pixel.x) / uint(TILE_SIZE)];
-    float d = frame_view_depth(P);
+    float d = frame_view_depth_from_buffer(pixel, depth);
     if (tile.list.w != 0u && d >= tile.depth.x && d <= tile.depth.y &&
         ((tile.list.z >> depth_bin(d, tile.depth.x, tile.depth.y)) & 1u) != 0u) {
         first = tile.list.x;

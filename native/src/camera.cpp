@@ -3,6 +3,7 @@
 #include <deferred/renderer.h>
 
 #include <cmath>
+#include <limits>
 #include <string>
 
 namespace deferred {
@@ -18,6 +19,23 @@ namespace {
 void require(bool ok, const std::string& what) {
     if (!ok) throw InvalidInput("camera: " + what);
 }
+
+// The GPU gets the projection and its inverse as float32: every entry must
+// stay finite and, if not zero, a normal float (llvmpipe and most GPUs flush
+// denormals to zero, which would collapse the depth range or the viewplane).
+bool float_representable(const glm::dmat4& m) {
+    for (int c = 0; c < 4; ++c)
+        for (int r = 0; r < 4; ++r) {
+            const double v = std::abs(m[c][r]);
+            if (!std::isfinite(v) || v > double(std::numeric_limits<float>::max())) return false;
+            if (v != 0.0 && v < double(std::numeric_limits<float>::min()) * 1024.0) return false;
+        }
+    return true;
+}
+
+// Largest |translation| of a camera (metres): the same bound as every other
+// position of the scene (scene_store.h, InputLimits::kMaxCoordinate).
+constexpr double kMaxCameraCoordinate = 1e15;
 }  // namespace
 
 CameraMatrices build_camera(const Camera& cam, int width, int height) {
@@ -28,9 +46,15 @@ CameraMatrices build_camera(const Camera& cam, int width, int height) {
     require(std::isfinite(cam.clip_start) && std::isfinite(cam.clip_end) && cam.clip_start > 0 &&
                 cam.clip_end > cam.clip_start, "need 0 < clip_start < clip_end");
     require(std::isfinite(cam.ortho_scale) && cam.ortho_scale > 0, "ortho_scale must be positive");
-    require(cam.pixel_aspect_x > 0 && cam.pixel_aspect_y > 0, "pixel aspect must be positive");
+    require(std::isfinite(cam.pixel_aspect_x) && std::isfinite(cam.pixel_aspect_y) && cam.pixel_aspect_x > 0 &&
+                cam.pixel_aspect_y > 0, "pixel aspect must be a positive finite number");
+    require(cam.clip_start >= 1e-6f, "clip_start must be at least 1e-6 m (Blender's minimum)");
+    require(cam.type == CameraType::Perspective || cam.type == CameraType::Orthographic, "unknown camera type");
     require(std::isfinite(cam.shift_x) && std::isfinite(cam.shift_y), "shift must be finite");
     for (double v : cam.matrix) require(std::isfinite(v), "matrix has NaN/Inf");
+    for (int i = 12; i < 15; ++i)
+        require(std::abs(cam.matrix[std::size_t(i)]) <= kMaxCameraCoordinate,
+                "position is farther than 1e15 m from the origin");
 
     CameraMatrices out;
     const glm::dmat4 m = to_glm(cam.matrix);
@@ -39,6 +63,7 @@ CameraMatrices build_camera(const Camera& cam, int width, int height) {
     glm::dvec3 x(m[0]), y(m[1]), z(m[2]);
     require(glm::length(x) > 0 && glm::length(y) > 0 && glm::length(z) > 0, "matrix is degenerate");
     out.rotation = glm::dmat3(glm::normalize(x), glm::normalize(y), glm::normalize(z));
+    require(std::abs(glm::determinant(out.rotation)) > 1e-6, "matrix is degenerate (its axes are parallel)");
     out.view = glm::dmat4(glm::transpose(out.rotation));
     out.orthographic = cam.type == CameraType::Orthographic;
     out.clip_start = cam.clip_start;
@@ -102,6 +127,11 @@ CameraMatrices build_camera(const Camera& cam, int width, int height) {
         p[3][2] = n * f / (f - n);
         p[2][3] = -1.0;
     }
+    require(r > l && t > b, "the viewplane is empty (shift or lens out of range for float precision)");
+    require(float_representable(p) && float_representable(glm::inverse(p)),
+            "lens/sensor/shift/ortho_scale/clip range give a projection float32 cannot represent "
+            "(clip " + std::to_string(n) + ".." + std::to_string(f) + ", viewplane " + std::to_string(r - l) + " x " +
+                std::to_string(t - b) + ")");
     out.projection = p;
     return out;
 }

@@ -2,7 +2,9 @@
 
 #include <deferred/renderer.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <string>
 
@@ -12,6 +14,12 @@ namespace {
 
 [[noreturn]] void invalid(const std::string& what) { throw InvalidInput(what); }
 
+std::string num(double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%g", v);
+    return buf;
+}
+
 template <class T>
 void require_finite(const T* data, std::size_t n, const char* what) {
     for (std::size_t i = 0; i < n; ++i)
@@ -19,9 +27,141 @@ void require_finite(const T* data, std::size_t n, const char* what) {
             invalid(std::string(what) + ": element " + std::to_string(i) + " is NaN or infinite");
 }
 
+template <class T>
+void require_bounded(const T* data, std::size_t n, double limit, const char* what, const char* unit) {
+    for (std::size_t i = 0; i < n; ++i) {
+        if (!std::isfinite(data[i]))
+            invalid(std::string(what) + ": element " + std::to_string(i) + " is NaN or infinite");
+        if (std::abs(double(data[i])) > limit)
+            invalid(std::string(what) + ": element " + std::to_string(i) + " = " + num(double(data[i])) +
+                    " exceeds the limit of " + num(limit) + unit);
+    }
+}
+
 bool finite3(const Vec3& v) { return std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]); }
 
+void require_range(float v, float lo, float hi, const char* owner, const char* name) {
+    if (!std::isfinite(v))
+        invalid(std::string(owner) + ": " + name + " is NaN or infinite");
+    if (!(v >= lo && v <= hi))
+        invalid(std::string(owner) + ": " + name + " = " + num(v) + " is outside [" + num(lo) + ", " + num(hi) + "]");
+}
+
+void require_colour(const Vec3& c, float hi, const char* owner, const char* name) {
+    if (!finite3(c)) invalid(std::string(owner) + ": " + name + " must be finite (got NaN/Inf)");
+    for (int k = 0; k < 3; ++k)
+        if (!(c[std::size_t(k)] >= 0.0f && c[std::size_t(k)] <= hi))
+            invalid(std::string(owner) + ": " + name + " component " + std::to_string(k) + " = " +
+                    num(c[std::size_t(k)]) + " is outside [0, " + num(hi) + "]");
+}
+
+double axis_length(const Mat4d& m, int axis) {
+    const double x = m[std::size_t(axis * 4)], y = m[std::size_t(axis * 4 + 1)], z = m[std::size_t(axis * 4 + 2)];
+    return std::sqrt(x * x + y * y + z * z);
+}
+
 }  // namespace
+
+std::int32_t validate_mesh(const MeshData& m) {
+    // Nothing reaches the GPU that could make it read out of bounds (an
+    // index past the vertex count would be an unchecked SSBO read).
+    if (m.triangle_count > 0 && (!m.positions || !m.indices)) invalid("mesh: positions and indices are required");
+    if (m.vertex_count > 0 && !m.positions) invalid("positions: null pointer for " + std::to_string(m.vertex_count) + " vertices");
+    constexpr std::size_t kMaxCorners = std::numeric_limits<std::int32_t>::max() / 4;
+    if (m.triangle_count > kMaxCorners / 3)
+        invalid("mesh: " + std::to_string(m.triangle_count) + " triangles exceed the per-draw limit");
+    if (m.vertex_count > std::numeric_limits<std::uint32_t>::max() / 3)
+        invalid("mesh: too many vertices");
+    require_bounded(m.positions, m.vertex_count * 3, InputLimits::kMaxCoordinate, "positions", " m");
+    for (std::size_t i = 0; i < m.triangle_count * 3; ++i)
+        if (m.indices[i] >= m.vertex_count)
+            invalid("indices: element " + std::to_string(i) + " = " + std::to_string(m.indices[i]) +
+                    " is out of range for " + std::to_string(m.vertex_count) + " vertices");
+    if (m.corner_normals) require_finite(m.corner_normals, m.triangle_count * 9, "corner_normals");
+    if (m.corner_uvs) require_finite(m.corner_uvs, m.triangle_count * 6, "corner_uvs");
+    std::int32_t max_mat = 0;
+    if (m.material_indices) {
+        for (std::size_t t = 0; t < m.triangle_count; ++t) {
+            if (m.material_indices[t] < 0)
+                invalid("material_indices: element " + std::to_string(t) + " = " +
+                        std::to_string(m.material_indices[t]) + " is negative");
+            max_mat = std::max(max_mat, m.material_indices[t]);
+        }
+    }
+    return max_mat;
+}
+
+void validate_material(const Material& m) {
+    const char* o = "material";
+    require_colour(m.base_color, InputLimits::kMaxHalf, o, "base_color");
+    require_colour(m.emission, std::numeric_limits<float>::max(), o, "emission");
+    require_range(m.metallic, 0, 1, o, "metallic");
+    require_range(m.roughness, 0, 1, o, "roughness");
+    require_range(m.specular, 0, InputLimits::kMaxSpecular, o, "specular");
+    require_range(m.specular_tint, 0, 1, o, "specular_tint");
+    require_range(m.sheen, 0, 1, o, "sheen");
+    require_range(m.sheen_tint, 0, 1, o, "sheen_tint");
+    require_range(m.clearcoat, 0, 1, o, "clearcoat");
+    require_range(m.clearcoat_roughness, 0, 1, o, "clearcoat_roughness");
+    require_range(m.emission_strength, 0, std::numeric_limits<float>::max(), o, "emission_strength");
+    require_range(m.alpha, 0, 1, o, "alpha");
+    if (m.pass_index >= InputLimits::kMaxPassIndex)
+        invalid("material: pass_index " + std::to_string(m.pass_index) + " must be below 2^24");
+}
+
+void validate_instances(const double* matrices, std::size_t count) {
+    if (count > 0 && !matrices) invalid("add_instances: matrices are required");
+    require_bounded(matrices, count * 16, InputLimits::kMaxCoordinate, "matrices", "");
+}
+
+void validate_light(const Light& l) {
+    const char* o = "light";
+    for (std::size_t i = 0; i < 16; ++i) {
+        if (!std::isfinite(l.matrix[i])) invalid("light: matrix has NaN/Inf (element " + std::to_string(i) + ")");
+        if (std::abs(l.matrix[i]) > InputLimits::kMaxCoordinate)
+            invalid("light: matrix element " + std::to_string(i) + " = " + num(l.matrix[i]) +
+                    " exceeds the limit of " + num(InputLimits::kMaxCoordinate));
+    }
+    if (static_cast<std::uint32_t>(l.type) > 3u) invalid("light: unknown type");
+    if (static_cast<std::uint32_t>(l.shape) > 3u) invalid("light: unknown area shape");
+    require_colour(l.color, std::numeric_limits<float>::max(), o, "color");
+    if (!std::isfinite(l.energy)) invalid("light: energy is NaN or infinite");
+    const double power = std::abs(double(l.energy)) * std::max({double(l.color[0]), double(l.color[1]), double(l.color[2])});
+    if (power > InputLimits::kMaxLightPower)
+        invalid("light: energy x colour = " + num(power) + " exceeds the limit of " + num(InputLimits::kMaxLightPower) +
+                (l.type == LightType::Sun ? " W/m^2" : " W"));
+    require_range(l.radius, 0, InputLimits::kMaxLightSize, o, "radius");
+    require_range(l.spot_size, 0, float(M_PI) + 1e-6f, o, "spot_size");
+    require_range(l.spot_blend, 0, 1, o, "spot_blend");
+    require_range(l.angle, 0, float(M_PI) + 1e-6f, o, "angle");
+    require_range(l.size, 0, InputLimits::kMaxLightSize, o, "size");
+    require_range(l.size_y, 0, InputLimits::kMaxLightSize, o, "size_y");
+}
+
+void validate_world(const World& w) { require_colour(w.color, InputLimits::kMaxWorld, "world", "color"); }
+
+Light sanitized_light(const Light& in) {
+    validate_light(in);
+    Light l = in;
+    if (l.radius < InputLimits::kMinLightExtent) l.radius = 0.0f;
+    if (l.type == LightType::Area) {
+        const bool separate_y = l.shape == AreaShape::Rectangle || l.shape == AreaShape::Ellipse;
+        auto raise = [](float& size, double axis) {
+            if (size <= 0.0f) return;  // zero size: emits nothing (skipped by the light module)
+            if (axis < 1e-20) { size = 0.0f; return; }  // collapsed axis: no emitting surface
+            if (double(size) * axis < InputLimits::kMinLightExtent)
+                size = float(InputLimits::kMinLightExtent / axis * (1.0 + 1e-6));
+        };
+        raise(l.size, axis_length(l.matrix, 0));
+        if (separate_y) {
+            raise(l.size_y, axis_length(l.matrix, 1));
+        } else {
+            // SQUARE/DISK use `size` on both axes: it must cover the smaller axis too.
+            raise(l.size, std::min(axis_length(l.matrix, 0), axis_length(l.matrix, 1)));
+        }
+    }
+    return l;
+}
 
 void SceneStore::clear() {
     meshes_.clear();
@@ -33,29 +173,7 @@ void SceneStore::clear() {
 }
 
 std::uint32_t SceneStore::add_mesh(const MeshData& m) {
-    // Validation first: nothing reaches the GPU that could make it read out
-    // of bounds (an index past the vertex count would be an unchecked SSBO read).
-    if (m.triangle_count > 0 && (!m.positions || !m.indices)) invalid("mesh: positions and indices are required");
-    constexpr std::size_t kMaxCorners = std::numeric_limits<std::int32_t>::max() / 4;
-    if (m.triangle_count * 3 > kMaxCorners)
-        invalid("mesh: " + std::to_string(m.triangle_count) + " triangles exceed the per-draw limit");
-    if (m.vertex_count > std::numeric_limits<std::uint32_t>::max() / 3)
-        invalid("mesh: too many vertices");
-    require_finite(m.positions, m.vertex_count * 3, "positions");
-    for (std::size_t i = 0; i < m.triangle_count * 3; ++i)
-        if (m.indices[i] >= m.vertex_count)
-            invalid("indices: element " + std::to_string(i) + " = " + std::to_string(m.indices[i]) +
-                    " is out of range for " + std::to_string(m.vertex_count) + " vertices");
-    if (m.corner_normals) require_finite(m.corner_normals, m.triangle_count * 9, "corner_normals");
-    if (m.corner_uvs) require_finite(m.corner_uvs, m.triangle_count * 6, "corner_uvs");
-    std::int32_t max_mat = 0;
-    if (m.material_indices) {
-        for (std::size_t t = 0; t < m.triangle_count; ++t) {
-            if (m.material_indices[t] < 0)
-                invalid("material_indices: element " + std::to_string(t) + " is negative");
-            max_mat = std::max(max_mat, m.material_indices[t]);
-        }
-    }
+    const std::int32_t max_mat = validate_mesh(m);
 
     GpuMesh g;
     g.triangle_count = static_cast<std::uint32_t>(m.triangle_count);
@@ -80,10 +198,7 @@ std::uint32_t SceneStore::add_mesh(const MeshData& m) {
 }
 
 std::uint32_t SceneStore::add_material(const Material& m) {
-    const float scalars[] = {m.metallic, m.roughness, m.specular, m.specular_tint, m.sheen, m.sheen_tint,
-                             m.clearcoat, m.clearcoat_roughness, m.emission_strength, m.alpha};
-    require_finite(scalars, 10, "material parameters");
-    if (!finite3(m.base_color) || !finite3(m.emission)) invalid("material colours must be finite");
+    validate_material(m);
     materials_.push_back(m);
     return static_cast<std::uint32_t>(materials_.size() - 1);
 }
@@ -93,8 +208,7 @@ void SceneStore::add_instances(std::uint32_t mesh_id, const double* matrices, st
     if (mesh_id >= meshes_.size())
         invalid("add_instances: mesh id " + std::to_string(mesh_id) + " does not exist (" +
                 std::to_string(meshes_.size()) + " meshes)");
-    if (count > 0 && !matrices) invalid("add_instances: matrices are required");
-    require_finite(matrices, count * 16, "matrices");
+    validate_instances(matrices, count);
     for (std::uint32_t s : slots)
         if (s >= materials_.size())
             invalid("material_slots: material id " + std::to_string(s) + " does not exist (" +
@@ -121,19 +235,10 @@ void SceneStore::add_instances(std::uint32_t mesh_id, const double* matrices, st
     batches_.push_back(std::move(b));
 }
 
-void SceneStore::add_light(const Light& l) {
-    for (double v : l.matrix)
-        if (!std::isfinite(v)) invalid("light: matrix has NaN/Inf");
-    const float scalars[] = {l.energy, l.radius, l.spot_size, l.spot_blend, l.angle, l.size, l.size_y};
-    require_finite(scalars, 7, "light parameters");
-    if (!finite3(l.color)) invalid("light: colour must be finite");
-    if (l.radius < 0 || l.size < 0 || l.size_y < 0 || l.angle < 0 || l.spot_size < 0)
-        invalid("light: sizes and angles must not be negative");
-    lights_.push_back(l);
-}
+void SceneStore::add_light(const Light& l) { lights_.push_back(sanitized_light(l)); }
 
 void SceneStore::set_world(const World& w) {
-    if (!finite3(w.color)) invalid("world: colour must be finite");
+    validate_world(w);
     world_ = w;
 }
 

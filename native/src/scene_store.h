@@ -20,6 +20,37 @@ struct GpuMesh {
     std::int32_t max_material_index = 0;
 };
 
+// Input contract of the scene API (README, "Hard cases and bad input").
+// Everything outside it is refused with InvalidInput naming the field; the
+// few documented fallbacks are applied by SceneStore when it stores a light.
+// The bounds keep every float32 product of the G-buffer and the lighting
+// finite (squared camera-relative distances stay below ~1e31, radiances of
+// the smallest lights below ~1e36).
+struct InputLimits {
+    static constexpr double kMaxCoordinate = 1e15;   // |position| and |matrix entry|, m
+    static constexpr float kMaxHalf = 65504.0f;      // base colour (RGBA16F G-buffer)
+    static constexpr float kMaxSpecular = 12.0f;     // F0 = 0.08 specular <= 0.96 (12.5: infinite IOR)
+    static constexpr float kMaxLightPower = 1e12f;   // |energy| x colour, W (sun: W/m^2)
+    static constexpr float kMaxLightSize = 1e6f;     // radius, size, size_y, m
+    static constexpr float kMinLightExtent = 1e-6f;  // smaller point/spot radius: 0; smaller area extent: raised
+    static constexpr float kMaxWorld = 1e12f;        // world colour
+    static constexpr std::uint32_t kMaxPassIndex = 1u << 24;  // exact in the float32 index passes
+};
+
+// Validation only (plain CPU, no GL: usable by tests and sanitizer builds).
+// Each throws InvalidInput("<field>: <problem>"); validate_mesh returns the
+// largest material index used (0 without material indices).
+std::int32_t validate_mesh(const MeshData& mesh);
+void validate_material(const Material& material);
+void validate_instances(const double* matrices, std::size_t count);
+void validate_light(const Light& light);
+void validate_world(const World& world);
+// The light as the renderer stores it: validate_light, then the documented
+// fallbacks (a point/spot radius below kMinLightExtent becomes 0, a delta
+// light; an area extent (size x axis scale) below kMinLightExtent is raised
+// to it, which looks the same from any distance above a few micrometres).
+Light sanitized_light(const Light& light);
+
 struct InstanceBatch {
     std::uint32_t mesh_id;
     std::vector<double> matrices;             // 16 per instance, column-major

@@ -34,6 +34,7 @@ void build(Renderer& r, int light_count) {
     for (int i = 0; i < light_count; ++i) {
         Light l;
         l.type = LightType::Point;
+        l.cast_shadow = false;
         l.matrix = tools::translation(-28 + 56 * u(rng), -28 + 56 * u(rng), 0.1 + 3.0 * u(rng));
         l.energy = float(0.05 + 0.5 * u(rng));
         l.radius = float(0.02 * u(rng));

@@ -14,6 +14,10 @@ layout(std430, binding = SSBO_MATERIAL_SLOTS) readonly buffer Slots { uint mater
 
 layout(location = 0) uniform uint instance_offset;
 layout(location = 1) uniform uint mesh_flags;  /* 1: normals, 2: uvs, 4: material indices */
+#ifdef SHADOW_PASS
+/* Shadow maps (shadow_frag.glsl): camera-relative world -> the face's clip space. */
+layout(location = 2) uniform mat4 shadow_view_projection;
+#endif
 
 out vec3 v_position;  /* camera-relative world */
 out vec3 v_normal;    /* world, unnormalised */
@@ -31,7 +35,11 @@ void main() {
     vec3 p = vec3(positions[3u * vi], positions[3u * vi + 1u], positions[3u * vi + 2u]);
     vec4 world = inst.model * vec4(p, 1.0);
     v_position = world.xyz;
+#ifdef SHADOW_PASS
+    gl_Position = shadow_view_projection * world;
+#else
     gl_Position = frame.projection * (frame.view * world);
+#endif
 
     v_normal = vec3(0.0);
     if ((mesh_flags & 1u) != 0u) {

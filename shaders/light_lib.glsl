@@ -25,6 +25,9 @@
  * accumulating samples converges to the integral Cycles computes. */
 
 #include "bsdf_lib.glsl"
+#ifdef HAS_SHADOWS
+#include "shadow_lib.glsl"
+#endif
 
 struct LightContribution {
     vec3 diffuse; /* radiance through the diffuse group (with albedo) */
@@ -197,7 +200,8 @@ void make_basis(vec3 n, out vec3 t, out vec3 bt) {
     bt = cross(n, t);
 }
 
-LightContribution shade_light(GpuLight light, SurfaceParams s, PrincipledWeights w, vec3 P, vec3 N, vec3 V) {
+LightContribution shade_light_unshadowed(GpuLight light, SurfaceParams s, PrincipledWeights w, vec3 P, vec3 N,
+                                         vec3 V) {
     LightContribution r;
     r.diffuse = vec3(0.0);
     r.glossy = vec3(0.0);
@@ -257,6 +261,20 @@ LightContribution shade_light(GpuLight light, SurfaceParams s, PrincipledWeights
         vec3 radiance = S / (4.0 * A);
         return shade_planar_light(c, light.axis_x.xyz, light.axis_y.xyz, int(light.axis_y.w) == AREA_ELLIPSE, false,
                                   light.direction.xyz, radiance, light, false, 1.0, s, w, N, V);
+    }
+#endif
+    return r;
+}
+
+/* The light's contribution times this sample's visibility of its light point. */
+LightContribution shade_light(GpuLight light, SurfaceParams s, PrincipledWeights w, vec3 P, vec3 N, vec3 V) {
+    LightContribution r = shade_light_unshadowed(light, s, w, P, N, V);
+#ifdef HAS_SHADOWS
+    int shadow = int(light.params.w);
+    if (shadow >= 0 && (r.diffuse != vec3(0.0) || r.glossy != vec3(0.0))) {
+        float visible = shadow_visibility(shadow, P, N);
+        r.diffuse *= visible;
+        r.glossy *= visible;
     }
 #endif
     return r;

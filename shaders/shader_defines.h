@@ -19,6 +19,7 @@
 #define SSBO_TILES 9
 #define SSBO_TILE_LIGHTS 10
 #define SSBO_CULL_COUNTER 11
+#define SSBO_SHADOWS 12
 
 /* Textures sampled by compute passes (G-buffer inputs) */
 #define TEX_DEPTH 0
@@ -31,6 +32,7 @@
 #define TEX_GBUF_EMISSION 7
 #define TEX_DIFF_LIGHT 8
 #define TEX_GLOSS_LIGHT 9
+#define TEX_SHADOW_MAPS 10
 
 /* Images written by compute passes */
 #define IMG_FILM 0        /* Combined accumulation */

@@ -38,7 +38,7 @@ struct alignas(16) mat4 { vec4 cols[4]; };
  *   axis_y        : xyz = area half-extent along the light's Y axis, w = AREA_* shape
  *   params        : x = area A (m^2, pi/4 factor for ellipses), y = cast shadow (0/1),
  *                   z = influence radius (m) beyond which the light is culled, < 0: infinite
- *                   (sun), w unused */
+ *                   (sun), w = index of its GpuShadow, or -1 without shadow maps this frame */
 SHARED_STRUCT(GpuLight) {
     vec4 position_type;
     vec4 strength;
@@ -101,6 +101,25 @@ SHARED_STRUCT(FrameConstants) {
     uvec4 tiles;
 };
 SHARED_ASSERT_SIZE(FrameConstants, 368);
+
+/* One shadow-casting light's maps for the current film sample.
+ *   point         : xyz the sample's point on the light (camera-relative), w first layer in the
+ *                   shadow map array
+ *   params        : x kind (SHADOW_CUBE: 6 layers, +X -X +Y -Y +Z -Z; SHADOW_CASCADES: 4 layers),
+ *                   y map resolution, z texel size at unit distance (cube: 2/res), w unused
+ *   cascade_split : far view depth of cascades 0..3
+ *   cascade       : camera-relative world -> cascade clip space (orthographic, depth in [0,1]
+ *                   along the sun's direction, 1 nearest the sun) */
+#define SHADOW_CUBE 0
+#define SHADOW_CASCADES 1
+#define SHADOW_CASCADE_COUNT 4
+SHARED_STRUCT(GpuShadow) {
+    vec4 point;
+    vec4 params;
+    vec4 cascade_split;
+    mat4 cascade[4];
+};
+SHARED_ASSERT_SIZE(GpuShadow, 304);
 
 /* One screen tile's light list, written by light_cull_comp.glsl.
  *   list  : x offset of the tile's light indices in the index buffer, y count,

@@ -43,9 +43,37 @@ const T* borrow(const py::handle& obj, const char* name, std::initializer_list<p
 }
 
 Vec3 vec3_from(const py::handle& obj, const char* what) {
+    // Any sequence of at least 3 numbers (tuple, list, numpy array, mathutils
+    // Color; RGBA gives its RGB); everything else is a ValueError naming the argument.
+    const bool sequence = PySequence_Check(obj.ptr()) && !py::isinstance<py::str>(obj) && !py::isinstance<py::bytes>(obj);
+    if (!sequence || py::len(obj) < 3)
+        throw py::value_error(std::string(what) + ": expected 3 numbers (RGB), got " +
+                              std::string(py::str(py::repr(obj))).substr(0, 60));
     py::sequence s = py::reinterpret_borrow<py::sequence>(obj);
-    if (py::len(s) < 3) throw py::value_error(std::string(what) + ": expected 3 values");
-    return {s[0].cast<float>(), s[1].cast<float>(), s[2].cast<float>()};
+    Vec3 v;
+    for (std::size_t i = 0; i < 3; ++i) {
+        PyObject* f = PyNumber_Float(s[i].ptr());
+        if (!f) {
+            PyErr_Clear();
+            throw py::value_error(std::string(what) + ": element " + std::to_string(i) + " is not a number");
+        }
+        v[i] = float(PyFloat_AsDouble(f));
+        Py_DECREF(f);
+    }
+    return v;
+}
+
+// A Python int in [0, 2^32) (ids, slots, pass indices): ValueError otherwise.
+std::uint32_t index_from(const py::handle& obj, const std::string& what) {
+    if (!PyIndex_Check(obj.ptr()) || py::isinstance<py::bool_>(obj))
+        throw py::value_error(what + ": expected an integer, got " + std::string(py::str(py::type::of(obj).attr("__name__"))));
+    const long long v = PyLong_AsLongLong(py::reinterpret_steal<py::object>(PyNumber_Index(obj.ptr())).ptr());
+    if (PyErr_Occurred()) {
+        PyErr_Clear();
+        throw py::value_error(what + ": integer out of range");
+    }
+    if (v < 0 || v > 0xffffffffLL) throw py::value_error(what + ": " + std::to_string(v) + " is out of range");
+    return std::uint32_t(v);
 }
 
 // Hands a pass to Python without copying: the numpy array owns the vector.
@@ -98,9 +126,13 @@ void declare_renderer(py::module_& m) {
             py::dict d;
             d["upload_ms"] = self.last.upload_ms;
             d["geometry_ms"] = self.last.geometry_ms;
+            d["shadow_ms"] = self.last.shadow_ms;
             d["culling_ms"] = self.last.culling_ms;
             d["lighting_ms"] = self.last.lighting_ms;
             d["tile_light_pairs"] = self.last.tile_light_pairs;
+            d["shadowed_lights"] = self.last.shadowed_lights;
+            d["shadow_lights_dropped"] = self.last.shadow_lights_dropped;
+            d["shadow_map_bytes"] = self.last.shadow_map_bytes;
             d["passes_ms"] = self.last.passes_ms;
             d["readback_ms"] = self.last.readback_ms;
             d["total_ms"] = self.last.total_ms;
@@ -144,7 +176,7 @@ void declare_renderer(py::module_& m) {
         .def("add_material",
              [](PyRenderer& self, const py::object& base_color, float metallic, float roughness, float specular,
                 float specular_tint, float sheen, float sheen_tint, float clearcoat, float clearcoat_roughness,
-                const py::object& emission, float emission_strength, float alpha, std::uint32_t pass_index) {
+                const py::object& emission, float emission_strength, float alpha, const py::object& pass_index) {
                  Material mat;
                  mat.base_color = vec3_from(base_color, "base_color");
                  mat.metallic = metallic;
@@ -158,17 +190,18 @@ void declare_renderer(py::module_& m) {
                  mat.emission = vec3_from(emission, "emission");
                  mat.emission_strength = emission_strength;
                  mat.alpha = alpha;
-                 mat.pass_index = pass_index;
+                 mat.pass_index = index_from(pass_index, "add_material: pass_index");
                  return self.get().add_material(mat);
              },
              py::kw_only(), py::arg("base_color") = py::make_tuple(0.8, 0.8, 0.8), py::arg("metallic") = 0.0f,
              py::arg("roughness") = 0.5f, py::arg("specular") = 0.5f, py::arg("specular_tint") = 0.0f,
              py::arg("sheen") = 0.0f, py::arg("sheen_tint") = 0.5f, py::arg("clearcoat") = 0.0f,
              py::arg("clearcoat_roughness") = 0.03f, py::arg("emission") = py::make_tuple(0.0, 0.0, 0.0),
-             py::arg("emission_strength") = 1.0f, py::arg("alpha") = 1.0f, py::arg("pass_index") = 0u)
+             py::arg("emission_strength") = 1.0f, py::arg("alpha") = 1.0f, py::arg("pass_index") = 0)
         .def("add_instances",
-             [](PyRenderer& self, std::uint32_t mesh_id, const py::object& matrices, const py::object& object_indices,
-                const py::object& material_slots) {
+             [](PyRenderer& self, const py::object& mesh_id_obj, const py::object& matrices,
+                const py::object& object_indices, const py::object& material_slots) {
+                 const std::uint32_t mesh_id = index_from(mesh_id_obj, "add_instances: mesh_id");
                  py::ssize_t n = 0, k = 0;
                  const double* rows = borrow<double>(matrices, "matrices", {-1, 4, 4}, &n);
                  // Row-major numpy (Blender Matrix order) -> column-major.
@@ -184,8 +217,12 @@ void declare_renderer(py::module_& m) {
                                                std::to_string(k));
                  }
                  std::vector<std::uint32_t> slots;
-                 if (!material_slots.is_none())
-                     for (const py::handle& h : material_slots) slots.push_back(h.cast<std::uint32_t>());
+                 if (!material_slots.is_none()) {
+                     if (!py::isinstance<py::iterable>(material_slots) || py::isinstance<py::str>(material_slots))
+                         throw py::value_error("material_slots: expected a sequence of material ids");
+                     for (const py::handle& h : material_slots)
+                         slots.push_back(index_from(h, "material_slots: element " + std::to_string(slots.size())));
+                 }
                  py::gil_scoped_release release;
                  self.get().add_instances(mesh_id, cols.data(), std::size_t(n), ids, slots);
              },
@@ -231,7 +268,8 @@ void declare_renderer(py::module_& m) {
         .def("render",
              [](PyRenderer& self, const Camera& camera, int width, int height, const std::vector<std::string>& passes,
                 bool film_transparent, float mist_start, float mist_depth, const std::string& mist_falloff,
-                int samples, float filter_width, bool light_culling, float light_threshold) {
+                int samples, float filter_width, bool light_culling, float light_threshold, bool shadows,
+                int shadow_resolution) {
                  RenderSettings s;
                  s.width = width;
                  s.height = height;
@@ -251,6 +289,8 @@ void declare_renderer(py::module_& m) {
                  s.filter_width = filter_width;
                  s.light_culling = light_culling;
                  s.light_threshold = light_threshold;
+                 s.shadows = shadows;
+                 s.shadow_resolution = shadow_resolution;
                  FrameResult frame;
                  {
                      py::gil_scoped_release release;
@@ -268,7 +308,7 @@ void declare_renderer(py::module_& m) {
              py::arg("passes") = std::vector<std::string>{"Combined"}, py::arg("film_transparent") = false,
              py::arg("mist_start") = 5.0f, py::arg("mist_depth") = 25.0f, py::arg("mist_falloff") = "QUADRATIC",
              py::arg("samples") = 1, py::arg("filter_width") = 1.5f, py::arg("light_culling") = true,
-             py::arg("light_threshold") = 1e-3f);
+             py::arg("light_threshold") = 1e-3f, py::arg("shadows") = true, py::arg("shadow_resolution") = 1024);
 }
 
 }  // namespace deferred::python

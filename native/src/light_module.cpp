@@ -1,5 +1,7 @@
 #include "light_module.h"
 
+#include "shadow_module.h"
+
 #include "../../shaders/shader_defines.h"
 
 #include <algorithm>
@@ -50,11 +52,12 @@ gpu::GpuLight pack_light(const Light& l, const glm::dvec3& camera_position, doub
     g.axis_x = v4(half_x, (1.0 - cs) * double(l.spot_blend));
     g.axis_y = v4(half_y, ellipse ? AREA_ELLIPSE : AREA_RECT);
     const double area = 4.0 * glm::length(half_x) * glm::length(half_y) * (ellipse ? M_PI / 4.0 : 1.0);
-    g.params = {float(area), l.cast_shadow ? 1.0f : 0.0f, float(influence_radius(l, threshold)), 0.0f};
+    g.params = {float(area), l.cast_shadow ? 1.0f : 0.0f, float(influence_radius(l, threshold)), -1.0f};
     return g;
 }
 
-void LightModule::sync(const std::vector<Light>& lights, const glm::dvec3& camera_position, double threshold) {
+void LightModule::sync(const std::vector<Light>& lights, const glm::dvec3& camera_position, double threshold,
+                       ShadowModule* shadows) {
     std::vector<gpu::GpuLight> packed;
     packed.reserve(lights.size());
     for (auto& t : has_type_) t = false;
@@ -65,7 +68,12 @@ void LightModule::sync(const std::vector<Light>& lights, const glm::dvec3& camer
                                           (l.shape == AreaShape::Ellipse && l.size_y <= 0)))
             continue;  // zero-size area light: no emitting surface (Cycles renders nothing either)
         packed.push_back(pack_light(l, camera_position, threshold));
+        if (shadows) shadows->offer(packed.size() - 1, l, packed.back());
         has_type_[static_cast<int>(l.type)] = true;
+    }
+    if (shadows) {
+        const std::vector<int> shadow_index = shadows->allocate(packed.size());
+        for (std::size_t i = 0; i < packed.size(); ++i) packed[i].params.w = float(shadow_index[i]);
     }
     count_ = static_cast<std::uint32_t>(packed.size());
     buffer_ = make_storage_buffer(packed.data(), packed.size() * sizeof(gpu::GpuLight), "lights");

@@ -31,7 +31,9 @@ double influence_radius(const Light& light, double threshold);
 
 class LightModule {
 public:
-    void sync(const std::vector<Light>& lights, const glm::dvec3& camera_position, double threshold);
+    // `shadows` (optional) gives each kept light its shadow index (params.w).
+    void sync(const std::vector<Light>& lights, const glm::dvec3& camera_position, double threshold,
+              class ShadowModule* shadows = nullptr);
     void add_defines(ShaderVariant& variant) const;
     void bind() const;
     std::uint32_t count() const { return count_; }

@@ -13,6 +13,7 @@
 #include "render_thread.h"
 #include "scene_store.h"
 #include "shader_library.h"
+#include "shadow_module.h"
 
 #include "../../shaders/shader_defines.h"
 #include "../../shaders/shader_shared.h"
@@ -83,6 +84,7 @@ struct Renderer::Impl {
     GBuffer gbuffer;
     LightModule lights;
     LightCulling culling;
+    ShadowModule shadows;
     VertexArray empty_vao;
     Buffer dummy_ssbo;
     GLint max_texture_size = 0, max_fb_width = 0, max_fb_height = 0;
@@ -93,6 +95,7 @@ struct Renderer::Impl {
             gbuffer = GBuffer();
             lights = LightModule();
             culling = LightCulling();
+            shadows = ShadowModule();
             scene.clear();
             shaders.reset();
             empty_vao.reset();
@@ -218,7 +221,8 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     Buffer instance_buffer = make_storage_buffer(instances.data(), instances.size() * sizeof(gpu::GpuInstance), "instances");
     Buffer slot_buffer = make_storage_buffer(slots.data(), slots.size() * sizeof(std::uint32_t), "material slots");
     Buffer material_buffer = make_storage_buffer(materials.data(), materials.size() * sizeof(gpu::GpuMaterial), "materials");
-    lights.sync(scene.lights(), cam.position, settings.light_threshold);
+    shadows.begin_frame(cam, settings.shadow_resolution, memory_budget_bytes() / 4);
+    lights.sync(scene.lights(), cam.position, settings.light_threshold, settings.shadows ? &shadows : nullptr);
     const bool culled = settings.light_culling && lights.count() >= kCullingMinLights;
 
     gpu::FrameConstants fc{};
@@ -270,6 +274,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     lights.add_defines(lighting_variant);
     if (light_split) lighting_variant.defines.push_back("OUT_LIGHT_SPLIT");
     if (culled) lighting_variant.defines.push_back("LIGHT_CULLING");
+    if (!shadows.empty()) lighting_variant.defines.push_back("HAS_SHADOWS");
     const GLuint geometry = shaders->graphics_program("geometry_vert.glsl", "geometry_frag.glsl", base_variant);
     const GLuint lighting = shaders->compute_program("lighting_comp.glsl", lighting_variant);
     auto pass_program = [&](Pass p, const char* mode) {
@@ -283,32 +288,12 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
 
     const GLuint groups_x = GLuint((settings.width + LIGHTING_GROUP_SIZE - 1) / LIGHTING_GROUP_SIZE);
     const GLuint groups_y = GLuint((settings.height + LIGHTING_GROUP_SIZE - 1) / LIGHTING_GROUP_SIZE);
-    double geometry_ms = 0, lighting_ms = 0, passes_ms = 0, culling_ms = 0;
+    double geometry_ms = 0, lighting_ms = 0, passes_ms = 0, culling_ms = 0, shadow_ms = 0;
 
-    for (int sample = 0; sample < settings.samples; ++sample) {
-        // Jitter: one pixel-filter offset for the whole image (sample 0: none).
-        const std::array<float, 4> u = sample_point(sample);
-        const double ox = filter.offset(u[0]), oy = filter.offset(u[1]);
-        glm::dmat4 jitter(1.0);
-        jitter[3][0] = 2.0 * ox / settings.width;  // clip.xy += offset_ndc * clip.w
-        jitter[3][1] = 2.0 * oy / settings.height;
-        const glm::dmat4 projection = jitter * cam.projection;
-        fc.projection = to_gpu(projection);
-        fc.inv_projection = to_gpu(glm::inverse(projection));
-        // Where in each light-shape cell (and on the sun's disk) this sample looks.
-        fc.sample_shift = {u[2], u[3], 0.0f, 0.0f};
-        glNamedBufferSubData(frame_buffer.get(), 0, sizeof(fc), &fc);
-
-        // Geometry pass.
-        gbuffer.bind_for_geometry();
-        glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
-        glEnable(GL_DEPTH_TEST);
-        glDepthFunc(GL_GREATER);  // reversed Z
-        glDepthMask(GL_TRUE);
-        glDisable(GL_CULL_FACE);  // two-sided, as Cycles
-        glDisable(GL_BLEND);
+    // Every mesh's instances, with the currently bound program (the geometry
+    // pass and the shadow maps share the vertex stage).
+    auto draw_scene = [&]() {
         glBindVertexArray(empty_vao.get());
-        glUseProgram(geometry);
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_INSTANCES, instance_buffer.get());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_MATERIAL_SLOTS, slot_buffer.get());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_MATERIALS, material_buffer.get());
@@ -327,6 +312,38 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
             glUniform1ui(1, mesh.flags);
             glDrawArraysInstanced(GL_TRIANGLES, 0, GLsizei(mesh.triangle_count * 3), GLsizei(d.count));
         }
+    };
+
+    for (int sample = 0; sample < settings.samples; ++sample) {
+        // Jitter: one pixel-filter offset for the whole image (sample 0: none).
+        const std::array<float, 4> u = sample_point(sample);
+        const double ox = filter.offset(u[0]), oy = filter.offset(u[1]);
+        glm::dmat4 jitter(1.0);
+        jitter[3][0] = 2.0 * ox / settings.width;  // clip.xy += offset_ndc * clip.w
+        jitter[3][1] = 2.0 * oy / settings.height;
+        const glm::dmat4 projection = jitter * cam.projection;
+        fc.projection = to_gpu(projection);
+        fc.inv_projection = to_gpu(glm::inverse(projection));
+        // Where in each light-shape cell (and on the sun's disk) this sample looks.
+        fc.sample_shift = {u[2], u[3], 0.0f, 0.0f};
+        glNamedBufferSubData(frame_buffer.get(), 0, sizeof(fc), &fc);
+        glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
+
+        // Shadow maps from this sample's point on each shadowed light.
+        if (!shadows.empty()) {
+            shadows.render_sample(*shaders, {u[2], u[3]}, draw_scene);
+            shadow_ms += timer.lap_ms();
+        }
+
+        // Geometry pass.
+        gbuffer.bind_for_geometry();
+        glEnable(GL_DEPTH_TEST);
+        glDepthFunc(GL_GREATER);  // reversed Z
+        glDepthMask(GL_TRUE);
+        glDisable(GL_CULL_FACE);  // two-sided, as Cycles
+        glDisable(GL_BLEND);
+        glUseProgram(geometry);
+        draw_scene();
         glBindFramebuffer(GL_FRAMEBUFFER, 0);
         check_gl("geometry pass");
         geometry_ms += timer.lap_ms();
@@ -344,6 +361,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         // Lighting pass: adds this sample's share to the film.
         glUseProgram(lighting);
         if (culled) culling.bind();
+        shadows.bind();
         glBindImageTexture(IMG_FILM, film.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
         if (light_split) {
             glBindImageTexture(IMG_DIFF_LIGHT, diffuse_light.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
@@ -405,9 +423,13 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     result.timings.geometry_ms = geometry_ms;
     result.timings.lighting_ms = lighting_ms;
     result.timings.culling_ms = culling_ms;
+    result.timings.shadow_ms = shadow_ms;
+    result.timings.shadow_map_bytes = shadows.empty() ? 0 : shadows.map_bytes();
+    result.timings.shadowed_lights = shadows.count();
+    result.timings.shadow_lights_dropped = shadows.dropped();
     result.timings.tile_light_pairs = culled ? culling.last_index_count() : 0;
     result.timings.passes_ms = passes_ms;
-    result.timings.total_ms = result.timings.upload_ms + geometry_ms + culling_ms + lighting_ms + passes_ms +
+    result.timings.total_ms = result.timings.upload_ms + shadow_ms + geometry_ms + culling_ms + lighting_ms + passes_ms +
                               result.timings.readback_ms;
     return result;
 }

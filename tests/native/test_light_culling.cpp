@@ -53,6 +53,7 @@ std::vector<Light> random_point_lights(int n, std::uint32_t seed, float energy_m
     for (int i = 0; i < n; ++i) {
         Light l;
         l.type = LightType::Point;
+        l.cast_shadow = false;  // culling under test, not shadows
         l.matrix = tools::translation(-28 + 56 * u(rng), -28 + 56 * u(rng), 0.1 + 3.0 * u(rng));
         l.energy = float(0.05 + energy_max * u(rng));
         l.radius = float(0.02 * u(rng));
@@ -146,6 +147,7 @@ TEST(LightCulling, LightOnTileBoundaryAndThroughNearPlane) {
                            std::tuple{-25.0, -25.0, 1.0}, std::tuple{0.0, 28.0, 1.0}}) {
         Light l;
         l.type = LightType::Point;
+        l.cast_shadow = false;  // culling under test, not shadows
         l.matrix = tools::translation(x, y, z);
         l.energy = 5.0f;
         l.radius = 0.0f;
@@ -165,6 +167,7 @@ TEST(LightCulling, TileWithMoreLightsThanAWorkgroup) {
     for (int i = 0; i < 3000; ++i) {
         Light l;
         l.type = LightType::Point;
+        l.cast_shadow = false;  // culling under test, not shadows
         l.matrix = tools::translation(0.3 * u(rng), 0.3 * u(rng), 0.5 + 0.5 * u(rng));
         l.energy = 0.2f;
         l.radius = 0.0f;

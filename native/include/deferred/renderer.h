@@ -65,6 +65,12 @@ struct RenderSettings {
     // Scenes with fewer than 8 lights are never culled (it would cost more).
     bool light_culling = true;
     float light_threshold = 1e-3f;
+    // Shadow maps for lights whose cast_shadow is on (one set per sample,
+    // from that sample's point on the light: soft shadows converge with
+    // samples). Resolution per cube face / cascade, lowered to fit the
+    // memory budget.
+    bool shadows = true;
+    int shadow_resolution = 1024;
 };
 
 // One pass of a finished frame: rows bottom-up (row 0 is the bottom of the
@@ -78,9 +84,13 @@ struct PassImage {
 // Wall-clock split of the last render, in milliseconds (GPU work is fenced
 // per stage, so the numbers are what each stage really cost).
 struct FrameTimings {
-    double upload_ms = 0, geometry_ms = 0, culling_ms = 0, lighting_ms = 0, passes_ms = 0, readback_ms = 0;
+    double upload_ms = 0, shadow_ms = 0, geometry_ms = 0, culling_ms = 0, lighting_ms = 0, passes_ms = 0,
+           readback_ms = 0;
     double total_ms = 0;
     std::uint64_t tile_light_pairs = 0;  // entries in the culled per-tile light lists
+    std::size_t shadow_map_bytes = 0;    // shadow map array + its depth buffer
+    std::size_t shadowed_lights = 0;     // lights with shadow maps this frame
+    std::size_t shadow_lights_dropped = 0;  // would cast shadows, over the layer/memory limits
     std::size_t gbuffer_bytes = 0;  // G-buffer + pass targets allocated for the frame
 };
 

@@ -1,0 +1,277 @@
+#include "shadow_module.h"
+
+#include "../../shaders/shader_defines.h"
+
+#include <deferred/renderer.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace deferred {
+
+namespace {
+
+gpu::mat4 to_gpu_mat(const glm::dmat4& m) {
+    gpu::mat4 r{};
+    for (int c = 0; c < 4; ++c) r.cols[c] = {float(m[c][0]), float(m[c][1]), float(m[c][2]), float(m[c][3])};
+    return r;
+}
+
+glm::dvec3 v3(const gpu::vec4& v) { return {v.x, v.y, v.z}; }
+
+// The cube face basis of shadow_lib.glsl's cube_face(): forward F, right R, up U.
+void face_basis(int face, glm::dvec3& F, glm::dvec3& R, glm::dvec3& U) {
+    const int axis = face / 2;
+    F = glm::dvec3(0.0);
+    F[axis] = (face % 2 == 0) ? 1.0 : -1.0;
+    const glm::dvec3 up = axis == 1 ? glm::dvec3(0, 0, 1) : glm::dvec3(0, 1, 0);
+    R = glm::normalize(glm::cross(F, up));
+    U = glm::cross(R, F);
+}
+
+// Camera-relative world -> clip for a 90 degree face from `origin`, reversed
+// Z with an infinite far plane (depth = near / distance along F).
+glm::dmat4 cube_face_matrix(int face, const glm::dvec3& origin) {
+    glm::dvec3 F, R, U;
+    face_basis(face, F, R, U);
+    glm::dmat4 view(1.0);  // rows R, U, -F
+    for (int c = 0; c < 3; ++c) {
+        view[c][0] = R[c];
+        view[c][1] = U[c];
+        view[c][2] = -F[c];
+    }
+    view[3] = glm::dvec4(-glm::dot(R, origin), -glm::dot(U, origin), glm::dot(F, origin), 1.0);
+    constexpr double near = 1e-3;
+    glm::dmat4 proj(0.0);
+    proj[0][0] = 1.0;
+    proj[1][1] = 1.0;
+    proj[3][2] = near;
+    proj[2][3] = -1.0;
+    return proj * view;
+}
+
+// Uniform point on the unit sphere (its projection on any plane is uniform on
+// the unit disk: Archimedes' hat-box theorem).
+glm::dvec3 uniform_sphere(double u1, double u2) {
+    const double z = 1.0 - 2.0 * u1, r = std::sqrt(std::max(0.0, 1.0 - z * z)), phi = 2.0 * M_PI * u2;
+    return {r * std::cos(phi), r * std::sin(phi), z};
+}
+
+glm::dvec2 concentric_disk(double u1, double u2) {
+    const double ox = 2 * u1 - 1, oy = 2 * u2 - 1;
+    if (ox == 0 && oy == 0) return {0, 0};
+    double r, t;
+    if (std::abs(ox) > std::abs(oy)) { r = ox; t = M_PI / 4 * (oy / ox); }
+    else { r = oy; t = M_PI / 2 - M_PI / 4 * (ox / oy); }
+    return {r * std::cos(t), r * std::sin(t)};
+}
+
+}  // namespace
+
+void ShadowModule::begin_frame(const CameraMatrices& camera, int resolution, std::size_t memory_budget) {
+    camera_ = camera;
+    resolution_ = std::clamp(resolution, 16, 8192);
+    budget_ = memory_budget;
+    entries_.clear();
+    layers_ = 0;
+}
+
+bool ShadowModule::offer(std::size_t light_index, const Light& light, const gpu::GpuLight& packed) {
+    if (!light.cast_shadow || light.energy == 0.0f) return false;
+    const bool sun = light.type == LightType::Sun;
+    if (!sun) {
+        // Only lights whose influence sphere reaches the view frustum.
+        const double radius = packed.params.z;
+        if (radius >= 0.0) {
+            const glm::dvec3 c = glm::dmat3(camera_.view) * v3(packed.position_type);
+            const double depth = -c.z;
+            if (depth + radius < camera_.clip_start || depth - radius > camera_.clip_end) return false;
+            const glm::dvec4& vp = camera_.viewplane;  // l r b t, in tan units (persp) or metres (ortho)
+            auto side = [&](double lo, double hi, double x) {
+                const double scale = camera_.orthographic ? 1.0 : std::max(depth, 0.0);
+                return x + radius >= lo * scale - radius * 2.0 && x - radius <= hi * scale + radius * 2.0;
+            };
+            if (depth > 0 && (!side(vp.x, vp.y, c.x) || !side(vp.z, vp.w, c.y))) return false;
+        }
+    }
+    Entry e;
+    e.light = packed;
+    e.sun = sun;
+    e.light_index = light_index;
+    const double S = std::abs(double(light.energy)) * std::max({light.color[0], light.color[1], light.color[2]});
+    const double d2 = glm::dot(v3(packed.position_type), v3(packed.position_type));
+    e.priority = sun ? 1e300 : S / std::max(d2, 1.0);
+    entries_.push_back(e);
+    return true;
+}
+
+std::vector<int> ShadowModule::allocate(std::size_t light_count) {
+    std::vector<int> index(light_count, -1);
+    dropped_ = 0;
+    if (entries_.empty()) return index;
+    GLint max_layers = 256;
+    glGetIntegerv(GL_MAX_ARRAY_TEXTURE_LAYERS, &max_layers);
+    std::stable_sort(entries_.begin(), entries_.end(),
+                     [](const Entry& a, const Entry& b) { return a.priority > b.priority; });
+    // Keep lights while their layers fit the array; lower the resolution (down
+    // to 256) to fit the memory budget, then drop the least important.
+    auto layers_of = [](const Entry& e) { return e.sun ? SHADOW_CASCADE_COUNT : 6; };
+    std::size_t kept = 0;
+    layers_ = 0;
+    for (const Entry& e : entries_) {
+        if (layers_ + layers_of(e) > max_layers) break;
+        layers_ += layers_of(e);
+        ++kept;
+    }
+    while (resolution_ > 256 && std::size_t(layers_) * resolution_ * resolution_ * 4 > budget_) resolution_ /= 2;
+    while (kept > 0 && std::size_t(layers_) * resolution_ * resolution_ * 4 > budget_) layers_ -= layers_of(entries_[--kept]);
+    dropped_ = entries_.size() - kept;
+    entries_.resize(kept);
+    int layer = 0;
+    for (std::size_t i = 0; i < entries_.size(); ++i) {
+        entries_[i].first_layer = layer;
+        layer += layers_of(entries_[i]);
+        index[entries_[i].light_index] = int(i);
+    }
+    if (entries_.empty()) return index;
+    bytes_ = (std::size_t(layers_) + 1) * resolution_ * resolution_ * 4;
+    if (layers_ != allocated_layers_ || resolution_ != allocated_resolution_) {
+        GLuint id = 0;
+        glCreateTextures(GL_TEXTURE_2D_ARRAY, 1, &id);
+        maps_ = Texture(id);
+        glTextureStorage3D(id, 1, GL_R32F, resolution_, resolution_, layers_);
+        glTextureParameteri(id, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+        glTextureParameteri(id, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+        glTextureParameteri(id, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+        glTextureParameteri(id, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+        depth_ = make_texture_2d(GL_DEPTH_COMPONENT32F, resolution_, resolution_, "shadow depth");
+        GLuint fbo = 0;
+        glCreateFramebuffers(1, &fbo);
+        fbo_ = Framebuffer(fbo);
+        glNamedFramebufferTexture(fbo, GL_DEPTH_ATTACHMENT, depth_.get(), 0);
+        allocated_layers_ = layers_;
+        allocated_resolution_ = resolution_;
+        check_gl("allocating shadow maps");
+    }
+    shadow_buffer_ = make_storage_buffer(nullptr, entries_.size() * sizeof(gpu::GpuShadow), "shadows");
+    return index;
+}
+
+void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float, 2>& u,
+                                 const std::function<void()>& bind_and_draw_scene) {
+    if (entries_.empty()) return;
+    ShaderVariant variant;
+    variant.defines.push_back("SHADOW_PASS");
+    const GLuint program = shaders.graphics_program("geometry_vert.glsl", "shadow_frag.glsl", variant);
+    glUseProgram(program);
+    glBindFramebuffer(GL_FRAMEBUFFER, fbo_.get());
+    glViewport(0, 0, resolution_, resolution_);
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_GREATER);
+    glDepthMask(GL_TRUE);
+    glDisable(GL_CULL_FACE);
+
+    std::vector<gpu::GpuShadow> shadows(entries_.size());
+    auto draw_layer = [&](int layer, const glm::dmat4& view_projection, const glm::dvec3& origin, int kind,
+                          const glm::dvec3& axis) {
+        glNamedFramebufferTextureLayer(fbo_.get(), GL_COLOR_ATTACHMENT0, maps_.get(), 0, layer);
+        const GLenum draw = GL_COLOR_ATTACHMENT0;
+        glNamedFramebufferDrawBuffers(fbo_.get(), 1, &draw);
+        const float far_away[4] = {3.0e38f, 0, 0, 0};
+        const float depth_far = 0.0f;
+        glClearNamedFramebufferfv(fbo_.get(), GL_COLOR, 0, far_away);
+        glClearNamedFramebufferfv(fbo_.get(), GL_DEPTH, 0, &depth_far);
+        const gpu::mat4 m = to_gpu_mat(view_projection);
+        glUniformMatrix4fv(2, 1, GL_FALSE, &m.cols[0].x);
+        glUniform4f(3, float(origin.x), float(origin.y), float(origin.z), float(kind));
+        glUniform3f(4, float(axis.x), float(axis.y), float(axis.z));
+        bind_and_draw_scene();
+    };
+
+    for (std::size_t i = 0; i < entries_.size(); ++i) {
+        const Entry& e = entries_[i];
+        gpu::GpuShadow& g = shadows[i];
+        const gpu::GpuLight& l = e.light;
+        if (e.sun) {
+            // The same point of the sun's disk the lighting uses this sample.
+            glm::dvec3 axis = glm::normalize(v3(l.direction));
+            const double tan_r = std::tan(double(l.strength.w));
+            if (tan_r > 0) {
+                glm::dvec3 t = glm::normalize(glm::cross(std::abs(axis.z) < 0.999 ? glm::dvec3(0, 0, 1) : glm::dvec3(1, 0, 0), -axis));
+                glm::dvec3 b = glm::cross(-axis, t);
+                const glm::dvec2 d = concentric_disk(u[0], u[1]) * tan_r;
+                axis = -glm::normalize(-axis + t * d.x + b * d.y);
+            }
+            const glm::dvec3 R = glm::normalize(glm::cross(axis, std::abs(axis.z) < 0.999 ? glm::dvec3(0, 0, 1) : glm::dvec3(1, 0, 0)));
+            const glm::dvec3 U = glm::cross(R, axis);
+            // Practical split scheme (Zhang et al. 2006), lambda 0.75.
+            const double n = camera_.clip_start, f = camera_.clip_end;
+            double splits[SHADOW_CASCADE_COUNT + 1];
+            for (int k = 0; k <= SHADOW_CASCADE_COUNT; ++k) {
+                const double t = double(k) / SHADOW_CASCADE_COUNT;
+                splits[k] = 0.75 * n * std::pow(f / n, t) + 0.25 * (n + (f - n) * t);
+            }
+            const glm::dvec4& vp = camera_.viewplane;
+            for (int k = 0; k < SHADOW_CASCADE_COUNT; ++k) {
+                // Bounding sphere of the frustum slice (camera-relative).
+                glm::dvec3 corners[8];
+                int ci = 0;
+                for (double depth : {splits[k], splits[k + 1]})
+                    for (double x : {vp.x, vp.y})
+                        for (double y : {vp.z, vp.w}) {
+                            const double s = camera_.orthographic ? 1.0 : depth;
+                            corners[ci++] = camera_.rotation * glm::dvec3(x * s, y * s, -depth);
+                        }
+                glm::dvec3 center(0.0);
+                for (auto& c : corners) center += c / 8.0;
+                double radius = 0;
+                for (auto& c : corners) radius = std::max(radius, glm::length(c - center));
+                radius *= 1.02;
+                // Depth along the sun: casters up to max(clip_end, 1 km) towards the sun.
+                const double zc = glm::dot(center, axis);
+                const double zmin = zc - radius - std::max(f, 1000.0), zmax = zc + radius;
+                glm::dmat4 m(0.0);  // rows: R/r, U/r, depth (1 nearest the sun), w
+                for (int c = 0; c < 3; ++c) {
+                    m[c][0] = R[c] / radius;
+                    m[c][1] = U[c] / radius;
+                    m[c][2] = -axis[c] / (zmax - zmin);
+                }
+                m[3][0] = -glm::dot(R, center) / radius;
+                m[3][1] = -glm::dot(U, center) / radius;
+                m[3][2] = zmax / (zmax - zmin);
+                m[3][3] = 1.0;
+                g.cascade[k] = to_gpu_mat(m);
+                draw_layer(e.first_layer + k, m, glm::dvec3(0.0), SHADOW_CASCADES, axis);
+            }
+            g.point = {float(axis.x), float(axis.y), float(axis.z), float(e.first_layer)};
+            g.params = {float(SHADOW_CASCADES), float(resolution_), 0.0f, 0.0f};
+            g.cascade_split = {float(splits[1]), float(splits[2]), float(splits[3]), float(splits[4])};
+        } else {
+            // This sample's point on the light.
+            glm::dvec3 p = v3(l.position_type);
+            const int type = int(l.position_type.w);
+            if (type == LIGHT_AREA) {
+                const glm::dvec2 xy = int(l.axis_y.w) == AREA_ELLIPSE ? concentric_disk(u[0], u[1])
+                                                                      : glm::dvec2(2 * u[0] - 1, 2 * u[1] - 1);
+                p += v3(l.axis_x) * xy.x + v3(l.axis_y) * xy.y;
+            } else if (l.strength.w > 0) {
+                p += uniform_sphere(u[0], u[1]) * double(l.strength.w);
+            }
+            for (int face = 0; face < 6; ++face)
+                draw_layer(e.first_layer + face, cube_face_matrix(face, p), p, SHADOW_CUBE, glm::dvec3(0.0));
+            g.point = {float(p.x), float(p.y), float(p.z), float(e.first_layer)};
+            g.params = {float(SHADOW_CUBE), float(resolution_), 2.0f / float(resolution_), 0.0f};
+        }
+    }
+    glNamedBufferSubData(shadow_buffer_.get(), 0, GLsizeiptr(shadows.size() * sizeof(gpu::GpuShadow)), shadows.data());
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    check_gl("shadow maps");
+}
+
+void ShadowModule::bind() const {
+    if (entries_.empty()) return;
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_SHADOWS, shadow_buffer_.get());
+    glBindTextureUnit(TEX_SHADOW_MAPS, maps_.get());
+}
+
+}  // namespace deferred

@@ -1,0 +1,16 @@
+/* Shadow maps: stores, per texel, the distance from the light's sample point
+ * (SHADOW_CUBE) or the depth along the sun's direction (SHADOW_CASCADES) of
+ * the nearest surface, as a float (R32F). Depth testing uses its own
+ * reversed-Z float buffer; the stored value is linear so the lookup compares
+ * distances in metres. */
+#include "frame_lib.glsl"
+
+in vec3 v_position;
+layout(location = 3) uniform vec4 shadow_origin; /* xyz: light point (cube) or a point up-sun (cascades); w: kind */
+layout(location = 4) uniform vec3 shadow_axis;   /* sun direction (cascades) */
+layout(location = 0) out float out_distance;
+
+void main() {
+    vec3 v = v_position - shadow_origin.xyz;
+    out_distance = int(shadow_origin.w) == SHADOW_CASCADES ? dot(v, shadow_axis) : length(v);
+}

@@ -1,0 +1,74 @@
+/* Shadow lookups (maps rendered by shadow_frag.glsl, one set per film
+ * sample, from this sample's point on the light; see ShadowModule).
+ *
+ * Soft shadows converge by sampling: each film sample renders the maps from
+ * a new point on the light (sphere lights: uniform on the sphere, whose
+ * projection onto the disk Cycles samples is uniform on that disk; area
+ * lights: uniform on the surface; sun: the same point of its disk the
+ * lighting uses), and the sample's unshadowed light is multiplied by that
+ * point's visibility. Averaged over samples this is the light's unshadowed
+ * integral times the fraction of the light's area that is visible, which is
+ * Cycles' result when the light's contribution varies little across it
+ * (the usual case; at grazing distances from large lights it is a bias).
+ *
+ * Bias, in shadow-map texels at the receiver's distance: normal offset of
+ * 1.5 texels scaled by sin(theta) (theta between the normal and the light),
+ * plus a slope-scaled depth bias of 1 + 2 tan(theta) texels clamped at 10. */
+
+layout(std430, binding = SSBO_SHADOWS) readonly buffer Shadows { GpuShadow shadows[]; };
+layout(binding = TEX_SHADOW_MAPS) uniform sampler2DArray shadow_maps;
+
+/* The cube face of direction v (+X -X +Y -Y +Z -Z) and its basis: forward F,
+ * right R, up U, as ShadowModule builds the face's view matrix. */
+int cube_face(vec3 v, out vec3 F, out vec3 R, out vec3 U) {
+    vec3 a = abs(v);
+    int face;
+    if (a.x >= a.y && a.x >= a.z) { face = v.x >= 0.0 ? 0 : 1; F = vec3(v.x >= 0.0 ? 1.0 : -1.0, 0.0, 0.0); }
+    else if (a.y >= a.z) { face = v.y >= 0.0 ? 2 : 3; F = vec3(0.0, v.y >= 0.0 ? 1.0 : -1.0, 0.0); }
+    else { face = v.z >= 0.0 ? 4 : 5; F = vec3(0.0, 0.0, v.z >= 0.0 ? 1.0 : -1.0); }
+    vec3 up = abs(F.y) > 0.5 ? vec3(0.0, 0.0, 1.0) : vec3(0.0, 1.0, 0.0);
+    R = normalize(cross(F, up));
+    U = cross(R, F);
+    return face;
+}
+
+float shadow_bias_scale(vec3 N, vec3 L, out float sin_t) {
+    float cos_t = clamp(dot(N, L), 1e-3, 1.0);
+    sin_t = sqrt(max(1.0 - cos_t * cos_t, 0.0));
+    return min(1.0 + 2.0 * sin_t / cos_t, 10.0);
+}
+
+/* 1 where this sample's light point sees P (normal N), 0 in shadow. */
+float shadow_visibility(int index, vec3 P, vec3 N) {
+    GpuShadow sh = shadows[index];
+    float res = sh.params.y;
+    if (int(sh.params.x) == SHADOW_CASCADES) {
+        vec3 axis = sh.point.xyz; /* for cascades: the sun's travel direction */
+        float d = frame_view_depth(P);
+        int c = d <= sh.cascade_split.x ? 0 : d <= sh.cascade_split.y ? 1 : d <= sh.cascade_split.z ? 2 : 3;
+        mat4 m = sh.cascade[c];
+        float texel = 2.0 / (length(vec3(m[0][0], m[1][0], m[2][0])) * res);
+        float sin_t;
+        float slope = shadow_bias_scale(N, -axis, sin_t);
+        vec3 Pb = P + N * (1.5 * texel * sin_t);
+        vec4 clip = m * vec4(Pb, 1.0);
+        vec2 uv = clip.xy * 0.5 + 0.5;
+        if (any(lessThan(uv, vec2(0.0))) || any(greaterThan(uv, vec2(1.0)))) return 1.0;
+        float stored = texture(shadow_maps, vec3(uv, sh.point.w + float(c))).r;
+        return dot(Pb, axis) - slope * texel <= stored ? 1.0 : 0.0;
+    }
+    vec3 v = P - sh.point.xyz;
+    float dist = length(v);
+    if (dist <= 0.0) return 1.0;
+    float texel = dist * sh.params.z;
+    float sin_t;
+    float slope = shadow_bias_scale(N, -v / dist, sin_t);
+    vec3 Pb = P + N * (1.5 * texel * sin_t);
+    vec3 vb = Pb - sh.point.xyz;
+    vec3 F, R, U;
+    int face = cube_face(vb, F, R, U);
+    float fwd = dot(vb, F);
+    vec2 uv = vec2(dot(vb, R), dot(vb, U)) / fwd * 0.5 + 0.5;
+    float stored = texture(shadow_maps, vec3(uv, sh.point.w + float(face))).r;
+    return length(vb) - slope * texel <= stored ? 1.0 : 0.0;
+}

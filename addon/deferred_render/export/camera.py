@@ -15,10 +15,16 @@ class CameraError(Exception):
     """The scene cannot be rendered from its camera; the message says why."""
 
 
+# The native input contract (native/src/camera.cpp): positions within 1e15 m.
+MAX_COORDINATE = 1e15
+
+
 def _normalized_matrix(matrix):
     m = np.array(matrix, dtype=np.float64)
     if m.shape != (4, 4) or not np.isfinite(m).all():
         raise CameraError("the camera has a NaN/Inf transform")
+    if np.abs(m[:3, 3]).max() > MAX_COORDINATE:
+        raise CameraError(f"the camera is farther than {MAX_COORDINATE:g} m from the origin (float32 rendering limit)")
     for axis in range(3):
         n = np.linalg.norm(m[:3, axis])
         if n < 1e-12:

@@ -14,8 +14,11 @@ already applied in the evaluated data). What is exported:
   data-linked materials both work;
 - lights (``light.py``).
 
-Objects that cannot be rendered (no faces, NaN/Inf vertices or matrix) are
-skipped with one warning each; the render goes on. Not warned about: curves
+Objects that cannot be rendered (no faces, NaN/Inf vertices or matrix,
+coordinates beyond 1e15 m) are skipped with one warning each; the render
+goes on. The native scene validation is the last word: anything it still
+refuses (a ValueError naming the array or parameter) skips that one object,
+light or material with a warning instead of failing the frame. Not warned about: curves
 without geometry (paths) and mesh objects whose modifiers leave no faces
 (e.g. geometry nodes that output only instances), as Cycles does.
 """
@@ -29,8 +32,10 @@ from . import material as material_export
 from . import mesh as mesh_export
 
 UNSUPPORTED_GEOMETRY = {"CURVES", "POINTCLOUD", "VOLUME", "GPENCIL"}
-# Larger transform entries overflow float32 positions on the GPU.
-MAX_MATRIX_VALUE = 1e30
+# The native input contract (native/src/scene_store.h, InputLimits): positions
+# and matrix entries within 1e15 m keep squared camera-relative distances
+# finite in float32 on the GPU.
+MAX_MATRIX_VALUE = mesh_export.MAX_COORDINATE
 
 
 class ExportStats:
@@ -52,13 +57,14 @@ class ExportStats:
 
 
 class _Group:
-    __slots__ = ("mesh_id", "material_ids", "matrices", "object_indices")
+    __slots__ = ("mesh_id", "material_ids", "matrices", "object_indices", "names")
 
     def __init__(self, mesh_id, material_ids):
         self.mesh_id = mesh_id
         self.material_ids = material_ids
         self.matrices = []
         self.object_indices = []
+        self.names = []
 
 
 class SceneExporter:
@@ -95,7 +101,12 @@ class SceneExporter:
             params, notes = material_export.material_params(material)
             if notes:
                 self._warn_once(("material", key), material_export.warning_text(material, notes))
-            mat_id = self.renderer.add_material(**params)
+            try:
+                mat_id = self.renderer.add_material(**params)
+            except ValueError as ex:  # refused by the native validation: default surface
+                name = material.name if material is not None else "<default>"
+                self._warn_once(("material-refused", key), f"Material '{name}': {ex} (rendered with the default surface)")
+                mat_id = self.renderer.add_material(**material_export.DEFAULT_PARAMS)
             self._material_ids[key] = mat_id
             self.stats.materials += 1
         return mat_id
@@ -131,15 +142,20 @@ class SceneExporter:
                 self._warn_once(("mesh", key), f"Object '{ob.name}' skipped: {ex}")
         else:
             mesh_export.clamp_material_indices(arrays, max(1, len(ob.material_slots)))
-            mesh_id = self.renderer.add_mesh(
-                arrays.positions, arrays.indices,
-                corner_normals=arrays.corner_normals,
-                corner_uvs=arrays.corner_uvs,
-                material_indices=arrays.material_indices)
-            entry = (mesh_id, arrays.triangle_count)
-            self.stats.meshes += 1
-            self.stats.triangles += arrays.triangle_count
-            self.stats.mesh_bytes += arrays.nbytes()
+            try:
+                mesh_id = self.renderer.add_mesh(
+                    arrays.positions, arrays.indices,
+                    corner_normals=arrays.corner_normals,
+                    corner_uvs=arrays.corner_uvs,
+                    material_indices=arrays.material_indices)
+            except ValueError as ex:  # refused by the native validation
+                self.stats.skipped_objects += 1
+                self._warn_once(("mesh", key), f"Object '{ob.name}' skipped: {ex}")
+            else:
+                entry = (mesh_id, arrays.triangle_count)
+                self.stats.meshes += 1
+                self.stats.triangles += arrays.triangle_count
+                self.stats.mesh_bytes += arrays.nbytes()
         self._mesh_ids[key] = entry
         return entry
 
@@ -167,8 +183,13 @@ class SceneExporter:
     def _sync_geometry(self, inst, ob):
         matrix = np.array(inst.matrix_world, dtype=np.float64)
         # Blender clamps an infinite scale to FLT_MAX; that overflows as well.
-        if not (np.isfinite(matrix).all() and np.abs(matrix).max() < MAX_MATRIX_VALUE):
+        if not np.isfinite(matrix).all():
             self._warn_once(("matrix", ob.name), f"Object '{ob.name}' skipped: NaN/Inf transform")
+            self.stats.skipped_objects += 1
+            return
+        if np.abs(matrix).max() > MAX_MATRIX_VALUE:
+            self._warn_once(("matrix", ob.name), f"Object '{ob.name}' skipped: transform beyond "
+                                                 f"{MAX_MATRIX_VALUE:g} (float32 rendering limit)")
             self.stats.skipped_objects += 1
             return
         entry = self._mesh_id(ob)
@@ -182,6 +203,7 @@ class SceneExporter:
             group = self._groups[group_key] = _Group(mesh_id, material_ids)
         group.matrices.append(matrix)
         group.object_indices.append(ob.pass_index)
+        group.names.append(ob.name)
         self.stats.instances += 1
         self.stats.instanced_triangles += triangles
 
@@ -193,14 +215,23 @@ class SceneExporter:
             return
         if params is None:
             return
-        self.renderer.add_light(**params)
+        try:
+            self.renderer.add_light(**params)
+        except ValueError as ex:  # refused by the native validation
+            self._warn_once(("light", ob.name), f"Light '{ob.name}' skipped: {ex}")
+            return
         self.stats.lights += 1
 
     def flush_instances(self):
         for group in self._groups.values():
             matrices = np.ascontiguousarray(np.stack(group.matrices), dtype=np.float64)
             object_indices = np.asarray(group.object_indices, dtype=np.uint32)
-            self.renderer.add_instances(group.mesh_id, matrices,
-                                        object_indices=object_indices,
-                                        material_slots=list(group.material_ids))
+            try:
+                self.renderer.add_instances(group.mesh_id, matrices,
+                                            object_indices=object_indices,
+                                            material_slots=list(group.material_ids))
+            except ValueError as ex:  # refused by the native validation
+                names = ", ".join(f"'{n}'" for n in group.names[:3]) + (" ..." if len(group.names) > 3 else "")
+                self.warn(f"{len(group.names)} object(s) skipped ({names}): {ex}")
+                self.stats.skipped_objects += len(group.names)
         self._groups.clear()

@@ -309,15 +309,31 @@ def viewport_params(material):
     return params
 
 
-def _sanitize(params):
+# The native input contract (native/src/scene_store.h, InputLimits): specular
+# up to 12 (F0 0.96; 12.5 is an infinite IOR), base colour up to 65504 (the
+# half-float G-buffer).
+MAX_SPECULAR = 12.0
+MAX_BASE_COLOR = 65504.0
+
+
+def _sanitize(params, notes=None):
+    """Clamp to the ranges the renderer accepts; NaN becomes the default.
+    Values beyond the native limits (reachable through linked Value/RGB
+    nodes) are noted."""
     out = dict(params)
     for key in ("metallic", "roughness", "specular_tint", "sheen", "sheen_tint", "clearcoat",
                 "clearcoat_roughness", "alpha"):
-        out[key] = _clamp01(out[key])
-    out["specular"] = max(0.0, float(out["specular"]))
-    out["emission_strength"] = max(0.0, float(out["emission_strength"]))
-    out["base_color"] = tuple(max(0.0, c) for c in out["base_color"])
-    out["emission"] = tuple(max(0.0, c) for c in out["emission"])
+        out[key] = _clamp01(_finite(out[key], DEFAULT_PARAMS[key]))
+    specular = _finite(out["specular"], DEFAULT_PARAMS["specular"])
+    if specular > MAX_SPECULAR and notes is not None:
+        notes.append(f"Specular {specular:g} clamped to {MAX_SPECULAR:g}")
+    out["specular"] = min(max(0.0, specular), MAX_SPECULAR)
+    out["emission_strength"] = max(0.0, _finite(out["emission_strength"], 0.0))
+    base = tuple(max(0.0, _finite(c, 0.0)) for c in out["base_color"])
+    if max(base) > MAX_BASE_COLOR and notes is not None:
+        notes.append(f"Base Color above {MAX_BASE_COLOR:g} clamped")
+    out["base_color"] = tuple(min(c, MAX_BASE_COLOR) for c in base)
+    out["emission"] = tuple(max(0.0, _finite(c, 0.0)) for c in out["emission"])
     return out
 
 
@@ -361,7 +377,7 @@ def material_params(material):
     except _Unreduced as ex:
         notes.insert(0, f"{ex} (used the viewport display colour)")
         return viewport_params(material), notes
-    params = _sanitize(params)
+    params = _sanitize(params, notes)
     params["pass_index"] = int(material.pass_index)
     return params, notes
 

@@ -22,6 +22,10 @@ import numpy as np
 # Object types whose geometry becomes a mesh through Object.to_mesh().
 MESHABLE_TYPES = {"MESH", "CURVE", "SURFACE", "FONT", "META"}
 
+# Largest |coordinate| (and matrix entry) the native renderer accepts
+# (native/src/scene_store.h, InputLimits::kMaxCoordinate).
+MAX_COORDINATE = 1e15
+
 
 class MeshArrays:
     """The arrays handed to ``Renderer.add_mesh`` (shapes and dtypes fixed)."""
@@ -112,6 +116,9 @@ def mesh_arrays(mesh, name=None, split_normals=None):
     if not np.isfinite(positions).all():
         bad = int((~np.isfinite(positions)).any(axis=1).sum())
         raise MeshSkipped(f"mesh '{name}' has {bad} vertices with NaN/Inf coordinates")
+    if positions.size and np.abs(positions).max() > MAX_COORDINATE:
+        bad = int((np.abs(positions) > MAX_COORDINATE).any(axis=1).sum())
+        raise MeshSkipped(f"mesh '{name}' has {bad} vertices beyond {MAX_COORDINATE:g} m (float32 rendering limit)")
 
     # uint32 buffers match Blender's MLoopTri storage, so foreach_get takes
     # its raw-copy fast path (int32 buffers are ~8x slower on 3.4).

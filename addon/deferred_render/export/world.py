@@ -10,6 +10,8 @@ colour) is used with one warning.
 import math
 
 MIST_FALLOFFS = {"QUADRATIC", "LINEAR", "INVERSE_QUADRATIC"}
+# The native input contract (native/src/scene_store.h, InputLimits::kMaxWorld).
+MAX_WORLD = 1e12
 
 
 def _color3(value):
@@ -34,7 +36,16 @@ def _linked(socket):
 
 
 def world_color(world):
-    """Return ((r, g, b), warnings)."""
+    """Return ((r, g, b), warnings): finite, in [0, 1e12]."""
+    color, warnings = _world_color(world)
+    color = tuple(max(0.0, c) if math.isfinite(c) else 0.0 for c in color)
+    if max(color) > MAX_WORLD:
+        warnings = list(warnings) + [f"World '{world.name}': colour x strength {max(color):g} clamped to {MAX_WORLD:g}"]
+        color = tuple(min(c, MAX_WORLD) for c in color)
+    return color, warnings
+
+
+def _world_color(world):
     if world is None:
         return (0.0, 0.0, 0.0), []
     if not world.use_nodes or world.node_tree is None:
@@ -85,4 +96,7 @@ def mist_params(world):
         return {"mist_start": 5.0, "mist_depth": 25.0, "mist_falloff": "QUADRATIC"}
     mist = world.mist_settings
     falloff = mist.falloff if mist.falloff in MIST_FALLOFFS else "QUADRATIC"
-    return {"mist_start": float(mist.start), "mist_depth": float(mist.depth), "mist_falloff": falloff}
+    # NaN/Inf (possible through Python or drivers) would reach the Mist pass.
+    start = float(mist.start) if math.isfinite(mist.start) else 5.0
+    depth = float(mist.depth) if math.isfinite(mist.depth) and mist.depth > 0 else 25.0
+    return {"mist_start": start, "mist_depth": depth, "mist_falloff": falloff}

@@ -107,12 +107,17 @@ SHARED_ASSERT_SIZE(FrameConstants, 368);
  *                   shadow map array
  *   params        : x kind (SHADOW_CUBE: 6 layers, +X -X +Y -Y +Z -Z; SHADOW_CASCADES: 4 layers),
  *                   y map resolution, z texel size at unit distance (cube: 2/res), w unused
- *   cascade_split : far view depth of cascades 0..3
+ *   cascade_split : cascades: far view depth of cascades 0..3; cubes: xy the sample's
+ *                   offset on the sphere light's disk, along each face's right/up axes
  *   cascade       : camera-relative world -> cascade clip space (orthographic, depth in [0,1]
  *                   along the sun's direction, 1 nearest the sun) */
 #define SHADOW_CUBE 0
 #define SHADOW_CASCADES 1
 #define SHADOW_CASCADE_COUNT 4
+/* Cube faces cover tan(angle) <= 1.1 instead of 1 (a little more than 90
+ * degrees) so points near a face border are inside the face as seen from
+ * any of the sample's per-face light points. */
+#define SHADOW_CUBE_OVERLAP 1.1
 SHARED_STRUCT(GpuShadow) {
     vec4 point;
     vec4 params;

@@ -2,10 +2,10 @@
  * sample, from this sample's point on the light; see ShadowModule).
  *
  * Soft shadows converge by sampling: each film sample renders the maps from
- * a new point on the light (sphere lights: uniform on the sphere, whose
- * projection onto the disk Cycles samples is uniform on that disk; area
- * lights: uniform on the surface; sun: the same point of its disk the
- * lighting uses), and the sample's unshadowed light is multiplied by that
+ * a new point on the light (sphere lights: per cube face, a point of the
+ * disk perpendicular to the face's axis, which is the disk Cycles samples
+ * for receivers on that axis; area lights: uniform on the surface; sun: the
+ * same point of its disk the lighting uses), and the sample's unshadowed light is multiplied by that
  * point's visibility. Averaged over samples this is the light's unshadowed
  * integral times the fraction of the light's area that is visible, which is
  * Cycles' result when the light's contribution varies little across it
@@ -57,18 +57,35 @@ float shadow_visibility(int index, vec3 P, vec3 N) {
         float stored = texture(shadow_maps, vec3(uv, sh.point.w + float(c))).r;
         return dot(Pb, axis) - slope * texel <= stored ? 1.0 : 0.0;
     }
-    vec3 v = P - sh.point.xyz;
+    /* The face from the light's centre; its light point is on the disk
+     * perpendicular to the face's axis (sh.cascade_split.xy, see ShadowModule). */
+    vec3 F, R, U;
+    int face = cube_face(P - sh.point.xyz, F, R, U);
+    vec3 light_point = sh.point.xyz + R * sh.cascade_split.x + U * sh.cascade_split.y;
+    /* Near a face border P may lie in the next face as seen from this face's
+     * point: switch once (faces also overlap by SHADOW_CUBE_OVERLAP). */
+    vec3 F2, R2, U2;
+    int face2 = cube_face(P - light_point, F2, R2, U2);
+    if (face2 != face) {
+        face = face2;
+        F = F2;
+        R = R2;
+        U = U2;
+        light_point = sh.point.xyz + R * sh.cascade_split.x + U * sh.cascade_split.y;
+    }
+    vec3 v = P - light_point;
     float dist = length(v);
-    if (dist <= 0.0) return 1.0;
+    /* A light point below the receiver's horizon: the unshadowed term already
+     * left that part of the light out (horizon clipping), and the receiver's
+     * own surface is no shadow; only occlusion by other geometry counts. */
+    if (dist <= 0.0 || dot(N, v) >= 0.0) return 1.0;
     float texel = dist * sh.params.z;
     float sin_t;
     float slope = shadow_bias_scale(N, -v / dist, sin_t);
     vec3 Pb = P + N * (1.5 * texel * sin_t);
-    vec3 vb = Pb - sh.point.xyz;
-    vec3 F, R, U;
-    int face = cube_face(vb, F, R, U);
-    float fwd = dot(vb, F);
-    vec2 uv = vec2(dot(vb, R), dot(vb, U)) / fwd * 0.5 + 0.5;
+    vec3 vb = Pb - light_point;
+    float fwd = max(dot(vb, F), 1e-20);
+    vec2 uv = vec2(dot(vb, R), dot(vb, U)) / (fwd * SHADOW_CUBE_OVERLAP) * 0.5 + 0.5;
     float stored = texture(shadow_maps, vec3(uv, sh.point.w + float(face))).r;
     return length(vb) - slope * texel <= stored ? 1.0 : 0.0;
 }

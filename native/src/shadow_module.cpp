@@ -29,7 +29,7 @@ void face_basis(int face, glm::dvec3& F, glm::dvec3& R, glm::dvec3& U) {
     U = glm::cross(R, F);
 }
 
-// Camera-relative world -> clip for a 90 degree face from `origin`, reversed
+// Camera-relative world -> clip for a (slightly wider than) 90 degree face from `origin`, reversed
 // Z with an infinite far plane (depth = near / distance along F).
 glm::dmat4 cube_face_matrix(int face, const glm::dvec3& origin) {
     glm::dvec3 F, R, U;
@@ -43,18 +43,11 @@ glm::dmat4 cube_face_matrix(int face, const glm::dvec3& origin) {
     view[3] = glm::dvec4(-glm::dot(R, origin), -glm::dot(U, origin), glm::dot(F, origin), 1.0);
     constexpr double near = 1e-3;
     glm::dmat4 proj(0.0);
-    proj[0][0] = 1.0;
-    proj[1][1] = 1.0;
+    proj[0][0] = 1.0 / SHADOW_CUBE_OVERLAP;
+    proj[1][1] = 1.0 / SHADOW_CUBE_OVERLAP;
     proj[3][2] = near;
     proj[2][3] = -1.0;
     return proj * view;
-}
-
-// Uniform point on the unit sphere (its projection on any plane is uniform on
-// the unit disk: Archimedes' hat-box theorem).
-glm::dvec3 uniform_sphere(double u1, double u2) {
-    const double z = 1.0 - 2.0 * u1, r = std::sqrt(std::max(0.0, 1.0 - z * z)), phi = 2.0 * M_PI * u2;
-    return {r * std::cos(phi), r * std::sin(phi), z};
 }
 
 glm::dvec2 concentric_disk(double u1, double u2) {
@@ -247,20 +240,30 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
             g.params = {float(SHADOW_CASCADES), float(resolution_), 0.0f, 0.0f};
             g.cascade_split = {float(splits[1]), float(splits[2]), float(splits[3]), float(splits[4])};
         } else {
-            // This sample's point on the light.
+            // This sample's point on the light. Area lights: uniform on the
+            // surface. Sphere lights: Cycles samples a disk facing each
+            // shading point; a face of the cube sees receivers around its
+            // axis, so each face uses the point of the disk perpendicular to
+            // that axis (the same disk coordinates for all six faces).
             glm::dvec3 p = v3(l.position_type);
+            glm::dvec2 disk(0.0);
             const int type = int(l.position_type.w);
             if (type == LIGHT_AREA) {
                 const glm::dvec2 xy = int(l.axis_y.w) == AREA_ELLIPSE ? concentric_disk(u[0], u[1])
                                                                       : glm::dvec2(2 * u[0] - 1, 2 * u[1] - 1);
                 p += v3(l.axis_x) * xy.x + v3(l.axis_y) * xy.y;
             } else if (l.strength.w > 0) {
-                p += uniform_sphere(u[0], u[1]) * double(l.strength.w);
+                disk = concentric_disk(u[0], u[1]) * double(l.strength.w);
             }
-            for (int face = 0; face < 6; ++face)
-                draw_layer(e.first_layer + face, cube_face_matrix(face, p), p, SHADOW_CUBE, glm::dvec3(0.0));
+            for (int face = 0; face < 6; ++face) {
+                glm::dvec3 F, R, U;
+                face_basis(face, F, R, U);
+                const glm::dvec3 pf = p + R * disk.x + U * disk.y;
+                draw_layer(e.first_layer + face, cube_face_matrix(face, pf), pf, SHADOW_CUBE, glm::dvec3(0.0));
+            }
             g.point = {float(p.x), float(p.y), float(p.z), float(e.first_layer)};
-            g.params = {float(SHADOW_CUBE), float(resolution_), 2.0f / float(resolution_), 0.0f};
+            g.params = {float(SHADOW_CUBE), float(resolution_), float(2.0 * SHADOW_CUBE_OVERLAP / resolution_), 0.0f};
+            g.cascade_split = {float(disk.x), float(disk.y), 0.0f, 0.0f};
         }
     }
     glNamedBufferSubData(shadow_buffer_.get(), 0, GLsizeiptr(shadows.size() * sizeof(gpu::GpuShadow)), shadows.data());

@@ -3,7 +3,9 @@
 // shaders/shadow_lib.glsl).
 //
 //  point, spot, area : a cube of 6 R32F layers storing the distance from the
-//                      light point (90 degree faces, reversed-Z depth test)
+//                      light point (90 degree faces, reversed-Z depth test);
+//                      sphere lights use, per face, the point of the disk
+//                      perpendicular to the face's axis
 //  sun               : 4 orthographic cascades over the view frustum
 //                      (practical split scheme, lambda 0.75) storing depth
 //                      along the sun's direction

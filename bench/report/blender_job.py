@@ -9,6 +9,8 @@ JOB.json (written by run_report.py):
      "target_width": 320,            # resolution_percentage chosen so width ~ this
      "warmup": true,                 # one untimed-for-the-table render first
      "eevee": {...}, "cycles": {...} # engine settings (see apply_* below)
+     "index_pass": false,            # also keep IndexOB (multilayer EXR; the reference)
+     "no_shadows": false,            # nothing occludes: see disable_shadows()
      "renders": [{"samples": 16, "seed": 7, "out": "/abs/x.exr", "min_reps": 1}, ...],
      "results": "/abs/results.json"}
 
@@ -21,18 +23,19 @@ GL context start and upload) and the sampling itself. With "warmup" the
 first render (at the first sample count) is done once before the measured
 ones, so in-process caches (EEVEE's compiled shaders, Cycles' kernels, our
 shader cache if any) are warm; its time is reported as cold_s. Renders
-faster than 2 s are repeated (3 times in all) and the median is kept.
+faster than 2 s are repeated (3 times in all) and the fastest is kept
+(other work on the 2 cores only ever adds time).
 
 How memory is measured: before each render the process' peak RSS (VmHWM) is
 reset through /proc/self/clear_refs ("5"); after it VmHWM is read. That is
 the peak resident memory of the whole Blender process during that render
 (on llvmpipe the "GPU" memory of EEVEE and of our engine is process memory
-too, so it is counted). RSS before the render is reported as well.
+too, so it is counted). RSS before the render is reported as well, and the
+1-minute load average before it (other processes on the 2 cores skew times).
 """
 
 import json
 import os
-import statistics
 import sys
 import time
 
@@ -56,8 +59,9 @@ def reset_peak_rss():
         return False
 
 
-def only_combined(scene):
-    """Render just the Combined pass of one view layer (same work for all engines)."""
+def only_combined(scene, index_pass=False):
+    """Render just the Combined pass of one view layer (same work for all
+    engines); the reference also keeps IndexOB for the per-object table."""
     active = bpy.context.view_layer
     for layer in scene.view_layers:
         layer.use = layer == active
@@ -68,7 +72,40 @@ def only_combined(scene):
             except (AttributeError, TypeError):
                 pass
     active.use_pass_combined = True
+    active.use_pass_object_index = bool(index_pass)
     return active
+
+
+def disable_shadows():
+    """Unoccluded variant of the reference: no object blocks any ray but the
+    camera's, so lights and the world light every surface as the Deferred
+    engine does while it has no shadows. visible_shadow alone is not enough:
+    Cycles combines light sampling with BSDF-sampled rays (MIS) also at
+    max_bounces 0, and a BSDF ray that hits an object loses the world's
+    light; so diffuse/glossy/transmission visibility go off too (lights keep
+    theirs)."""
+    for ob in bpy.data.objects:
+        if ob.type == 'LIGHT':
+            continue
+        for flag in ("visible_shadow", "visible_diffuse", "visible_glossy", "visible_transmission",
+                     "visible_volume_scatter"):
+            if hasattr(ob, flag):
+                setattr(ob, flag, False)
+    for light in bpy.data.lights:
+        if hasattr(light, "cycles"):
+            light.cycles.cast_shadow = False
+        light.use_shadow = False
+
+
+def pass_index_names(depsgraph):
+    """{pass_index: sorted object names} of the rendered mesh objects."""
+    names = {}
+    for inst in depsgraph.object_instances:
+        ob = inst.object
+        if ob.type in ('MESH', 'CURVE', 'SURFACE', 'META', 'FONT'):
+            key = str(ob.pass_index)
+            names.setdefault(key, set()).add(ob.original.name if ob.original else ob.name)
+    return {k: sorted(v)[:8] + (["..."] if len(v) > 8 else []) for k, v in names.items()}
 
 
 def apply_common(scene, job):
@@ -132,27 +169,20 @@ def set_samples(scene, engine, samples, seed):
         raise ValueError(engine)
 
 
-STATS = []
-
-
-def on_stats(text, *_args):
-    STATS.append(str(text))
-
-
 def render_once(scene):
-    del STATS[:]
+    load_before = os.getloadavg()[0]
     reset_ok = reset_peak_rss()
     rss_before = proc_status_mb("VmRSS")
     t0 = time.perf_counter()
     bpy.ops.render.render()
     dt = time.perf_counter() - t0
     peak = proc_status_mb("VmHWM") if reset_ok else float("nan")
-    return dt, rss_before, peak, (STATS[-1] if STATS else "")
+    return dt, rss_before, peak, load_before
 
 
-def save_combined(scene, path):
+def save_combined(scene, path, multilayer=False):
     img = scene.render.image_settings
-    img.file_format = 'OPEN_EXR'
+    img.file_format = 'OPEN_EXR_MULTILAYER' if multilayer else 'OPEN_EXR'
     img.color_mode = 'RGBA'
     img.color_depth = '32'
     img.exr_codec = 'ZIP'
@@ -173,17 +203,23 @@ def main():
         raise RuntimeError(f"engine {engine} not available")
     if engine == 'DEFERRED_RENDER' and not hasattr(scene, "deferred_render"):
         raise RuntimeError("the deferred_render add-on is not loaded")
-    only_combined(scene)
+    only_combined(scene, job.get("index_pass", False))
     size = apply_common(scene, job)
     if hasattr(scene, "cycles"):
         apply_cycles(scene, job.get("cycles"))
     apply_eevee(scene, job.get("eevee"))
-    bpy.app.handlers.render_stats.append(on_stats)
+    if job.get("no_shadows"):
+        disable_shadows()
 
     out = {"engine": engine, "blend": bpy.data.filepath, "width": size[0], "height": size[1],
            "percentage": scene.render.resolution_percentage, "filter_size": scene.render.filter_size,
            "blender": bpy.app.version_string, "rss_loaded_mb": proc_status_mb("VmRSS"),
            "renders": []}
+    if engine == 'DEFERRED_RENDER':
+        dr = scene.deferred_render
+        out["deferred"] = {k: getattr(dr, k) for k in dir(dr)
+                           if not k.startswith(("_", "bl_", "rna_")) and k not in ("name",)
+                           and isinstance(getattr(dr, k), (int, float, bool, str))}
     if engine == 'BLENDER_EEVEE':
         ee = scene.eevee
         out["eevee"] = {k: getattr(ee, k) for k in (
@@ -200,25 +236,29 @@ def main():
     out["cold"] = cold
     for spec in renders:
         set_samples(scene, engine, spec["samples"], spec.get("seed", 0))
-        times, peaks, befores, stats = [], [], [], ""
+        times, peaks, befores, loads = [], [], [], []
         while True:
-            dt, before, peak, stats = render_once(scene)
+            dt, before, peak, load = render_once(scene)
             times.append(dt)
             peaks.append(peak)
             befores.append(before)
+            loads.append(load)
             reps = max(int(spec.get("min_reps", 1)), 3 if times[0] < 2.0 else 1)
             if len(times) >= reps:
                 break
-        save_combined(scene, spec["out"])
+        save_combined(scene, spec["out"], multilayer=job.get("index_pass", False))
         entry = {"samples": spec["samples"], "seed": spec.get("seed", 0), "out": spec["out"],
-                 "seconds": statistics.median(times), "all_seconds": times,
-                 "peak_rss_mb": max(peaks), "rss_before_mb": min(befores), "stats": stats}
+                 "seconds": min(times), "all_seconds": times,
+                 "peak_rss_mb": max(peaks), "rss_before_mb": min(befores),
+                 "loadavg_1min_before": max(loads)}
         out["renders"].append(entry)
         print(f"report_job: {engine} {spec['samples']} samples: {entry['seconds']:.3f} s "
               f"(runs {', '.join(f'{t:.3f}' for t in times)}), peak RSS {entry['peak_rss_mb']:.0f} MB",
               flush=True)
         with open(job["results"], "w") as f:   # partial results survive a crash
             json.dump(out, f, indent=1)
+    if job.get("index_pass"):
+        out["pass_index_names"] = pass_index_names(bpy.context.evaluated_depsgraph_get())
     with open(job["results"], "w") as f:
         json.dump(out, f, indent=1)
 

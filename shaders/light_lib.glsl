@@ -266,16 +266,16 @@ LightContribution shade_light_unshadowed(GpuLight light, SurfaceParams s, Princi
     return r;
 }
 
-/* The light's contribution times this sample's visibility of its light point. */
-LightContribution shade_light(GpuLight light, SurfaceParams s, PrincipledWeights w, vec3 P, vec3 N, vec3 V) {
+/* The light's unshadowed contribution, and in `visible` this sample's
+ * visibility of its light point (1 without a shadow map): the sample's
+ * shadowed light is their product. */
+LightContribution shade_light(GpuLight light, SurfaceParams s, PrincipledWeights w, vec3 P, vec3 N, vec3 V,
+                              out float visible) {
     LightContribution r = shade_light_unshadowed(light, s, w, P, N, V);
+    visible = 1.0;
 #ifdef HAS_SHADOWS
     int shadow = int(light.params.w);
-    if (shadow >= 0 && (r.diffuse != vec3(0.0) || r.glossy != vec3(0.0))) {
-        float visible = shadow_visibility(shadow, P, N);
-        r.diffuse *= visible;
-        r.glossy *= visible;
-    }
+    if (shadow >= 0 && (r.diffuse != vec3(0.0) || r.glossy != vec3(0.0))) visible = shadow_visibility(shadow, P, N);
 #endif
     return r;
 }

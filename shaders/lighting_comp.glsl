@@ -35,6 +35,9 @@ layout(binding = TEX_GBUF_PARAMS1) uniform sampler2D gbuf_params1;
 #endif
 
 layout(binding = IMG_FILM, rgba32f) uniform image2D film;
+#ifdef OUT_SHADOW
+layout(binding = IMG_SHADOW, rgba32f) uniform image2D shadow_light;
+#endif
 #ifdef OUT_LIGHT_SPLIT
 layout(binding = IMG_DIFF_LIGHT, rgba32f) uniform image2D diffuse_light;
 layout(binding = IMG_GLOSS_LIGHT, rgba32f) uniform image2D glossy_light;
@@ -105,6 +108,8 @@ void main() {
         from_list = true;
     }
 #endif
+    float lum_shadowed = 0.0, lum_unshadowed = 0.0;
+    const vec3 luminance = vec3(0.2126729, 0.7151522, 0.0721750);
     const uint end = min(count, light_batch.y);
     if (!first_batch && light_batch.x >= end) return;
     for (uint k = light_batch.x; k < end; ++k) {
@@ -113,14 +118,23 @@ void main() {
 #else
         uint i = k;
 #endif
-        LightContribution c = shade_light(lights[i], s, w, P, N, V);
-        total.diffuse += c.diffuse;
-        total.glossy += c.glossy;
+        float visible;
+        LightContribution c = shade_light(lights[i], s, w, P, N, V, visible);
+        total.diffuse += c.diffuse * visible;
+        total.glossy += c.glossy * visible;
+#ifdef OUT_SHADOW
+        float lum = dot(c.diffuse + c.glossy, luminance);
+        lum_unshadowed += lum;
+        lum_shadowed += lum * visible;
+#endif
     }
 
     vec4 emission = first_batch ? texelFetch(gbuf_emission, pixel, 0) : vec4(0.0);
     vec4 sample_value = vec4(emission.rgb + total.diffuse + total.glossy, emission.a);
     imageStore(film, pixel, imageLoad(film, pixel) + sample_value * share);
+#ifdef OUT_SHADOW
+    imageStore(shadow_light, pixel, imageLoad(shadow_light, pixel) + vec4(lum_shadowed, lum_unshadowed, 0.0, 0.0) * share);
+#endif
 #ifdef OUT_LIGHT_SPLIT
     imageStore(diffuse_light, pixel, imageLoad(diffuse_light, pixel) + vec4(total.diffuse * share, 0.0));
     imageStore(glossy_light, pixel, imageLoad(glossy_light, pixel) + vec4(total.glossy * share, 0.0));

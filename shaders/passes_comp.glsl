@@ -9,7 +9,9 @@
  * once (Depth, Position, IndexOB, IndexMA: sample 0, the pixel centre, as
  * Cycles). DiffDir/GlossDir accumulate their colour during the samples and
  * RESOLVE_LIGHT divides the accumulated light by it at the end, as Cycles
- * divides the accumulated passes. Compiled only for the passes requested. */
+ * divides the accumulated passes; RESOLVE_SHADOW turns the accumulated
+ * shadowed/unshadowed luminance into the Shadow pass. Compiled only for the
+ * passes requested. */
 #include "frame_lib.glsl"
 #include "gbuffer_lib.glsl"
 #include "bsdf_lib.glsl"
@@ -34,6 +36,9 @@ layout(binding = TEX_GBUF_UV) uniform sampler2D gbuf_uv;
 layout(binding = TEX_DIFF_LIGHT) uniform sampler2D diffuse_light;
 layout(binding = TEX_GLOSS_LIGHT) uniform sampler2D glossy_light;
 #endif
+#ifdef RESOLVE_SHADOW
+layout(binding = TEX_SHADOW_LIGHT) uniform sampler2D shadow_light;
+#endif
 
 layout(binding = IMG_PASS_OUT, rgba32f) uniform image2D pass_out;
 
@@ -54,7 +59,11 @@ void main() {
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(pixel, ivec2(frame.viewport.xy)))) return;
 
-#ifdef RESOLVE_LIGHT
+#if defined(RESOLVE_SHADOW)
+    /* Shadow: shadowed over unshadowed direct-light luminance, 1 where no light arrives. */
+    vec2 l = texelFetch(shadow_light, pixel, 0).xy;
+    imageStore(pass_out, pixel, vec4(vec3(l.y > 0.0 ? l.x / l.y : 1.0), 0.0));
+#elif defined(RESOLVE_LIGHT)
 #if PASS_ID == PASS_DIFF_DIR
     vec3 light = texelFetch(diffuse_light, pixel, 0).rgb;
 #else
@@ -96,6 +105,8 @@ void main() {
     value = background ? vec4(0.0) : vec4(texelFetch(gbuf_emission, pixel, 0).rgb, 0.0);
 #elif PASS_ID == PASS_ENV
     value = background ? vec4(frame.world_color.rgb, 0.0) : vec4(0.0);
+#elif PASS_ID == PASS_SHADOW
+    value = vec4(1.0); /* written by the RESOLVE_SHADOW variant */
 #else
 #error "passes_comp.glsl: unknown PASS_ID"
 #endif

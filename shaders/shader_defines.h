@@ -33,12 +33,14 @@
 #define TEX_DIFF_LIGHT 8
 #define TEX_GLOSS_LIGHT 9
 #define TEX_SHADOW_MAPS 10
+#define TEX_SHADOW_LIGHT 11
 
 /* Images written by compute passes */
 #define IMG_FILM 0        /* Combined accumulation */
 #define IMG_DIFF_LIGHT 1  /* diffuse direct light, with albedo (divided later) */
 #define IMG_GLOSS_LIGHT 2
 #define IMG_PASS_OUT 3
+#define IMG_SHADOW 4      /* x shadowed, y unshadowed direct-light luminance (Shadow pass) */
 
 /* Fragment outputs of the geometry pass (G-buffer MRT) */
 #define OUT_EMISSION 0
@@ -64,6 +66,7 @@
 #define PASS_GLOSS_COL 11
 #define PASS_EMIT 12
 #define PASS_ENV 13
+#define PASS_SHADOW 14
 
 /* Compute workgroup size (8x8 pixels) */
 #define LIGHTING_GROUP_SIZE 8

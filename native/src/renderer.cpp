@@ -159,6 +159,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     features.ids = wanted.contains(Pass::IndexOB) || wanted.contains(Pass::IndexMA);
     features.uv = wanted.contains(Pass::UV);
     const bool light_split = wanted.contains(Pass::DiffDir) || wanted.contains(Pass::GlossDir);
+    const bool shadow_pass = wanted.contains(Pass::Shadow);
     if (settings.samples < 1 || settings.samples > 65536)
         throw InvalidInput("samples must be in 1..65536, got " + std::to_string(settings.samples));
     if (!(settings.filter_width > 0.0f && settings.filter_width <= 100.0f))
@@ -173,7 +174,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     const std::size_t pixels = std::size_t(settings.width > 0 ? settings.width : 0) *
                                std::size_t(settings.height > 0 ? settings.height : 0);
     std::size_t per_pixel = 4 + 8 + 8 + 8 + 4 + (features.params1 ? 8 : 0) + (features.ids ? 8 : 0) +
-                            (features.uv ? 8 : 0) + 16 + (light_split ? 32 : 0);
+                            (features.uv ? 8 : 0) + 16 + (light_split ? 32 : 0) + (shadow_pass ? 16 : 0);
     for (Pass p : wanted.list()) per_pixel += (p == Pass::Combined ? 0 : 16) + 4 * std::size_t(pass_info(p).channels);
     check_settings(settings, pixels * per_pixel);
 
@@ -260,6 +261,8 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         diffuse_light = accumulation("diffuse light");
         glossy_light = accumulation("glossy light");
     }
+    Texture shadow_light;
+    if (shadow_pass) shadow_light = accumulation("shadow light");
     std::vector<std::pair<Pass, Texture>> pass_images;
     for (Pass p : wanted.list())
         if (p != Pass::Combined) pass_images.emplace_back(p, accumulation(pass_info(p).name));
@@ -275,6 +278,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     if (light_split) lighting_variant.defines.push_back("OUT_LIGHT_SPLIT");
     if (culled) lighting_variant.defines.push_back("LIGHT_CULLING");
     if (!shadows.empty()) lighting_variant.defines.push_back("HAS_SHADOWS");
+    if (shadow_pass) lighting_variant.defines.push_back("OUT_SHADOW");
     const GLuint geometry = shaders->graphics_program("geometry_vert.glsl", "geometry_frag.glsl", base_variant);
     const GLuint lighting = shaders->compute_program("lighting_comp.glsl", lighting_variant);
     auto pass_program = [&](Pass p, const char* mode) {
@@ -363,6 +367,8 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         if (culled) culling.bind();
         shadows.bind();
         glBindImageTexture(IMG_FILM, film.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
+        if (shadow_pass)
+            glBindImageTexture(IMG_SHADOW, shadow_light.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
         if (light_split) {
             glBindImageTexture(IMG_DIFF_LIGHT, diffuse_light.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
             glBindImageTexture(IMG_GLOSS_LIGHT, glossy_light.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
@@ -378,7 +384,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         // Other passes: filtered ones every sample, the rest at sample 0.
         for (auto& [p, image] : pass_images) {
             const bool first_only = pass_from_first_sample(p);
-            if (first_only && sample > 0) continue;
+            if ((first_only && sample > 0) || p == Pass::Shadow) continue;  // Shadow: resolved below
             glUseProgram(pass_program(p, first_only ? nullptr : "ACCUMULATE"));
             gbuffer.bind_textures();
             glBindImageTexture(IMG_PASS_OUT, image.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
@@ -389,12 +395,14 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         passes_ms += timer.lap_ms();
     }
 
-    // DiffDir/GlossDir: accumulated light over accumulated colour.
+    // DiffDir/GlossDir: accumulated light over accumulated colour; Shadow:
+    // shadowed over unshadowed light.
     for (auto& [p, image] : pass_images) {
-        if (p != Pass::DiffDir && p != Pass::GlossDir) continue;
-        glUseProgram(pass_program(p, "RESOLVE_LIGHT"));
+        if (p != Pass::DiffDir && p != Pass::GlossDir && p != Pass::Shadow) continue;
+        glUseProgram(pass_program(p, p == Pass::Shadow ? "RESOLVE_SHADOW" : "RESOLVE_LIGHT"));
         glBindTextureUnit(TEX_DIFF_LIGHT, diffuse_light.get());
         glBindTextureUnit(TEX_GLOSS_LIGHT, glossy_light.get());
+        glBindTextureUnit(TEX_SHADOW_LIGHT, shadow_light.get());
         glBindImageTexture(IMG_PASS_OUT, image.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
         glDispatchCompute(groups_x, groups_y, 1);
     }

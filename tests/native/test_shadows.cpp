@@ -259,3 +259,31 @@ TEST(Shadows, CubeRestingOnThePlaneCastsAnAttachedShadow) {
         EXPECT_LE(worst_gap, 1) << "light type " << int(type);
     }
 }
+
+TEST(Shadows, ShadowPassIsShadowedOverUnshadowedLight) {
+    // A floor half covered by a blocker at 0.5 m, lit by a small sphere light
+    // from above; looking down from between blocker and floor.
+    Renderer r;
+    tools::MeshArrays floor = tools::make_plane(8.0f);
+    tools::MeshArrays blocker = tools::make_plane(2.0f);
+    const std::uint32_t fm = r.add_mesh(floor.view()), bm = r.add_mesh(blocker.view());
+    const std::uint32_t mat = r.add_material(grey());
+    Mat4d I = identity_matrix();
+    r.add_instances(fm, I.data(), 1, nullptr, {mat});
+    Mat4d t = tools::translation(-2.0, 0.0, 0.5);
+    r.add_instances(bm, t.data(), 1, nullptr, {mat});
+    Light l;
+    l.type = LightType::Point;
+    l.matrix = tools::translation(0, 0, 2.0);
+    l.radius = 0.0f;
+    l.energy = 300.0f;
+    r.add_light(l);
+    RenderSettings s;
+    s.width = 64;
+    s.height = 8;
+    s.passes = {Pass::Shadow};
+    FrameResult f = r.render(deferred::testing::top_down_ortho(0.3, 1.6f), s);
+    const PassImage& sh = *f.find(Pass::Shadow);
+    EXPECT_NEAR(pixel3(sh, 4, 4).x, 0.0, 1e-6);   // under the blocker (x ~ -0.7)
+    EXPECT_NEAR(pixel3(sh, 60, 4).x, 1.0, 1e-6);  // in the open (x ~ +0.7)
+}

@@ -24,6 +24,8 @@ enum class Pass : std::uint32_t {
     GlossCol,      // RGB: glossy closure weight
     Emit,          // RGB: emission
     Env,           // RGB: world colour where the background is seen
+    Shadow,        // RGB: shadowed / unshadowed direct light (luminance; 1 = unshadowed), as
+                   // EEVEE's Shadow pass (Cycles 3.x has none); 1 on background and unlit pixels
     Count
 };
 

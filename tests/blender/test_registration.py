@@ -97,7 +97,7 @@ def test_passes(checks):
         return
     names = [p[0] for p in mod.PASSES]
     checks.check(names[0] == "Combined" and set(FLAGS) <= set(names),
-                 "native PASSES lists Combined and the 13 other passes", str(names))
+                 "native PASSES lists Combined and the other passes", str(names))
     scene = bpy.context.scene
     layer = scene.view_layers[0]
     U.set_all_passes(layer, True)
@@ -109,10 +109,10 @@ def test_passes(checks):
     layer.use_pass_z = True
     layer.use_pass_normal = True
     layer.use_pass_vector = True       # not produced by the renderer: must not appear
-    layer.use_pass_shadow = True       # idem
-    layer.use_pass_ambient_occlusion = True
+    layer.use_pass_shadow = True       # produced (EEVEE's convention): must appear
+    layer.use_pass_ambient_occlusion = True  # not produced
     outputs = render_layers_outputs(scene)
-    checks.check(outputs == ["Image", "Alpha", "Depth", "Normal"],
+    checks.check(outputs == ["Image", "Alpha", "Depth", "Normal", "Shadow"],
                  "only enabled AND produced passes are registered", str(outputs))
     layer.use_pass_vector = layer.use_pass_shadow = layer.use_pass_ambient_occlusion = False
 

@@ -54,7 +54,9 @@ def _light_settings(scene):
     culling = bool(getattr(settings, "light_culling", True)) if settings is not None else True
     threshold = float(getattr(settings, "light_threshold", 1e-3)) if settings is not None else 1e-3
     exposure = float(getattr(scene.view_settings, "exposure", 0.0))
-    return {"light_culling": culling, "light_threshold": threshold / (2.0 ** exposure)}
+    shadow_resolution = int(getattr(settings, "shadow_resolution", 1024)) if settings is not None else 1024
+    return {"light_culling": culling, "light_threshold": threshold / (2.0 ** exposure),
+            "shadow_resolution": shadow_resolution}
 
 
 def _format_timings(timings):

@@ -38,6 +38,16 @@ class DeferredRenderSettings(bpy.types.PropertyGroup):
         soft_max=0.1,
         precision=5,
     )
+    shadow_resolution: IntProperty(
+        name="Shadow Resolution",
+        description=(
+            "Texels per side of each shadow cube face / sun cascade (lights with Cast Shadow "
+            "on); lowered automatically to fit the memory budget"
+        ),
+        default=1024,
+        min=64,
+        max=8192,
+    )
     device_index: IntProperty(
         name="Device",
         description=(

@@ -1,0 +1,83 @@
+// Shadow-map benchmark: the cost of shadows per light type and its share of
+// the frame, and how it grows with the number of shadow-casting lights.
+// Scene: a floor with 16 boxes; one sample; shadow maps 1024^2 per face.
+// Usage: deferred_bench_shadows [width height]
+#include "builtin_scenes.h"
+
+#include <cstdio>
+#include <cstdlib>
+
+using namespace deferred;
+
+namespace {
+void build_geometry(Renderer& r) {
+    tools::MeshArrays floor = tools::make_plane(20.0f);
+    tools::MeshArrays box = tools::make_box(0.5f, 0.5f, 0.5f);
+    Material m;
+    const std::uint32_t mat = r.add_material(m);
+    const std::uint32_t fm = r.add_mesh(floor.view()), bm = r.add_mesh(box.view());
+    Mat4d I = identity_matrix();
+    r.add_instances(fm, I.data(), 1, nullptr, {mat});
+    for (int i = 0; i < 16; ++i) {
+        Mat4d t = tools::translation(-6.0 + 4.0 * (i % 4), -6.0 + 4.0 * (i / 4), 0.5);
+        r.add_instances(bm, t.data(), 1, nullptr, {mat});
+    }
+}
+
+Light make(LightType type, double x, double y) {
+    Light l;
+    l.type = type;
+    const double eye[3] = {x, y, 4.0}, target[3] = {x * 0.5, y * 0.5, 0.0};
+    l.matrix = tools::look_at(eye, target);
+    l.energy = type == LightType::Sun ? 2.0f : 300.0f;
+    l.spot_size = 1.2f;
+    l.size = 1.0f;
+    return l;
+}
+
+FrameTimings frame(Renderer& r, const Camera& cam, int w, int h, bool shadows) {
+    RenderSettings s;
+    s.width = w;
+    s.height = h;
+    s.shadows = shadows;
+    r.render(cam, s);  // warm-up
+    return r.render(cam, s).timings;
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+    std::setvbuf(stdout, nullptr, _IOLBF, 0);
+    const int w = argc > 2 ? std::atoi(argv[1]) : 1920, h = argc > 2 ? std::atoi(argv[2]) : 1080;
+    try {
+        Renderer r;
+        Camera cam;
+        const double eye[3] = {0, -14, 10}, target[3] = {0, 0, 0};
+        cam.matrix = tools::look_at(eye, target);
+        cam.lens = 30.0f;
+        std::printf("GL: %s, %dx%d, 1 sample, shadow maps 1024^2 (ms, one frame after a warm-up)\n\n",
+                    r.gl_info().renderer.c_str(), w, h);
+        std::printf("| light | frame without shadows | frame with shadows | shadow maps | share of frame | map MiB |\n");
+        std::printf("|---|---:|---:|---:|---:|---:|\n");
+        const char* names[] = {"point", "spot", "sun", "area"};
+        for (LightType type : {LightType::Point, LightType::Spot, LightType::Sun, LightType::Area}) {
+            r.clear_scene();
+            build_geometry(r);
+            r.add_light(make(type, 2.0, -3.0));
+            const FrameTimings off = frame(r, cam, w, h, false), on = frame(r, cam, w, h, true);
+            std::printf("| %s | %.0f | %.0f | %.0f | %.0f %% | %.0f |\n", names[int(type)], off.total_ms, on.total_ms,
+                        on.shadow_ms, 100.0 * on.shadow_ms / on.total_ms, double(on.shadow_map_bytes) / (1 << 20));
+        }
+        std::printf("\n| shadowed point lights | frame | shadow maps | per light |\n|---:|---:|---:|---:|\n");
+        for (int n : {1, 2, 4, 8}) {
+            r.clear_scene();
+            build_geometry(r);
+            for (int i = 0; i < n; ++i) r.add_light(make(LightType::Point, -6.0 + 12.0 * i / 8, 3.0));
+            const FrameTimings on = frame(r, cam, w, h, true);
+            std::printf("| %d | %.0f | %.0f | %.0f |\n", n, on.total_ms, on.shadow_ms, on.shadow_ms / n);
+        }
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "error: %s\n", e.what());
+        return 1;
+    }
+    return 0;
+}

@@ -1,0 +1,102 @@
+// Shared helpers of the robustness suite (issue 7): finiteness checks over
+// every pass, small scene builders, environment overrides.
+#pragma once
+
+#include "builtin_scenes.h"
+
+#include <deferred/renderer.h>
+
+#include <glm/glm.hpp>
+
+#include <cmath>
+#include <cstdint>
+#include <cstdlib>
+#include <string>
+
+namespace deferred::robustness {
+
+// Every pass the renderer can produce.
+inline PassSet all_passes() {
+    PassSet s;
+    for (std::uint32_t i = 0; i < kPassCount; ++i) s.insert(Pass(i));
+    return s;
+}
+
+struct FiniteReport {
+    std::size_t bad = 0;          // non-finite values over all passes
+    std::string first;            // "Pass(x, y) channel c = nan"
+    bool ok() const { return bad == 0; }
+};
+
+inline FiniteReport check_finite(const FrameResult& f) {
+    FiniteReport r;
+    for (const PassImage& img : f.passes)
+        for (std::size_t i = 0; i < img.pixels.size(); ++i)
+            if (!std::isfinite(img.pixels[i])) {
+                if (r.bad++ == 0) {
+                    const std::size_t px = i / std::size_t(img.channels);
+                    r.first = std::string(pass_info(img.pass).name) + "(" + std::to_string(px % img.width) + ", " +
+                              std::to_string(px / img.width) + ") channel " + std::to_string(i % img.channels) +
+                              " = " + std::to_string(img.pixels[i]);
+                }
+            }
+    return r;
+}
+
+inline const float* pixel(const PassImage& img, int x, int y) {
+    return &img.pixels[(std::size_t(y) * img.width + x) * img.channels];
+}
+
+inline std::uint64_t env_u64(const char* name, std::uint64_t fallback) {
+    if (const char* v = std::getenv(name)) {
+        char* end = nullptr;
+        const unsigned long long x = std::strtoull(v, &end, 0);
+        if (end && *end == '\0' && end != v) return x;
+    }
+    return fallback;
+}
+
+inline Mat4d rotation_z(double angle, double tx = 0, double ty = 0, double tz = 0) {
+    Mat4d m = tools::translation(tx, ty, tz);
+    m[0] = std::cos(angle);
+    m[1] = std::sin(angle);
+    m[4] = -std::sin(angle);
+    m[5] = std::cos(angle);
+    return m;
+}
+
+inline glm::dmat4 to_glm_mat(const Mat4d& m) {
+    glm::dmat4 r;
+    for (int c = 0; c < 4; ++c)
+        for (int row = 0; row < 4; ++row) r[c][row] = m[std::size_t(c * 4 + row)];
+    return r;
+}
+
+// Orthographic camera `h` above the origin looking straight down, `extent` m across.
+inline Camera top_down(double h, float extent) {
+    Camera cam;
+    cam.type = CameraType::Orthographic;
+    cam.matrix = tools::translation(0, 0, h);
+    cam.ortho_scale = extent;
+    cam.clip_start = 0.01f;
+    cam.clip_end = float(h * 10);
+    return cam;
+}
+
+// A single triangle mesh (corner normals optional, all equal to `n`).
+struct TriangleMesh {
+    float positions[9];
+    std::uint32_t indices[3] = {0, 1, 2};
+    float normals[9];
+    MeshData view(bool with_normals) const {
+        MeshData m;
+        m.positions = positions;
+        m.vertex_count = 3;
+        m.indices = indices;
+        m.triangle_count = 1;
+        m.corner_normals = with_normals ? normals : nullptr;
+        return m;
+    }
+};
+
+}  // namespace deferred::robustness

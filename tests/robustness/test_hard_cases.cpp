@@ -231,9 +231,11 @@ int back_plane_pixels(Renderer& r, double distance, double sep, double tilt) {
         m[12] = p.x; m[13] = p.y; m[14] = p.z;
         return m;
     };
+    // The back plane is drawn first: with GL_GREATER a front fragment at an
+    // equal depth loses, so any depth collapse shows the back plane.
     const float half = float(distance * 2);
-    add_plane(r, half, plane_matrix(0.0), front, 1);
     add_plane(r, half, plane_matrix(-sep), back, 2);
+    add_plane(r, half, plane_matrix(0.0), front, 1);
     Camera cam;  // identity: at the origin looking down -Z
     cam.clip_start = 1e-4f;
     cam.clip_end = float(distance * 10);

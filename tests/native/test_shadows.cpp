@@ -61,6 +61,28 @@ Light light_of(LightType type, double angle_deg) {
     return l;
 }
 
+// A floor, a blocker plane covering x < 0 at height h, and a point light of
+// radius R at height H above the origin; black world.
+void build_edge_scene(Renderer& r, double h, double H, double R) {
+    tools::MeshArrays floor = tools::make_plane(8.0f);
+    tools::MeshArrays blocker = tools::make_plane(2.0f);
+    const std::uint32_t fm = r.add_mesh(floor.view()), bm = r.add_mesh(blocker.view());
+    const std::uint32_t mat = r.add_material(grey());
+    Mat4d I = identity_matrix();
+    r.add_instances(fm, I.data(), 1, nullptr, {mat});
+    Mat4d t = tools::translation(-2.0, 0.0, h);
+    r.add_instances(bm, t.data(), 1, nullptr, {mat});
+    Light l;
+    l.type = LightType::Point;
+    l.matrix = tools::translation(0, 0, H);
+    l.radius = float(R);
+    l.energy = 300.0f;
+    r.add_light(l);
+    World black;
+    black.color = {0, 0, 0};
+    r.set_world(black);
+}
+
 }  // namespace
 
 TEST(Shadows, NoAcneOnLitPlanesAtGrazingAngles) {
@@ -93,23 +115,7 @@ TEST(Shadows, PenumbraWidthMatchesGeometry) {
     const double H = 2.0, h = 0.5;
     for (double R : {0.2, 0.4}) {
         Renderer r;
-        tools::MeshArrays floor = tools::make_plane(8.0f);
-        tools::MeshArrays blocker = tools::make_plane(2.0f);
-        const std::uint32_t fm = r.add_mesh(floor.view()), bm = r.add_mesh(blocker.view());
-        const std::uint32_t mat = r.add_material(grey());
-        Mat4d I = identity_matrix();
-        r.add_instances(fm, I.data(), 1, nullptr, {mat});
-        Mat4d t = tools::translation(-2.0, 0.0, h);  // covers x < 0 at height h
-        r.add_instances(bm, t.data(), 1, nullptr, {mat});
-        Light l;
-        l.type = LightType::Point;
-        l.matrix = tools::translation(0, 0, H);
-        l.radius = float(R);
-        l.energy = 300.0f;
-        r.add_light(l);
-        World black;
-        black.color = {0, 0, 0};
-        r.set_world(black);
+        build_edge_scene(r, h, H, R);
         // Looking down from between the blocker (behind the camera) and the floor.
         Camera cam = deferred::testing::top_down_ortho(0.3, 1.6f);
         RenderSettings s;
@@ -264,20 +270,7 @@ TEST(Shadows, ShadowPassIsShadowedOverUnshadowedLight) {
     // A floor half covered by a blocker at 0.5 m, lit by a small sphere light
     // from above; looking down from between blocker and floor.
     Renderer r;
-    tools::MeshArrays floor = tools::make_plane(8.0f);
-    tools::MeshArrays blocker = tools::make_plane(2.0f);
-    const std::uint32_t fm = r.add_mesh(floor.view()), bm = r.add_mesh(blocker.view());
-    const std::uint32_t mat = r.add_material(grey());
-    Mat4d I = identity_matrix();
-    r.add_instances(fm, I.data(), 1, nullptr, {mat});
-    Mat4d t = tools::translation(-2.0, 0.0, 0.5);
-    r.add_instances(bm, t.data(), 1, nullptr, {mat});
-    Light l;
-    l.type = LightType::Point;
-    l.matrix = tools::translation(0, 0, 2.0);
-    l.radius = 0.0f;
-    l.energy = 300.0f;
-    r.add_light(l);
+    build_edge_scene(r, 0.5, 2.0, 0.0);
     RenderSettings s;
     s.width = 64;
     s.height = 8;

@@ -139,11 +139,19 @@ LightContribution shade_planar_light(vec3 c, vec3 a, vec3 b, bool ellipse, bool 
     float c2 = dot(c, c);
     float radius2 = dot(a, a);
     float NdotC = dot(N, c);
+    float area = ellipse ? M_PI_F * length(a) * length(b) : 4.0 * length(a) * length(b);
     if (sphere_disk && NdotC > 0.0 && NdotC * NdotC >= radius2 * (c2 - NdotC * NdotC) / c2) {
         /* A disk facing the point and wholly above its horizon (a sphere
          * light's disk, R sin <= d cos): J is along c, and the projected solid
          * angle is pi R^2 cos / (d^2 + R^2) in closed form. */
         J2 = c * (2.0 * M_PI_F * radius2 / ((c2 + radius2) * sqrt(c2)));
+    } else if (area < 1e-4 * c2) {
+        /* An emitter that looks tiny (solid angle < 1e-4 sr): the outline sum
+         * cancels catastrophically in float (edge terms ~ size/d, their sum
+         * ~ (size/d)^2); use the small-emitter limit A cos_l cos_s / d^2,
+         * whose own relative error is O(A / d^2) (tests/robustness). */
+        float cos_l = max(-dot(emit_dir, c), 0.0) * inversesqrt(c2);
+        J2 = NdotC > 0.0 ? c * (2.0 * area * cos_l / (c2 * sqrt(c2))) : vec3(0.0);
     } else {
         J2 = ellipse ? ellipse_vector_irradiance(c, a, b, N) : rect_vector_irradiance(c, a, b, N);
     }
@@ -164,7 +172,6 @@ LightContribution shade_planar_light(vec3 c, vec3 a, vec3 b, bool ellipse, bool 
     /* Points per sample: up to the full G x G grid (frame.counts.z = G^2) for
      * lights that look large from here, fewer for small ones, where the BSDF
      * barely varies across the light (the estimate stays unbiased). */
-    float area = ellipse ? M_PI_F * length(a) * length(b) : 4.0 * length(a) * length(b);
     uint G = max(uint(sqrt(float(max(frame.counts.z, 1u))) + 0.5), 1u);
     float angular_size2 = area / max(c2, 1e-20); /* ~ solid angle */
     if (angular_size2 < 0.01) G = 1u;

@@ -166,6 +166,8 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         throw InvalidInput("filter_width must be in (0, 100] pixels");
     if (!(settings.light_threshold >= 0.0f) || !std::isfinite(settings.light_threshold))
         throw InvalidInput("light_threshold must be a finite number >= 0");
+    if (!std::isfinite(settings.mist.start) || !std::isfinite(settings.mist.depth))
+        throw InvalidInput("mist start/depth must be finite");
 
     // Memory check before any allocation: G-buffer (depth 4, emission 8,
     // base 8, params0 8, normal 4, optional params1 8, ids 8, uv 8), the

@@ -140,6 +140,8 @@ void declare_renderer(py::module_& m) {
             return d;
         })
         .def("clear_scene", [](PyRenderer& self) { self.get().clear_scene(); })
+        .def("cancel", [](PyRenderer& self) { self.get().cancel(); },
+             "Stop a render() running on another thread at its next sample (it raises Cancelled).")
         .def("add_mesh",
              [](PyRenderer& self, const py::object& positions, const py::object& indices,
                 const py::object& corner_normals, const py::object& corner_uvs,

@@ -43,11 +43,14 @@ Enum enum_from_name(const std::string& value, std::initializer_list<std::pair<co
 
 void declare_scene(py::module_& m) {
     static py::exception<Error> error(m, "Error", PyExc_RuntimeError);
+    static py::exception<Cancelled> cancelled(m, "Cancelled", error.ptr());
     py::register_exception_translator([](std::exception_ptr p) {
         try {
             if (p) std::rethrow_exception(p);
         } catch (const InvalidInput& e) {
             PyErr_SetString(PyExc_ValueError, e.what());
+        } catch (const Cancelled& e) {
+            cancelled(e.what());
         } catch (const Error& e) {
             error(e.what());
         }

@@ -19,6 +19,7 @@
 #include "../../shaders/shader_shared.h"
 
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <cstddef>
 #include <cstdlib>
@@ -88,6 +89,14 @@ struct Renderer::Impl {
     VertexArray empty_vao;
     Buffer dummy_ssbo;
     GLint max_texture_size = 0, max_fb_width = 0, max_fb_height = 0;
+    std::atomic<bool> cancel_requested{false};
+
+    void check_cancel() {
+        if (cancel_requested.exchange(false)) {
+            glFinish();  // leave the GL work of this frame done before unwinding
+            throw Cancelled("render cancelled");
+        }
+    }
 
     ~Impl() {
         thread.run([this] {
@@ -321,6 +330,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     };
 
     for (int sample = 0; sample < settings.samples; ++sample) {
+        check_cancel();
         // Jitter: one pixel-filter offset for the whole image (sample 0: none).
         const std::array<float, 4> u = sample_point(sample);
         const double ox = filter.offset(u[0]), oy = filter.offset(u[1]);
@@ -376,6 +386,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
             glBindImageTexture(IMG_GLOSS_LIGHT, glossy_light.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
         }
         for (std::uint32_t begin = 0; begin == 0 || begin < lights.count(); begin += kLightBatch) {
+            if (begin > 0) check_cancel();
             glUniform2ui(0, begin, begin + kLightBatch);
             glDispatchCompute(groups_x, groups_y, 1);
             glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
@@ -483,7 +494,10 @@ void Renderer::set_world(const World& world) {
 }
 
 FrameResult Renderer::render(const Camera& camera, const RenderSettings& settings) {
+    impl_->cancel_requested = false;
     return impl_->thread.run([&] { return impl_->render(camera, settings); });
 }
+
+void Renderer::cancel() { impl_->cancel_requested = true; }
 
 }  // namespace deferred

@@ -2,6 +2,7 @@
 clear ValueErrors for bad arrays, native errors as exceptions, passes out as
 float32 arrays. Run with /usr/bin/python3.11 (Blender's Python)."""
 import threading
+import time
 import unittest
 
 import numpy as np
@@ -94,6 +95,35 @@ class ModuleTest(unittest.TestCase):
         fov = 2.0 * np.arctan(36.0 / (2.0 * 35.0))
         pos_fov = self.r.render(dn.Camera(matrix=m, fov=fov, lens=99.0), 16, 9, passes=["Position"])["Position"]
         np.testing.assert_allclose(pos_fov, pos_lens, atol=1e-5)
+
+    def test_cancel_stops_a_running_render(self):
+        p, i, n = plane()
+        mesh = self.r.add_mesh(p, i, corner_normals=n)
+        self.r.add_instances(mesh, np.eye(4)[None], material_slots=[self.r.add_material()])
+        self.r.add_light(type="AREA", size=1.0, energy=50.0, matrix=np.array(
+            [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 1], [0, 0, 0, 1]], float))
+        outcome = {}
+
+        def work():
+            try:
+                self.r.render(camera(), 256, 256, samples=4096)
+                outcome["done"] = True
+            except dn.Cancelled:
+                outcome["cancelled"] = True
+
+        t = threading.Thread(target=work)
+        t.start()
+        # Keep asking until the render (4096 samples: minutes here) stops; a
+        # cancel that arrives before render() starts is cleared by it.
+        deadline = time.monotonic() + 60
+        while t.is_alive() and time.monotonic() < deadline:
+            self.r.cancel()
+            t.join(0.05)
+        self.assertFalse(t.is_alive())
+        self.assertEqual(outcome, {"cancelled": True})
+        # The renderer stays usable.
+        out = self.r.render(camera(), 8, 8)
+        self.assertEqual(out["Combined"].shape, (8, 8, 4))
 
     def test_bad_device_index_is_native_error(self):
         with self.assertRaises(dn.Error) as ctx:

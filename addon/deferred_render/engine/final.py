@@ -15,6 +15,7 @@ on; the native session is released in ``finally``.
 
 import collections
 import sys
+import threading
 import time
 import traceback
 
@@ -154,6 +155,32 @@ class FinalRender:
             renderer = None  # noqa: F841
             engine.end_result(result, cancel=cancelled)
 
+    def _render_cancellable(self, renderer, mod, camera, frame, kwargs):
+        """The native render on a worker thread (it releases the GIL and
+        touches no bpy data), while this thread polls test_break() and asks
+        the renderer to stop at its next sample when the user cancels."""
+        outcome = {}
+
+        def work():
+            try:
+                outcome["images"] = renderer.render(camera, frame.full_width, frame.full_height, **kwargs)
+            except BaseException as ex:  # re-raised on the main thread
+                outcome["error"] = ex
+
+        worker = threading.Thread(target=work, name="deferred-render", daemon=True)
+        worker.start()
+        while worker.is_alive():
+            worker.join(0.05)
+            if worker.is_alive() and self.engine.test_break():
+                renderer.cancel()
+                worker.join()
+        if "error" in outcome:
+            cancelled_type = getattr(mod, "Cancelled", None)
+            if cancelled_type is not None and isinstance(outcome["error"], cancelled_type):
+                raise RenderCancelled()
+            raise outcome["error"]
+        return outcome["images"]
+
     def _render_into(self, result, frame):
         engine = self.engine
         scene = self.scene
@@ -205,11 +232,11 @@ class FinalRender:
         self.status(f"rendering {frame.full_width}x{frame.full_height}, {samples} samples, "
                     f"{len(requested)} passes", 0.35)
         t_render = time.perf_counter()
+        kwargs = dict(passes=requested, film_transparent=bool(scene.render.film_transparent),
+                      samples=samples, filter_width=float(scene.render.filter_size),
+                      **_light_settings(scene), **mist)
         try:
-            images = renderer.render(camera, frame.full_width, frame.full_height, passes=requested,
-                                     film_transparent=bool(scene.render.film_transparent),
-                                     samples=samples, filter_width=float(scene.render.filter_size),
-                                     **_light_settings(scene), **mist)
+            images = self._render_cancellable(renderer, mod, camera, frame, kwargs)
         except ValueError as ex:  # size/settings validation: the message says it all
             raise RenderSettingsError(str(ex)) from ex
         t_render = time.perf_counter() - t_render

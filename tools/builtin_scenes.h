@@ -28,7 +28,8 @@ Mat4d look_at(const double eye[3], const double target[3], const double up[3] = 
 
 // The showcase: a floor, a 5x5 grid of spheres sweeping roughness (x) and
 // metallic (y), one light of each type plus `extra_point_lights` small point
-// lights scattered above the floor. Returns the camera.
-Camera build_showcase(Renderer& renderer, int extra_point_lights = 0);
+// lights scattered above the floor. Returns the camera. `offset` moves
+// everything (camera and lights too): the far-from-origin hard cases.
+Camera build_showcase(Renderer& renderer, int extra_point_lights = 0, const double offset[3] = nullptr);
 
 }  // namespace deferred::tools

@@ -33,83 +33,8 @@ World black_world() {
 // The built-in showcase (tools/builtin_scenes.cpp), everything moved by
 // `o` (camera too).
 Camera build_showcase_at(Renderer& r, glm::dvec3 o) {
-    tools::MeshArrays floor = tools::make_plane(12.0f, 4);
-    tools::MeshArrays sphere = tools::make_uv_sphere(0.4f, 48, 24);
-    tools::MeshArrays box = tools::make_box(0.5f, 0.5f, 0.5f);
-    const std::uint32_t floor_mesh = r.add_mesh(floor.view());
-    const std::uint32_t sphere_mesh = r.add_mesh(sphere.view());
-    const std::uint32_t box_mesh = r.add_mesh(box.view());
-    auto at = [&](double x, double y, double z) { return tools::translation(o.x + x, o.y + y, o.z + z); };
-    auto moved = [&](Mat4d m) {
-        m[12] += o.x; m[13] += o.y; m[14] += o.z;
-        return m;
-    };
-    Material floor_mat;
-    floor_mat.base_color = {0.6f, 0.6f, 0.6f};
-    floor_mat.roughness = 0.7f;
-    const std::uint32_t floor_id = r.add_material(floor_mat);
-    Mat4d F = at(0, 0, 0);
-    std::uint32_t obj = 1;
-    r.add_instances(floor_mesh, F.data(), 1, &obj, {floor_id});
-    for (int j = 0; j < 5; ++j)
-        for (int i = 0; i < 5; ++i) {
-            Material m;
-            m.base_color = {0.8f, 0.3f + 0.1f * j, 0.2f + 0.15f * i};
-            m.roughness = 0.05f + 0.2f * i;
-            m.metallic = 0.25f * j;
-            if (i == 4 && j == 0) { m.clearcoat = 1.0f; m.sheen = 0.5f; }
-            const std::uint32_t id = r.add_material(m);
-            Mat4d t = at(-2.0 + i, -2.0 + j, 0.4);
-            std::uint32_t ob = std::uint32_t(100 + j * 5 + i);
-            r.add_instances(sphere_mesh, t.data(), 1, &ob, {id});
-        }
-    Material emissive;
-    emissive.base_color = {0.1f, 0.1f, 0.1f};
-    emissive.emission = {1.0f, 0.5f, 0.2f};
-    emissive.emission_strength = 3.0f;
-    const std::uint32_t emissive_id = r.add_material(emissive);
-    Mat4d bt = at(3.2, 0.0, 0.5);
-    std::uint32_t box_obj = 2;
-    r.add_instances(box_mesh, bt.data(), 1, &box_obj, {emissive_id});
-
-    const double origin[3] = {0, 0, 0};
-    Light point;
-    point.matrix = at(-3, -3, 3);
-    point.energy = 400;
-    point.radius = 0.3f;
-    r.add_light(point);
-    Light spot;
-    spot.type = LightType::Spot;
-    const double spot_eye[3] = {3, -3, 4}, spot_target[3] = {1, -1, 0};
-    spot.matrix = moved(tools::look_at(spot_eye, spot_target));
-    spot.energy = 800;
-    spot.spot_size = 0.8f;
-    spot.color = {1.0f, 0.8f, 0.6f};
-    r.add_light(spot);
-    Light sun;
-    sun.type = LightType::Sun;
-    const double sun_eye[3] = {1, 2, 3};
-    sun.matrix = moved(tools::look_at(sun_eye, origin));
-    sun.energy = 1.5f;
-    r.add_light(sun);
-    Light area;
-    area.type = LightType::Area;
-    const double area_eye[3] = {0, 3, 2.5};
-    area.matrix = moved(tools::look_at(area_eye, origin));
-    area.shape = AreaShape::Rectangle;
-    area.size = 2.0f;
-    area.size_y = 1.0f;
-    area.energy = 300;
-    area.color = {0.6f, 0.8f, 1.0f};
-    r.add_light(area);
-    World w;
-    w.color = {0.05f, 0.05f, 0.05f};
-    r.set_world(w);
-    Camera cam;
-    const double eye[3] = {0, -8, 5}, target[3] = {0, 0, 0.3};
-    cam.matrix = moved(tools::look_at(eye, target));
-    cam.lens = 35.0f;
-    return cam;
+    const double offset[3] = {o.x, o.y, o.z};
+    return tools::build_showcase(r, 0, offset);
 }
 
 // One plane instance (material, object index, matrix), optionally with a

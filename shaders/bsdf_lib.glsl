@@ -160,11 +160,75 @@ struct LobeEval {
     vec3 glossy;
 };
 
+/* The diffuse group alone (Burley + sheen), f cos for unit radiance. */
+vec3 principled_eval_diffuse(SurfaceParams s, PrincipledWeights w, vec3 N, vec3 V, vec3 L) {
+    vec3 d = w.diffuse * principled_diffuse_factor(dot(N, L), dot(N, V), dot(L, V), s.roughness);
+    if (w.sheen != vec3(0.0)) d += w.sheen * principled_sheen_factor(N, V, L);
+    return d;
+}
+
 LobeEval principled_eval(SurfaceParams s, PrincipledWeights w, vec3 N, vec3 V, vec3 L) {
     LobeEval e;
-    float NdotL = dot(N, L);
-    e.diffuse = w.diffuse * principled_diffuse_factor(NdotL, dot(N, V), dot(L, V), s.roughness);
-    if (w.sheen != vec3(0.0)) e.diffuse += w.sheen * principled_sheen_factor(N, V, L);
+    e.diffuse = principled_eval_diffuse(s, w, N, V, L);
     e.glossy = principled_specular(w, N, V, L) + vec3(principled_clearcoat(w, N, V, L));
     return e;
+}
+
+/* ---- Sampling the specular lobe (for multiple importance sampling of
+ * lights a glossy surface reflects, as Cycles does with BSDF rays). ---- */
+
+/* GGX visible-normal sampling (Heitz 2018, "Sampling the GGX Distribution of
+ * Visible Normals", JCGT 7(4)): the incident direction for uniform u, with
+ * pdf principled_specular_pdf(). alpha = roughness^2. */
+vec3 sample_ggx_vndf(vec3 N, vec3 V, float alpha, vec2 u) {
+    vec3 T, B;
+    vec3 up = abs(N.z) < 0.999 ? vec3(0.0, 0.0, 1.0) : vec3(1.0, 0.0, 0.0);
+    T = normalize(cross(up, N));
+    B = cross(N, T);
+    vec3 Ve = vec3(dot(V, T), dot(V, B), dot(V, N));
+    vec3 Vh = normalize(vec3(alpha * Ve.x, alpha * Ve.y, Ve.z));
+    float lensq = Vh.x * Vh.x + Vh.y * Vh.y;
+    vec3 T1 = lensq > 0.0 ? vec3(-Vh.y, Vh.x, 0.0) * inversesqrt(lensq) : vec3(1.0, 0.0, 0.0);
+    vec3 T2 = cross(Vh, T1);
+    float r = sqrt(u.x), phi = 2.0 * M_PI_F * u.y;
+    float t1 = r * cos(phi), t2 = r * sin(phi);
+    float sh = 0.5 * (1.0 + Vh.z);
+    t2 = (1.0 - sh) * sqrt(max(1.0 - t1 * t1, 0.0)) + sh * t2;
+    vec3 Nh = t1 * T1 + t2 * T2 + sqrt(max(1.0 - t1 * t1 - t2 * t2, 0.0)) * Vh;
+    vec3 He = normalize(vec3(alpha * Nh.x, alpha * Nh.y, max(Nh.z, 0.0)));
+    vec3 H = He.x * T + He.y * B + He.z * N;
+    return reflect(-V, H);
+}
+
+/* Solid-angle pdf of sample_ggx_vndf: G1(V) D(H) / (4 N.V). */
+float principled_specular_pdf(PrincipledWeights w, vec3 N, vec3 V, vec3 L) {
+    float NdotV = dot(N, V);
+    if (NdotV <= 0.0 || dot(N, L) <= 0.0) return 0.0;
+    vec3 H = normalize(L + V);
+    float cosH = dot(N, H);
+    if (cosH <= 0.0) return 0.0;
+    float cosH2 = cosH * cosH;
+    vec3 nxh = cross(N, H);
+    float tanH2 = dot(nxh, nxh) / cosH2;
+    float denom = w.alpha2 + tanH2;
+    float D = w.alpha2 / (M_PI_F * cosH2 * cosH2 * denom * denom);
+    return ggx_G1(w.alpha2, N, V) * D * 0.25 / NdotV;
+}
+
+/* A lobe below Cycles' 1e-7 alpha^2 cut-off is a perfect mirror: it reflects
+ * only along R = 2 (N.V) N - V, with weight reflection_color (the principled
+ * Fresnel at H = N; bsdf_microfacet_ggx_sample's "specular case", eval/pdf).
+ * Returns the weight of that direction for the specular plus clearcoat
+ * mirrors (zero where neither is a mirror). */
+vec3 principled_mirror_weight(PrincipledWeights w, vec3 N, vec3 V) {
+    float NdotV = dot(N, V);
+    vec3 r = vec3(0.0);
+    if (NdotV <= 0.0) return r;
+    if (w.specular != 0.0 && w.alpha2 <= 1e-7) {
+        float FH = (fresnel_dielectric_cos(NdotV, w.spec_eta) - w.spec_F0) / (1.0 - w.spec_F0);
+        r += w.cspec0 * (1.0 - FH) + vec3(FH);
+    }
+    if (w.clearcoat > 0.0 && w.cc_alpha * w.cc_alpha <= 1e-7)
+        r += vec3(fresnel_dielectric_cos(NdotV, 1.5) * 0.25 * w.clearcoat);
+    return r;
 }

@@ -19,7 +19,11 @@
  *    Gauss-Legendre quadrature, plus the straight chord where the horizon cuts);
  *  - the diffuse and sheen lobes are that exact term times their value in the
  *    direction of J, plus a Monte Carlo correction over K stratified points
- *    of the light; the glossy lobes are Monte Carlo over the same points.
+ *    of the light; the glossy lobes are Monte Carlo over the same points,
+ *    and a low-roughness specular lobe is also sampled by direction (GGX
+ *    visible normals), the two combined by the power heuristic as Cycles
+ *    combines light and BSDF rays; a mirror lobe (alpha^2 <= 1e-7) sees the
+ *    light only along its reflected ray.
  * The points are one per cell of a G x G grid, placed in each cell at
  * frame.sample_shift (a low-discrepancy point per film sample), so
  * accumulating samples converges to the integral Cycles computes. */
@@ -124,6 +128,21 @@ vec2 concentric_disk(vec2 u) {
     return r * vec2(cos(theta), sin(theta));
 }
 
+/* Where the ray from the shading point along unit L meets the planar
+ * emitter c + a x + b y (|x|,|y| <= 1, or x^2 + y^2 <= 1 for an ellipse;
+ * a and b orthogonal) from its emitting side: distance t and the cosine at
+ * the emitter. */
+bool emitter_hit(vec3 c, vec3 a, vec3 b, bool ellipse, vec3 emit_dir, vec3 L, out float t, out float cos_l) {
+    cos_l = -dot(emit_dir, L);
+    t = 0.0;
+    if (cos_l <= 0.0) return false;
+    t = -dot(c, emit_dir) / cos_l;
+    if (!(t > 0.0)) return false;
+    vec3 q = L * t - c;
+    float x = dot(q, a) / dot(a, a), y = dot(q, b) / dot(b, b);
+    return ellipse ? x * x + y * y <= 1.0 : max(abs(x), abs(y)) <= 1.0;
+}
+
 /* Shade one planar emitter: outline c + a, b (relative to the shading point),
  * radiance `radiance` x a spot attenuation that Cycles evaluates per sampled
  * point (att_center at the centre; spot lights only, 1 otherwise), emitting
@@ -177,6 +196,13 @@ LightContribution shade_planar_light(vec3 c, vec3 a, vec3 b, bool ellipse, bool 
     if (angular_size2 < 0.01) G = 1u;
     else if (angular_size2 < 0.2) G = min(G, 2u);
     float weight = area / float(G * G);
+    /* The specular lobe is also sampled by direction (GGX visible normals)
+     * and combined with the light points by the power heuristic (Veach 1997,
+     * as Cycles' MIS of light and BSDF rays): light points alone miss the
+     * small bright reflection a low-roughness surface makes of a large light.
+     * Rough lobes (alpha >= 0.25) are wide enough for light points alone. */
+    const bool bsdf_sampling = w.specular != 0.0 && w.alpha2 > 1e-7 && w.alpha2 < 0.0625;
+    float alpha = sqrt(w.alpha2); /* GGX alpha = roughness^2 */
     vec3 mc_diffuse = vec3(0.0), mc_glossy = vec3(0.0);
     for (uint j = 0u; j < G; ++j) {
         for (uint i = 0u; i < G; ++i) {
@@ -190,10 +216,40 @@ LightContribution shade_planar_light(vec3 c, vec3 a, vec3 b, bool ellipse, bool 
             if (cos_l <= 0.0) continue;
             float geom = cos_l / t2 * weight;
             float att = spot ? spot_attenuation(light, -L) : 1.0;
-            LobeEval e = principled_eval(s, w, N, V, L);
-            mc_diffuse += (e.diffuse * att - diffuse_at_J * (att_center * max(dot(N, L), 0.0))) * geom;
-            mc_glossy += e.glossy * (att * geom);
+            vec3 diff = principled_eval_diffuse(s, w, N, V, L);
+            vec3 spec = principled_specular(w, N, V, L);
+            float cc = principled_clearcoat(w, N, V, L);
+            if (bsdf_sampling) {
+                float pl = t2 / (cos_l * area), pb = principled_specular_pdf(w, N, V, L);
+                spec *= pl * pl / (pl * pl + pb * pb);
+            }
+            mc_diffuse += (diff * att - diffuse_at_J * (att_center * max(dot(N, L), 0.0))) * geom;
+            mc_glossy += (spec + vec3(cc)) * (att * geom);
+            if (bsdf_sampling) {
+                /* The BSDF's own direction for this cell (another point of
+                 * the cell, so the two techniques do not share a pattern). */
+                vec2 ub = (vec2(i, j) + fract(frame.sample_shift.yx + vec2(0.5, 0.25))) / float(G);
+                vec3 Lb = sample_ggx_vndf(N, V, alpha, ub);
+                float tb, cos_b;
+                if (emitter_hit(c, a, b, ellipse, emit_dir, Lb, tb, cos_b)) {
+                    float pb = principled_specular_pdf(w, N, V, Lb);
+                    if (pb > 0.0) {
+                        float pl = tb * tb / (cos_b * area);
+                        float attb = spot ? spot_attenuation(light, -Lb) : 1.0;
+                        mc_glossy += principled_specular(w, N, V, Lb) *
+                                     (attb * pb / (pl * pl + pb * pb) / float(G * G));
+                    }
+                }
+            }
         }
+    }
+    /* Mirror lobes (alpha^2 <= 1e-7) see the light only along R. */
+    vec3 mirror = principled_mirror_weight(w, N, V);
+    if (mirror != vec3(0.0)) {
+        vec3 R = reflect(-V, N);
+        float tr, cos_r;
+        if (emitter_hit(c, a, b, ellipse, emit_dir, R, tr, cos_r))
+            mc_glossy += mirror * (spot ? spot_attenuation(light, -R) : 1.0);
     }
     r.diffuse = (r.diffuse + mc_diffuse) * radiance;
     r.glossy = mc_glossy * radiance;
@@ -255,6 +311,11 @@ LightContribution shade_light_unshadowed(GpuLight light, SurfaceParams s, Princi
         LobeEval e = principled_eval(s, w, N, V, L);
         r.diffuse = e.diffuse * S;
         r.glossy = e.glossy * S;
+        /* A mirror sees the sun's disk where R falls inside it, with the
+         * radiance Cycles gives it: S / (pi tan^2 r) (distant.invarea). */
+        vec3 mirror = principled_mirror_weight(w, N, V);
+        if (tan_r > 0.0 && mirror != vec3(0.0) && dot(reflect(-V, N), -light.direction.xyz) >= cos(light.strength.w))
+            r.glossy += mirror * S / (M_PI_F * tan_r * tan_r);
         return r;
     }
 #endif

@@ -43,6 +43,14 @@ Material rough_material() {
     return m;
 }
 
+// A low-roughness lobe (alpha = 0.04): a small bright reflection of the
+// light, which light points alone find rarely (MIS with GGX sampling).
+Material shiny_material() {
+    Material m = rough_material();
+    m.roughness = 0.2f;
+    return m;
+}
+
 Material diffuse_only() {
     Material m = rough_material();
     m.specular = 0.0f;
@@ -166,8 +174,67 @@ static std::vector<LightCase> light_cases() {
     // a looser bound at 64 samples (the convergence issue tightens it).
     cases.push_back({"area_square_glossy", square, rough_material(), 64, 2e-2});
     cases.push_back({"point_sphere_glossy", sphere, rough_material(), 64, 2e-2});
+    // Low roughness: the specular lobe sampled by direction and MIS-weighted
+    // with the light points by the power heuristic (measured, 64 samples: square 0.0142 with
+    // light points alone, 0.0066 with MIS; disk 0.0117 -> 0.0067; the sphere
+    // light looks small, 0.0043 / 0.0058, both noise).
+    cases.push_back({"area_square_shiny", square, shiny_material(), 64, 1e-2});
+    cases.push_back({"area_disk_shiny", disk, shiny_material(), 64, 1e-2});
+    cases.push_back({"point_sphere_shiny", sphere, shiny_material(), 64, 1e-2});
     return cases;
 }
 
 INSTANTIATE_TEST_SUITE_P(Lights, PlaneUnderLight, ::testing::ValuesIn(light_cases()),
                          [](const ::testing::TestParamInfo<LightCase>& info) { return info.param.name; });
+
+// Roughness 0 is a mirror (Cycles' "specular case", alpha^2 <= 1e-7): light
+// sampling gives nothing, the reflected ray finds the light. A metallic
+// mirror plane seen from straight above shows the square light above it as
+// base colour x radiance S / (4 A) exactly where the reflected ray hits the
+// light, and black elsewhere (metallic: no diffuse).
+TEST(MirrorReflection, RoughnessZeroReflectsAreaLightExactly) {
+    Renderer r;
+    tools::MeshArrays plane = tools::make_plane(20.0f);
+    const std::uint32_t mesh = r.add_mesh(plane.view());
+    Material m = rough_material();
+    m.metallic = 1.0f;
+    m.roughness = 0.0f;
+    const std::uint32_t mat = r.add_material(m);
+    Mat4d I = identity_matrix();
+    r.add_instances(mesh, I.data(), 1, nullptr, {mat});
+    Light square = make_light(LightType::Area, 0.0, 0.0, 1.0, 200.0f);
+    square.shape = AreaShape::Square;
+    square.size = 1.0f;
+    r.add_light(square);
+    World black;
+    black.color = {0, 0, 0};
+    r.set_world(black);
+    RenderSettings s;
+    s.width = 48;
+    s.height = 48;
+    s.samples = 4;
+    s.filter_width = 0.01f;
+    s.passes.insert(Pass::Position);
+    FrameResult f = r.render(deferred::testing::top_down_ortho(5.0, 4.0f), s);
+    const PassImage& combined = *f.find(Pass::Combined);
+    const PassImage& position = *f.find(Pass::Position);
+    const double radiance = 200.0 / 4.0;
+    int inside = 0, wrong = 0;
+    double worst = 0;
+    for (int y = 0; y < s.height; ++y)
+        for (int x = 0; x < s.width; ++x) {
+            const glm::dvec3 P = pixel3(position, x, y);
+            const bool under = std::abs(P.x) < 0.5 && std::abs(P.y) < 0.5;
+            inside += under;
+            const glm::dvec3 got = pixel3(combined, x, y);
+            for (int k = 0; k < 3; ++k) {
+                const double expect = under ? m.base_color[k] * radiance : 0.0;
+                const double err = std::abs(got[k] - expect) / radiance;
+                worst = std::max(worst, err);
+                wrong += err > 1e-3;
+            }
+        }
+    std::printf("mirror: %d pixels see the light, max error %.2e of the radiance\n", inside, worst);
+    EXPECT_EQ(inside, 12 * 12);
+    EXPECT_EQ(wrong, 0);
+}

@@ -38,19 +38,38 @@ layout(binding = IMG_FILM, rgba32f) uniform image2D film;
 #ifdef OUT_SHADOW
 layout(binding = IMG_SHADOW, rgba32f) uniform image2D shadow_light;
 #endif
+#ifdef OUT_AO
+layout(binding = IMG_AO, rgba32f) uniform image2D ao_image;
+#endif
 #ifdef OUT_LIGHT_SPLIT
 layout(binding = IMG_DIFF_LIGHT, rgba32f) uniform image2D diffuse_light;
 layout(binding = IMG_GLOSS_LIGHT, rgba32f) uniform image2D glossy_light;
 #endif
 
-/* World light at max_bounces 0, for now unshadowed: the constant world colour
- * times the diffuse closure colour (Lambertian irradiance pi Lw times f = c/pi)
- * and times the GGX directional albedo of the specular closure, from the
- * analytic fit of Karis 2014 ("Physically Based Shading on Mobile"). Both are
- * approximations of what Cycles integrates; occlusion is ignored. */
-LightContribution world_light(PrincipledWeights w, SurfaceParams s, float NdotV) {
+/* World light at max_bounces 0: the constant world colour Lw through the
+ * rays that reach it.
+ *  Unoccluded part, closed form: Lw times the diffuse closure colour
+ *  (Lambertian irradiance pi Lw times f = c/pi) and times the GGX directional
+ *  albedo of the specular closure, from the analytic fit of Karis 2014
+ *  ("Physically Based Shading on Mobile"); both approximate what Cycles
+ *  integrates.
+ *  Occlusion, Monte Carlo over the film's samples (HAS_WORLD_OCCLUSION): each
+ *  sample has one direction w of the sphere (uniform) and an orthographic
+ *  map along it holding the nearest and farthest geometry, which gives the
+ *  visibility of the world along w and along -w; the one of the pair above
+ *  the horizon, u, is a uniform sample of the hemisphere (pdf 1/(2 pi)).
+ *  The diffuse light blocked is subtracted as a control variate:
+ *  Lw [A - 2 pi f(u) cos (1 - V(u))] has the expectation
+ *  Lw [A - integral f cos (1 - V)] = Lw integral f cos V where A is the
+ *  closed form, and no noise where nothing occludes. Ambient occlusion
+ *  AO = 1 - 2 cos(u) (1 - V(u)) (expectation: the cosine-weighted visible
+ *  fraction, Cycles' AO pass) also scales the glossy part: specular
+ *  occlusion from AO, an approximation (Cycles traces the lobe's own
+ *  directions). */
+LightContribution world_light(PrincipledWeights w, SurfaceParams s, vec3 P, vec3 N, vec3 V, out float ao) {
     LightContribution r;
     vec3 Lw = frame.world_color.rgb;
+    float NdotV = dot(N, V);
     r.diffuse = Lw * (w.diffuse + w.sheen);
     const vec4 c0 = vec4(-1.0, -0.0275, -0.572, 0.022);
     const vec4 c1 = vec4(1.0, 0.0425, 1.04, -0.04);
@@ -58,6 +77,20 @@ LightContribution world_light(PrincipledWeights w, SurfaceParams s, float NdotV)
     float a004 = min(k.x * k.x, exp2(-9.28 * max(NdotV, 0.0))) * k.x + k.y;
     vec2 AB = vec2(-1.04, 1.04) * a004 + k.zw;
     r.glossy = Lw * (w.cspec0 * AB.x + AB.y) * w.specular;
+    ao = 1.0;
+#ifdef HAS_WORLD_OCCLUSION
+    GpuShadow sh = shadows[int(frame.world_occlusion.x)];
+    float c = -dot(N, sh.point.xyz); /* cos to the map's world direction */
+    float side = c >= 0.0 ? 1.0 : -1.0;
+    vec3 u = -sh.point.xyz * side; /* whichever of the pair is above the horizon */
+    float cos_u = abs(c);
+    if (cos_u > 0.0) {
+        float blocked = 1.0 - world_visibility(sh, P, N, side);
+        r.diffuse -= Lw * (2.0 * M_PI_F) * principled_eval_diffuse(s, w, N, V, u) * blocked;
+        ao = 1.0 - 2.0 * cos_u * blocked;
+        r.glossy *= ao;
+    }
+#endif
     return r;
 }
 
@@ -92,7 +125,11 @@ void main() {
     LightContribution total;
     total.diffuse = vec3(0.0);
     total.glossy = vec3(0.0);
-    if (first_batch) total = world_light(w, s, dot(N, V));
+    float ao = 1.0;
+    if (first_batch) total = world_light(w, s, P, N, V, ao);
+#ifdef OUT_AO
+    if (first_batch) imageStore(ao_image, pixel, imageLoad(ao_image, pixel) + vec4(vec3(ao), 0.0) * share);
+#endif
     /* The tile's list when this sample's point lies inside the depth range
      * and occupied bins the list was culled for, every light otherwise (a
      * jittered sample can see a sliver no pixel centre saw). */

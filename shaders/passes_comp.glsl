@@ -107,6 +107,8 @@ void main() {
     value = background ? vec4(frame.world_color.rgb, 0.0) : vec4(0.0);
 #elif PASS_ID == PASS_SHADOW
     value = vec4(1.0); /* written by the RESOLVE_SHADOW variant */
+#elif PASS_ID == PASS_AO
+    value = vec4(1.0); /* accumulated by the lighting pass */
 #else
 #error "passes_comp.glsl: unknown PASS_ID"
 #endif

@@ -34,6 +34,7 @@
 #define TEX_GLOSS_LIGHT 9
 #define TEX_SHADOW_MAPS 10
 #define TEX_SHADOW_LIGHT 11
+#define TEX_WORLD_MAP 12    /* RG32F: (-nearest, farthest) depth along the world direction */
 
 /* Images written by compute passes */
 #define IMG_FILM 0        /* Combined accumulation */
@@ -41,6 +42,7 @@
 #define IMG_GLOSS_LIGHT 2
 #define IMG_PASS_OUT 3
 #define IMG_SHADOW 4      /* x shadowed, y unshadowed direct-light luminance (Shadow pass) */
+#define IMG_AO 5          /* AO pass accumulation (lighting pass, first batch) */
 
 /* Fragment outputs of the geometry pass (G-buffer MRT) */
 #define OUT_EMISSION 0
@@ -67,6 +69,7 @@
 #define PASS_EMIT 12
 #define PASS_ENV 13
 #define PASS_SHADOW 14
+#define PASS_AO 15
 
 /* Compute workgroup size (8x8 pixels) */
 #define LIGHTING_GROUP_SIZE 8

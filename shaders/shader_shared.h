@@ -86,7 +86,9 @@ SHARED_ASSERT_SIZE(GpuInstance, 144);
  *   sample_shift    : xy this sample's point in [0,1)^2 inside every cell of the light-shape
  *                     grid and on the sun's disk (0.5: the centre, sample 0), zw unused
  *   tiles           : x tiles per row, y tile rows, z 1 if light culling is on, w the pixel
- *                     filter's reach in whole pixels (tile frusta are widened by it) */
+ *                     filter's reach in whole pixels (tile frusta are widened by it)
+ *   world_occlusion : x index (GpuShadow) of this sample's world-occlusion map, < 0 without
+ *                     one; yzw unused */
 SHARED_STRUCT(FrameConstants) {
     mat4 view;
     mat4 projection;
@@ -99,20 +101,25 @@ SHARED_STRUCT(FrameConstants) {
     uvec4 counts;
     vec4 sample_shift;
     uvec4 tiles;
+    vec4 world_occlusion;
 };
-SHARED_ASSERT_SIZE(FrameConstants, 368);
+SHARED_ASSERT_SIZE(FrameConstants, 384);
 
 /* One shadow-casting light's maps for the current film sample.
  *   point         : xyz the sample's point on the light (camera-relative), w first layer in the
  *                   shadow map array
- *   params        : x kind (SHADOW_CUBE: 6 layers, +X -X +Y -Y +Z -Z; SHADOW_CASCADES: 4 layers),
- *                   y map resolution, z texel size at unit distance (cube: 2/res), w unused
+ *   params        : x kind (SHADOW_CUBE: 6 layers, +X -X +Y -Y +Z -Z; SHADOW_CASCADES: 4 layers;
+ *                   SHADOW_WORLD: 1 layer, point.xyz the direction light travels from the world),
+ *                   y this light's map resolution (texels per side), z texel size at unit
+ *                   distance (cube: 2 overlap/res), w resolution / the array's layer size
+ *                   (the maps fill the lower-left corner of their layers)
  *   cascade_split : cascades: far view depth of cascades 0..3; cubes: xy the sample's
  *                   offset on the sphere light's disk, along each face's right/up axes
  *   cascade       : camera-relative world -> cascade clip space (orthographic, depth in [0,1]
  *                   along the sun's direction, 1 nearest the sun) */
 #define SHADOW_CUBE 0
 #define SHADOW_CASCADES 1
+#define SHADOW_WORLD 2 /* one orthographic map (cascade[0]) along a direction of the world */
 #define SHADOW_CASCADE_COUNT 4
 /* Cube faces cover tan(angle) <= 1.1 instead of 1 (a little more than 90
  * degrees) so points near a face border are inside the face as seen from

@@ -2,15 +2,27 @@
  * (SHADOW_CUBE) or the depth along the sun's direction (SHADOW_CASCADES) of
  * the nearest surface, as a float (R32F). Depth testing uses its own
  * reversed-Z float buffer; the stored value is linear so the lookup compares
- * distances in metres. */
+ * distances in metres.
+ * WORLD_MAP: the world's occlusion map stores (-min, max) of the depth along
+ * its axis through MAX blending (no depth test), so one map answers for the
+ * direction it looks along and for the opposite one. */
 #include "frame_lib.glsl"
 
 in vec3 v_position;
 layout(location = 3) uniform vec4 shadow_origin; /* xyz: light point (cube) or a point up-sun (cascades); w: kind */
 layout(location = 4) uniform vec3 shadow_axis;   /* sun direction (cascades) */
+#ifdef WORLD_MAP
+layout(location = 0) out vec2 out_depths;
+#else
 layout(location = 0) out float out_distance;
+#endif
 
 void main() {
     vec3 v = v_position - shadow_origin.xyz;
+#ifdef WORLD_MAP
+    float d = dot(v, shadow_axis);
+    out_depths = vec2(-d, d);
+#else
     out_distance = int(shadow_origin.w) == SHADOW_CASCADES ? dot(v, shadow_axis) : length(v);
+#endif
 }

@@ -38,24 +38,58 @@ float shadow_bias_scale(vec3 N, vec3 L, out float sin_t) {
     return min(1.0 + 2.0 * sin_t / cos_t, 10.0);
 }
 
+/* A map's [0, 1]^2 coordinates -> the array layer's: the light's maps fill
+ * the lower-left resolution^2 corner (params.y texels, params.w of the
+ * layer); the last texel is clamped so nearest filtering stays inside. */
+vec2 shadow_map_uv(GpuShadow sh, vec2 uv) {
+    return clamp(uv, vec2(0.0), vec2(1.0 - 0.5 / sh.params.y)) * sh.params.w;
+}
+
+/* Orthographic map `m` (layer first + offset) along sh.point.xyz, the
+ * direction the light travels: a sun cascade or the world's map. */
+float ortho_visibility(GpuShadow sh, mat4 m, int offset, vec3 P, vec3 N) {
+    vec3 axis = sh.point.xyz;
+    float texel = 2.0 / (length(vec3(m[0][0], m[1][0], m[2][0])) * sh.params.y);
+    float sin_t;
+    float slope = shadow_bias_scale(N, -axis, sin_t);
+    vec3 Pb = P + N * (1.5 * texel * sin_t);
+    vec4 clip = m * vec4(Pb, 1.0);
+    vec2 uv = clip.xy * 0.5 + 0.5;
+    if (any(lessThan(uv, vec2(0.0))) || any(greaterThan(uv, vec2(1.0)))) return 1.0;
+    float stored = texture(shadow_maps, vec3(shadow_map_uv(sh, uv), sh.point.w + float(offset))).r;
+    return dot(Pb, axis) - slope * texel <= stored ? 1.0 : 0.0;
+}
+
+#ifdef HAS_WORLD_OCCLUSION
+layout(binding = TEX_WORLD_MAP) uniform sampler2D world_map;
+
+/* 1 where P (normal N) sees the world along u = -side * axis (side +1: where
+ * the map looks from, -1: the opposite direction), 0 where geometry blocks
+ * it. The map holds (-nearest, farthest) depth along the axis. */
+float world_visibility(GpuShadow sh, vec3 P, vec3 N, float side) {
+    vec3 axis = sh.point.xyz;
+    mat4 m = sh.cascade[0];
+    float texel = 2.0 / (length(vec3(m[0][0], m[1][0], m[2][0])) * sh.params.y);
+    float sin_t;
+    float slope = shadow_bias_scale(N, -axis * side, sin_t);
+    vec3 Pb = P + N * (1.5 * texel * sin_t);
+    vec4 clip = m * vec4(Pb, 1.0);
+    vec2 uv = clip.xy * 0.5 + 0.5;
+    if (any(lessThan(uv, vec2(0.0))) || any(greaterThan(uv, vec2(1.0)))) return 1.0;
+    vec2 stored = texture(world_map, shadow_map_uv(sh, uv)).rg;
+    float d = dot(Pb, axis);
+    return side > 0.0 ? (d - slope * texel <= -stored.r ? 1.0 : 0.0) : (d + slope * texel >= stored.g ? 1.0 : 0.0);
+}
+#endif
+
 /* 1 where this sample's light point sees P (normal N), 0 in shadow. */
 float shadow_visibility(int index, vec3 P, vec3 N) {
     GpuShadow sh = shadows[index];
     float res = sh.params.y;
     if (int(sh.params.x) == SHADOW_CASCADES) {
-        vec3 axis = sh.point.xyz; /* for cascades: the sun's travel direction */
         float d = frame_view_depth(P);
         int c = d <= sh.cascade_split.x ? 0 : d <= sh.cascade_split.y ? 1 : d <= sh.cascade_split.z ? 2 : 3;
-        mat4 m = sh.cascade[c];
-        float texel = 2.0 / (length(vec3(m[0][0], m[1][0], m[2][0])) * res);
-        float sin_t;
-        float slope = shadow_bias_scale(N, -axis, sin_t);
-        vec3 Pb = P + N * (1.5 * texel * sin_t);
-        vec4 clip = m * vec4(Pb, 1.0);
-        vec2 uv = clip.xy * 0.5 + 0.5;
-        if (any(lessThan(uv, vec2(0.0))) || any(greaterThan(uv, vec2(1.0)))) return 1.0;
-        float stored = texture(shadow_maps, vec3(uv, sh.point.w + float(c))).r;
-        return dot(Pb, axis) - slope * texel <= stored ? 1.0 : 0.0;
+        return ortho_visibility(sh, sh.cascade[c], c, P, N);
     }
     /* The face from the light's centre; its light point is on the disk
      * perpendicular to the face's axis (sh.cascade_split.xy, see ShadowModule). */
@@ -86,6 +120,6 @@ float shadow_visibility(int index, vec3 P, vec3 N) {
     vec3 vb = Pb - light_point;
     float fwd = max(dot(vb, F), 1e-20);
     vec2 uv = vec2(dot(vb, R), dot(vb, U)) / (fwd * SHADOW_CUBE_OVERLAP) * 0.5 + 0.5;
-    float stored = texture(shadow_maps, vec3(uv, sh.point.w + float(face))).r;
+    float stored = texture(shadow_maps, vec3(shadow_map_uv(sh, uv), sh.point.w + float(face))).r;
     return length(vb) - slope * texel <= stored ? 1.0 : 0.0;
 }

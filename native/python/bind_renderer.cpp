@@ -133,6 +133,7 @@ void declare_renderer(py::module_& m) {
             d["shadowed_lights"] = self.last.shadowed_lights;
             d["shadow_lights_dropped"] = self.last.shadow_lights_dropped;
             d["shadow_map_bytes"] = self.last.shadow_map_bytes;
+            d["shadow_resolutions"] = self.last.shadow_resolutions;
             d["passes_ms"] = self.last.passes_ms;
             d["readback_ms"] = self.last.readback_ms;
             d["total_ms"] = self.last.total_ms;
@@ -271,7 +272,7 @@ void declare_renderer(py::module_& m) {
              [](PyRenderer& self, const Camera& camera, int width, int height, const std::vector<std::string>& passes,
                 bool film_transparent, float mist_start, float mist_depth, const std::string& mist_falloff,
                 int samples, float filter_width, bool light_culling, float light_threshold, bool shadows,
-                int shadow_resolution) {
+                int shadow_resolution, float shadow_quality) {
                  RenderSettings s;
                  s.width = width;
                  s.height = height;
@@ -293,6 +294,7 @@ void declare_renderer(py::module_& m) {
                  s.light_threshold = light_threshold;
                  s.shadows = shadows;
                  s.shadow_resolution = shadow_resolution;
+                 s.shadow_quality = shadow_quality;
                  FrameResult frame;
                  {
                      py::gil_scoped_release release;
@@ -310,7 +312,8 @@ void declare_renderer(py::module_& m) {
              py::arg("passes") = std::vector<std::string>{"Combined"}, py::arg("film_transparent") = false,
              py::arg("mist_start") = 5.0f, py::arg("mist_depth") = 25.0f, py::arg("mist_falloff") = "QUADRATIC",
              py::arg("samples") = 1, py::arg("filter_width") = 1.5f, py::arg("light_culling") = true,
-             py::arg("light_threshold") = 1e-3f, py::arg("shadows") = true, py::arg("shadow_resolution") = 1024);
+             py::arg("light_threshold") = 1e-3f, py::arg("shadows") = true, py::arg("shadow_resolution") = 1024,
+             py::arg("shadow_quality") = 1.0f);
 }
 
 }  // namespace deferred::python

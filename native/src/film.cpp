@@ -48,4 +48,10 @@ std::array<float, 4> sample_point(int sample) {
     return u;
 }
 
+std::array<float, 2> world_sample_point(int sample) {
+    static constexpr double alpha[2] = {0.7548776662466927, 0.5698402909980532};
+    const double s = double(sample);
+    return {float(std::fmod(0.5 + s * alpha[0], 1.0)), float(std::fmod(0.5 + s * alpha[1], 1.0))};
+}
+
 }  // namespace deferred

@@ -38,4 +38,10 @@ private:
 // at the centre of every light shape.
 std::array<float, 4> sample_point(int sample);
 
+// Sample `sample`'s point for the world's direction: the 2D R-sequence
+// (alpha = 1/phi2, 1/phi2^2, phi2 = 1.32471... the plastic number), offset
+// 0.5; its own sequence so the world's directions do not repeat the pixel
+// jitter's or the light points' pattern.
+std::array<float, 2> world_sample_point(int sample);
+
 }  // namespace deferred

@@ -25,6 +25,7 @@ public:
     void bind_textures() const;       // binds every target to its TEX_* unit
 
     std::size_t bytes() const { return bytes_; }
+    GLuint depth_texture() const { return depth_.get(); }
     int width() const { return width_; }
     int height() const { return height_; }
     const GBufferFeatures& features() const { return features_; }

@@ -14,7 +14,7 @@ static_assert(PASS_COMBINED == int(Pass::Combined) && PASS_DEPTH == int(Pass::De
               PASS_DIFF_DIR == int(Pass::DiffDir) && PASS_DIFF_COL == int(Pass::DiffCol) &&
               PASS_GLOSS_DIR == int(Pass::GlossDir) && PASS_GLOSS_COL == int(Pass::GlossCol) &&
               PASS_EMIT == int(Pass::Emit) && PASS_ENV == int(Pass::Env) && PASS_SHADOW == int(Pass::Shadow) &&
-              kPassCount == 15,
+              PASS_AO == int(Pass::AO) && kPassCount == 16,
               "shader_defines.h PASS_* ids drifted from deferred::Pass");
 
 namespace {
@@ -34,6 +34,7 @@ const std::array<PassInfo, kPassCount> kPasses = {{
     {Pass::Emit, "Emit", "RGB", 3, {0, 0, 0, 0}},
     {Pass::Env, "Env", "RGB", 3, {0, 0, 0, 0}},
     {Pass::Shadow, "Shadow", "RGB", 3, {1, 1, 1, 0}},
+    {Pass::AO, "AO", "RGB", 3, {0, 0, 0, 0}},
 }};
 }  // namespace
 

@@ -150,6 +150,35 @@ struct Renderer::Impl {
     }
 
     FrameResult render(const Camera& camera, const RenderSettings& settings);
+
+    // The visible surfaces the shadow maps are sized for: sample 0's depth
+    // (unjittered pixel centres) read back on a grid of at most 128 x 128
+    // points, as camera-relative positions with the width of a pixel there.
+    std::vector<ShadowModule::Receiver> visible_receivers(const CameraMatrices& cam, int width, int height) const {
+        std::vector<float> depth(std::size_t(width) * std::size_t(height));
+        glGetTextureImage(gbuffer.depth_texture(), 0, GL_DEPTH_COMPONENT, GL_FLOAT,
+                          GLsizei(depth.size() * sizeof(float)), depth.data());
+        check_gl("reading the depth for shadow map sizes");
+        const glm::dmat4 to_view = glm::inverse(cam.projection);
+        const glm::dmat4 to_world = glm::inverse(cam.view);
+        const glm::dvec4& vp = cam.viewplane;
+        const double pixel = std::min((vp.y - vp.x) / width, (vp.w - vp.z) / height);  // at unit depth (persp)
+        const int step = std::max(1, std::max(width, height) / 128);
+        std::vector<ShadowModule::Receiver> out;
+        for (int y = step / 2; y < height; y += step)
+            for (int x = step / 2; x < width; x += step) {
+                const double z = depth[std::size_t(y) * std::size_t(width) + std::size_t(x)];
+                if (!(z > 0.0)) continue;  // background (reversed Z: 0 is far)
+                const glm::dvec4 ndc(2.0 * (x + 0.5) / width - 1.0, 2.0 * (y + 0.5) / height - 1.0, z, 1.0);
+                glm::dvec4 v = to_view * ndc;
+                v /= v.w;
+                const double view_depth = -v.z;
+                const double footprint = cam.orthographic ? pixel : pixel * view_depth;
+                if (!(footprint > 0.0) || !std::isfinite(footprint)) continue;
+                out.push_back({glm::dvec3(to_world * glm::dvec4(glm::dvec3(v), 1.0)), view_depth, footprint});
+            }
+        return out;
+    }
 };
 
 namespace {
@@ -175,6 +204,8 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         throw InvalidInput("filter_width must be in (0, 100] pixels");
     if (!(settings.light_threshold >= 0.0f) || !std::isfinite(settings.light_threshold))
         throw InvalidInput("light_threshold must be a finite number >= 0");
+    if (!(settings.shadow_quality > 0.0f && settings.shadow_quality <= 16.0f))
+        throw InvalidInput("shadow_quality must be in (0, 16] texels per pixel");
     if (!std::isfinite(settings.mist.start) || !std::isfinite(settings.mist.depth))
         throw InvalidInput("mist start/depth must be finite");
 
@@ -233,7 +264,13 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     Buffer instance_buffer = make_storage_buffer(instances.data(), instances.size() * sizeof(gpu::GpuInstance), "instances");
     Buffer slot_buffer = make_storage_buffer(slots.data(), slots.size() * sizeof(std::uint32_t), "material slots");
     Buffer material_buffer = make_storage_buffer(materials.data(), materials.size() * sizeof(gpu::GpuMaterial), "materials");
-    shadows.begin_frame(cam, settings.shadow_resolution, memory_budget_bytes() / 4);
+    shadows.begin_frame(cam, settings.shadow_resolution, settings.shadow_quality, memory_budget_bytes() / 4);
+    // The world's occlusion map, when the world lights anything or the AO
+    // pass is asked for.
+    const World& world = scene.world();
+    const bool world_lights = world.color[0] > 0.0f || world.color[1] > 0.0f || world.color[2] > 0.0f;
+    const bool ao_pass = wanted.contains(Pass::AO);
+    if (settings.shadows && (world_lights || ao_pass) && scene.instance_count() > 0) shadows.offer_world();
     lights.sync(scene.lights(), cam.position, settings.light_threshold, settings.shadows ? &shadows : nullptr);
     const bool culled = settings.light_culling && lights.count() >= kCullingMinLights;
 
@@ -242,7 +279,6 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     fc.inv_view = to_gpu(glm::inverse(cam.view));
     fc.camera_position = {float(cam.position.x), float(cam.position.y), float(cam.position.z),
                           cam.orthographic ? 1.0f : 0.0f};
-    const World& world = scene.world();
     fc.world_color = {world.color[0], world.color[1], world.color[2], settings.film_transparent ? 1.0f : 0.0f};
     fc.viewport = {float(settings.width), float(settings.height), 1.0f / float(settings.width),
                    1.0f / float(settings.height)};
@@ -255,6 +291,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     // How far (whole pixels) a jittered sample can look from its pixel centre.
     const std::uint32_t reach = settings.samples > 1 ? std::uint32_t(std::ceil(filter.support())) : 0u;
     fc.tiles = {tiles_x, tiles_y, culled ? 1u : 0u, reach};
+    fc.world_occlusion = {float(shadows.world_index()), 0.0f, 0.0f, 0.0f};
     Buffer frame_buffer = make_storage_buffer(nullptr, sizeof(fc), "frame constants");
     glBindBufferBase(GL_UNIFORM_BUFFER, UBO_FRAME, frame_buffer.get());
 
@@ -289,6 +326,8 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     if (light_split) lighting_variant.defines.push_back("OUT_LIGHT_SPLIT");
     if (culled) lighting_variant.defines.push_back("LIGHT_CULLING");
     if (!shadows.empty()) lighting_variant.defines.push_back("HAS_SHADOWS");
+    if (shadows.world_index() >= 0) lighting_variant.defines.push_back("HAS_WORLD_OCCLUSION");
+    if (ao_pass) lighting_variant.defines.push_back("OUT_AO");
     if (shadow_pass) lighting_variant.defines.push_back("OUT_SHADOW");
     const GLuint geometry = shaders->graphics_program("geometry_vert.glsl", "geometry_frag.glsl", base_variant);
     const GLuint lighting = shaders->compute_program("lighting_comp.glsl", lighting_variant);
@@ -345,12 +384,6 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         glNamedBufferSubData(frame_buffer.get(), 0, sizeof(fc), &fc);
         glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
 
-        // Shadow maps from this sample's point on each shadowed light.
-        if (!shadows.empty()) {
-            shadows.render_sample(*shaders, {u[2], u[3]}, draw_scene);
-            shadow_ms += timer.lap_ms();
-        }
-
         // Geometry pass.
         gbuffer.bind_for_geometry();
         glEnable(GL_DEPTH_TEST);
@@ -363,6 +396,14 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         glBindFramebuffer(GL_FRAMEBUFFER, 0);
         check_gl("geometry pass");
         geometry_ms += timer.lap_ms();
+
+        // Shadow maps from this sample's point on each shadowed light, sized
+        // at sample 0 from what the visible surfaces need.
+        if (!shadows.empty()) {
+            if (sample == 0) shadows.fit(visible_receivers(cam, settings.width, settings.height));
+            shadows.render_sample(*shaders, {u[2], u[3]}, world_sample_point(sample), draw_scene);
+            shadow_ms += timer.lap_ms();
+        }
 
         // Light lists, once per frame from sample 0's depth (later samples
         // fall back to every light where they see outside a tile's bounds).
@@ -381,6 +422,8 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         glBindImageTexture(IMG_FILM, film.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
         if (shadow_pass)
             glBindImageTexture(IMG_SHADOW, shadow_light.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
+        for (auto& [p, image] : pass_images)
+            if (p == Pass::AO) glBindImageTexture(IMG_AO, image.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
         if (light_split) {
             glBindImageTexture(IMG_DIFF_LIGHT, diffuse_light.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
             glBindImageTexture(IMG_GLOSS_LIGHT, glossy_light.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
@@ -397,7 +440,8 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         // Other passes: filtered ones every sample, the rest at sample 0.
         for (auto& [p, image] : pass_images) {
             const bool first_only = pass_from_first_sample(p);
-            if ((first_only && sample > 0) || p == Pass::Shadow) continue;  // Shadow: resolved below
+            // Shadow: resolved below; AO: accumulated by the lighting pass.
+            if ((first_only && sample > 0) || p == Pass::Shadow || p == Pass::AO) continue;
             glUseProgram(pass_program(p, first_only ? nullptr : "ACCUMULATE"));
             gbuffer.bind_textures();
             glBindImageTexture(IMG_PASS_OUT, image.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
@@ -447,6 +491,8 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     result.timings.shadow_ms = shadow_ms;
     result.timings.shadow_map_bytes = shadows.empty() ? 0 : shadows.map_bytes();
     result.timings.shadowed_lights = shadows.count();
+    result.timings.shadow_resolutions = shadows.resolutions();
+    result.timings.shadow_layers_rendered = shadows.layers_rendered();
     result.timings.shadow_lights_dropped = shadows.dropped();
     result.timings.tile_light_pairs = culled ? culling.last_index_count() : 0;
     result.timings.passes_ms = passes_ms;

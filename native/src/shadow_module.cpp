@@ -59,14 +59,47 @@ glm::dvec2 concentric_disk(double u1, double u2) {
     return {r * std::cos(t), r * std::sin(t)};
 }
 
+// Camera-relative world -> clip of an orthographic map along `axis` (the
+// direction light travels) over the sphere (center, radius): x, y over the
+// sphere, depth 1 nearest the light, with casters up to max(far, 1 km)
+// beyond the sphere towards the light.
+glm::dmat4 ortho_map(const glm::dvec3& axis, const glm::dvec3& center, double radius, double far) {
+    const glm::dvec3 R = glm::normalize(glm::cross(axis, std::abs(axis.z) < 0.999 ? glm::dvec3(0, 0, 1) : glm::dvec3(1, 0, 0)));
+    const glm::dvec3 U = glm::cross(R, axis);
+    const double zc = glm::dot(center, axis);
+    const double zmin = zc - radius - std::max(far, 1000.0), zmax = zc + radius;
+    glm::dmat4 m(0.0);  // rows: R/r, U/r, depth (1 nearest the light), w
+    for (int c = 0; c < 3; ++c) {
+        m[c][0] = R[c] / radius;
+        m[c][1] = U[c] / radius;
+        m[c][2] = -axis[c] / (zmax - zmin);
+    }
+    m[3][0] = -glm::dot(R, center) / radius;
+    m[3][1] = -glm::dot(U, center) / radius;
+    m[3][2] = zmax / (zmax - zmin);
+    m[3][3] = 1.0;
+    return m;
+}
+
 }  // namespace
 
-void ShadowModule::begin_frame(const CameraMatrices& camera, int resolution, std::size_t memory_budget) {
+void ShadowModule::begin_frame(const CameraMatrices& camera, int max_resolution, float quality,
+                              std::size_t memory_budget) {
     camera_ = camera;
-    resolution_ = std::clamp(resolution, 16, 8192);
+    resolution_ = std::clamp(max_resolution, 32, 8192);
+    quality_ = quality;
     budget_ = memory_budget;
     entries_.clear();
     layers_ = 0;
+    world_index_ = -1;
+}
+
+void ShadowModule::offer_world() {
+    Entry e;
+    e.world = true;
+    e.priority = 1e300;
+    e.light_index = std::size_t(-1);
+    entries_.push_back(e);
 }
 
 bool ShadowModule::offer(std::size_t light_index, const Light& light, const gpu::GpuLight& packed) {
@@ -91,6 +124,8 @@ bool ShadowModule::offer(std::size_t light_index, const Light& light, const gpu:
     e.light = packed;
     e.sun = sun;
     e.light_index = light_index;
+    e.fixed_point = light.type == LightType::Sun ? !(light.angle > 0.0f)
+                                                 : light.type != LightType::Area && !(light.radius > 0.0f);
     const double S = std::abs(double(light.energy)) * std::max({light.color[0], light.color[1], light.color[2]});
     const double d2 = glm::dot(v3(packed.position_type), v3(packed.position_type));
     e.priority = sun ? 1e300 : S / std::max(d2, 1.0);
@@ -108,7 +143,7 @@ std::vector<int> ShadowModule::allocate(std::size_t light_count) {
                      [](const Entry& a, const Entry& b) { return a.priority > b.priority; });
     // Keep lights while their layers fit the array; lower the resolution (down
     // to 256) to fit the memory budget, then drop the least important.
-    auto layers_of = [](const Entry& e) { return e.sun ? SHADOW_CASCADE_COUNT : 6; };
+    auto layers_of = [](const Entry& e) { return e.world ? 0 : e.sun ? SHADOW_CASCADE_COUNT : 6; };
     std::size_t kept = 0;
     layers_ = 0;
     for (const Entry& e : entries_) {
@@ -124,11 +159,107 @@ std::vector<int> ShadowModule::allocate(std::size_t light_count) {
     for (std::size_t i = 0; i < entries_.size(); ++i) {
         entries_[i].first_layer = layer;
         layer += layers_of(entries_[i]);
-        index[entries_[i].light_index] = int(i);
+        if (entries_[i].world) world_index_ = int(i);
+        else index[entries_[i].light_index] = int(i);
     }
-    if (entries_.empty()) return index;
-    bytes_ = (std::size_t(layers_) + 1) * resolution_ * resolution_ * 4;
-    if (layers_ != allocated_layers_ || resolution_ != allocated_resolution_) {
+    return index;
+}
+
+ShadowModule::Cascades ShadowModule::cascades() const {
+    Cascades c{};
+    // Practical split scheme (Zhang et al. 2006), lambda 0.75.
+    const double n = camera_.clip_start, f = camera_.clip_end;
+    for (int k = 0; k <= SHADOW_CASCADE_COUNT; ++k) {
+        const double t = double(k) / SHADOW_CASCADE_COUNT;
+        c.split[k] = 0.75 * n * std::pow(f / n, t) + 0.25 * (n + (f - n) * t);
+    }
+    const glm::dvec4& vp = camera_.viewplane;
+    for (int k = 0; k < SHADOW_CASCADE_COUNT; ++k) {
+        // Bounding sphere of the frustum slice (camera-relative).
+        glm::dvec3 corners[8];
+        int ci = 0;
+        for (double depth : {c.split[k], c.split[k + 1]})
+            for (double x : {vp.x, vp.y})
+                for (double y : {vp.z, vp.w}) {
+                    const double s = camera_.orthographic ? 1.0 : depth;
+                    corners[ci++] = camera_.rotation * glm::dvec3(x * s, y * s, -depth);
+                }
+        glm::dvec3 center(0.0);
+        for (auto& p : corners) center += p / 8.0;
+        double radius = 0;
+        for (auto& p : corners) radius = std::max(radius, glm::length(p - center));
+        c.center[k] = center;
+        c.radius[k] = radius * 1.02;
+    }
+    return c;
+}
+
+void ShadowModule::fit(const std::vector<Receiver>& receivers) {
+    if (entries_.empty()) return;
+    const Cascades cs = cascades();
+    layers_rendered_ = 0;
+    receivers_center_ = glm::dvec3(0.0);
+    receivers_radius_ = 0.0;
+    for (const Receiver& p : receivers) receivers_center_ += p.position / double(receivers.size());
+    for (const Receiver& p : receivers)
+        receivers_radius_ = std::max(receivers_radius_, glm::length(p.position - receivers_center_));
+    receivers_radius_ = std::max(receivers_radius_ * 1.02, 1e-3);
+    std::vector<double> need;
+    need.reserve(receivers.size());
+    int array_resolution = 32;
+    for (Entry& e : entries_) {
+        need.clear();
+        const gpu::GpuLight& l = e.light;
+        if (e.world) {
+            // One map over the receivers' bounding sphere.
+            for (const Receiver& p : receivers) need.push_back(quality_ * 2.0 * receivers_radius_ / p.footprint);
+        } else if (e.sun) {
+            // A cascade of radius r spans 2r over `resolution` texels.
+            for (const Receiver& p : receivers) {
+                int k = 0;
+                while (k < SHADOW_CASCADE_COUNT - 1 && p.depth > cs.split[k + 1]) ++k;
+                need.push_back(quality_ * 2.0 * cs.radius[k] / p.footprint);
+            }
+        } else {
+            // A cube face's texel at distance d from the light spans
+            // d * 2 * overlap / resolution (at the face's centre).
+            const glm::dvec3 lp = v3(l.position_type);
+            const double reach = l.params.z >= 0.0f ? double(l.params.z) : 1e300;
+            const bool area = int(l.position_type.w) == LIGHT_AREA;
+            for (const Receiver& p : receivers) {
+                const glm::dvec3 v = p.position - lp;
+                const double d = glm::length(v);
+                if (d > reach || (area && glm::dot(v, v3(l.direction)) <= 0.0)) continue;
+                need.push_back(quality_ * 2.0 * SHADOW_CUBE_OVERLAP * d / p.footprint);
+            }
+        }
+        double r = 32.0;
+        if (!need.empty()) {
+            const std::size_t k = std::min(need.size() - 1, need.size() * 9 / 10);
+            std::nth_element(need.begin(), need.begin() + long(k), need.end());
+            r = need[k];
+        }
+        e.resolution = std::clamp(int(std::ceil(std::min(r, 1e6) / 32.0)) * 32, 32, resolution_);
+        e.rendered = false;
+        if (e.world) {
+            if (e.resolution != world_allocated_) {
+                world_map_ = make_texture_2d(GL_RG32F, e.resolution, e.resolution, "world occlusion map");
+                glTextureParameteri(world_map_.get(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+                glTextureParameteri(world_map_.get(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+                GLuint fbo = 0;
+                glCreateFramebuffers(1, &fbo);
+                world_fbo_ = Framebuffer(fbo);
+                glNamedFramebufferTexture(fbo, GL_COLOR_ATTACHMENT0, world_map_.get(), 0);
+                world_allocated_ = e.resolution;
+            }
+            continue;
+        }
+        array_resolution = std::max(array_resolution, e.resolution);
+    }
+    resolution_ = array_resolution;
+    bytes_ = (layers_ > 0 ? (std::size_t(layers_) + 1) * resolution_ * resolution_ * 4 : 0) +
+              std::size_t(world_allocated_) * world_allocated_ * 8;
+    if (layers_ > 0 && (layers_ != allocated_layers_ || resolution_ != allocated_resolution_)) {
         GLuint id = 0;
         glCreateTextures(GL_TEXTURE_2D_ARRAY, 1, &id);
         maps_ = Texture(id);
@@ -147,10 +278,17 @@ std::vector<int> ShadowModule::allocate(std::size_t light_count) {
         check_gl("allocating shadow maps");
     }
     shadow_buffer_ = make_storage_buffer(nullptr, entries_.size() * sizeof(gpu::GpuShadow), "shadows");
-    return index;
+}
+
+std::vector<int> ShadowModule::resolutions() const {
+    std::vector<int> r;
+    for (const Entry& e : entries_)
+        if (!e.world) r.push_back(e.resolution);
+    return r;
 }
 
 void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float, 2>& u,
+                                 const std::array<float, 2>& u_world,
                                  const std::function<void()>& bind_and_draw_scene) {
     if (entries_.empty()) return;
     ShaderVariant variant;
@@ -158,7 +296,6 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
     const GLuint program = shaders.graphics_program("geometry_vert.glsl", "shadow_frag.glsl", variant);
     glUseProgram(program);
     glBindFramebuffer(GL_FRAMEBUFFER, fbo_.get());
-    glViewport(0, 0, resolution_, resolution_);
     glEnable(GL_DEPTH_TEST);
     glDepthFunc(GL_GREATER);
     glDepthMask(GL_TRUE);
@@ -179,12 +316,38 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
         glUniform4f(3, float(origin.x), float(origin.y), float(origin.z), float(kind));
         glUniform3f(4, float(axis.x), float(axis.y), float(axis.z));
         bind_and_draw_scene();
+        ++layers_rendered_;
     };
 
+    glEnable(GL_SCISSOR_TEST);
+    const Cascades cs = cascades();
+    glm::dvec3 world_axis(0.0);
+    glm::dmat4 world_matrix(0.0);
     for (std::size_t i = 0; i < entries_.size(); ++i) {
-        const Entry& e = entries_[i];
+        Entry& e = entries_[i];
         gpu::GpuShadow& g = shadows[i];
         const gpu::GpuLight& l = e.light;
+        // Maps of a light without size are the same every sample: keep them.
+        const bool draw = !(e.fixed_point && e.rendered);
+        e.rendered = true;
+        glViewport(0, 0, e.resolution, e.resolution);
+        glScissor(0, 0, e.resolution, e.resolution);  // clears too: only the corner in use
+        const float uv_scale = float(e.resolution) / float(resolution_);
+        if (e.world) {
+            // This sample's direction of the world, uniform on the sphere
+            // (the map also answers for the opposite one); light from it
+            // travels along `axis`.
+            const double z = 1.0 - 2.0 * u_world[0], phi = 2.0 * M_PI * u_world[1];
+            const double rxy = std::sqrt(std::max(0.0, 1.0 - z * z));
+            const glm::dvec3 axis = -glm::dvec3(rxy * std::cos(phi), rxy * std::sin(phi), z);
+            const glm::dmat4 m = ortho_map(axis, receivers_center_, receivers_radius_, camera_.clip_end);
+            g.cascade[0] = to_gpu_mat(m);
+            g.point = {float(axis.x), float(axis.y), float(axis.z), 0.0f};
+            g.params = {float(SHADOW_WORLD), float(e.resolution), 0.0f, 1.0f};
+            world_axis = axis;
+            world_matrix = m;
+            continue;
+        }
         if (e.sun) {
             // The same point of the sun's disk the lighting uses this sample.
             glm::dvec3 axis = glm::normalize(v3(l.direction));
@@ -195,50 +358,14 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
                 const glm::dvec2 d = concentric_disk(u[0], u[1]) * tan_r;
                 axis = -glm::normalize(-axis + t * d.x + b * d.y);
             }
-            const glm::dvec3 R = glm::normalize(glm::cross(axis, std::abs(axis.z) < 0.999 ? glm::dvec3(0, 0, 1) : glm::dvec3(1, 0, 0)));
-            const glm::dvec3 U = glm::cross(R, axis);
-            // Practical split scheme (Zhang et al. 2006), lambda 0.75.
-            const double n = camera_.clip_start, f = camera_.clip_end;
-            double splits[SHADOW_CASCADE_COUNT + 1];
-            for (int k = 0; k <= SHADOW_CASCADE_COUNT; ++k) {
-                const double t = double(k) / SHADOW_CASCADE_COUNT;
-                splits[k] = 0.75 * n * std::pow(f / n, t) + 0.25 * (n + (f - n) * t);
-            }
-            const glm::dvec4& vp = camera_.viewplane;
             for (int k = 0; k < SHADOW_CASCADE_COUNT; ++k) {
-                // Bounding sphere of the frustum slice (camera-relative).
-                glm::dvec3 corners[8];
-                int ci = 0;
-                for (double depth : {splits[k], splits[k + 1]})
-                    for (double x : {vp.x, vp.y})
-                        for (double y : {vp.z, vp.w}) {
-                            const double s = camera_.orthographic ? 1.0 : depth;
-                            corners[ci++] = camera_.rotation * glm::dvec3(x * s, y * s, -depth);
-                        }
-                glm::dvec3 center(0.0);
-                for (auto& c : corners) center += c / 8.0;
-                double radius = 0;
-                for (auto& c : corners) radius = std::max(radius, glm::length(c - center));
-                radius *= 1.02;
-                // Depth along the sun: casters up to max(clip_end, 1 km) towards the sun.
-                const double zc = glm::dot(center, axis);
-                const double zmin = zc - radius - std::max(f, 1000.0), zmax = zc + radius;
-                glm::dmat4 m(0.0);  // rows: R/r, U/r, depth (1 nearest the sun), w
-                for (int c = 0; c < 3; ++c) {
-                    m[c][0] = R[c] / radius;
-                    m[c][1] = U[c] / radius;
-                    m[c][2] = -axis[c] / (zmax - zmin);
-                }
-                m[3][0] = -glm::dot(R, center) / radius;
-                m[3][1] = -glm::dot(U, center) / radius;
-                m[3][2] = zmax / (zmax - zmin);
-                m[3][3] = 1.0;
+                const glm::dmat4 m = ortho_map(axis, cs.center[k], cs.radius[k], camera_.clip_end);
                 g.cascade[k] = to_gpu_mat(m);
-                draw_layer(e.first_layer + k, m, glm::dvec3(0.0), SHADOW_CASCADES, axis);
+                if (draw) draw_layer(e.first_layer + k, m, glm::dvec3(0.0), SHADOW_CASCADES, axis);
             }
             g.point = {float(axis.x), float(axis.y), float(axis.z), float(e.first_layer)};
-            g.params = {float(SHADOW_CASCADES), float(resolution_), 0.0f, 0.0f};
-            g.cascade_split = {float(splits[1]), float(splits[2]), float(splits[3]), float(splits[4])};
+            g.params = {float(SHADOW_CASCADES), float(e.resolution), 0.0f, uv_scale};
+            g.cascade_split = {float(cs.split[1]), float(cs.split[2]), float(cs.split[3]), float(cs.split[4])};
         } else {
             // This sample's point on the light. Area lights: uniform on the
             // surface. Sphere lights: Cycles samples a disk facing each
@@ -259,14 +386,43 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
                 glm::dvec3 F, R, U;
                 face_basis(face, F, R, U);
                 const glm::dvec3 pf = p + R * disk.x + U * disk.y;
-                draw_layer(e.first_layer + face, cube_face_matrix(face, pf), pf, SHADOW_CUBE, glm::dvec3(0.0));
+                if (draw) draw_layer(e.first_layer + face, cube_face_matrix(face, pf), pf, SHADOW_CUBE, glm::dvec3(0.0));
             }
             g.point = {float(p.x), float(p.y), float(p.z), float(e.first_layer)};
-            g.params = {float(SHADOW_CUBE), float(resolution_), float(2.0 * SHADOW_CUBE_OVERLAP / resolution_), 0.0f};
+            g.params = {float(SHADOW_CUBE), float(e.resolution), float(2.0 * SHADOW_CUBE_OVERLAP / e.resolution),
+                        uv_scale};
             g.cascade_split = {float(disk.x), float(disk.y), 0.0f, 0.0f};
         }
     }
     glNamedBufferSubData(shadow_buffer_.get(), 0, GLsizeiptr(shadows.size() * sizeof(gpu::GpuShadow)), shadows.data());
+    glDisable(GL_SCISSOR_TEST);
+    if (world_index_ >= 0) {
+        // Nearest and farthest geometry along the axis in one pass: MAX
+        // blending of (-depth, depth), no depth test; depth clamping keeps
+        // casters beyond the map's depth range (the far side serves the
+        // opposite direction), the stored value is the exact depth anyway.
+        ShaderVariant world_variant = variant;
+        world_variant.defines.push_back("WORLD_MAP");
+        glUseProgram(shaders.graphics_program("geometry_vert.glsl", "shadow_frag.glsl", world_variant));
+        glBindFramebuffer(GL_FRAMEBUFFER, world_fbo_.get());
+        glViewport(0, 0, world_allocated_, world_allocated_);
+        const float lowest[4] = {-3.0e38f, -3.0e38f, 0, 0};
+        glClearNamedFramebufferfv(world_fbo_.get(), GL_COLOR, 0, lowest);
+        glDisable(GL_DEPTH_TEST);
+        glEnable(GL_DEPTH_CLAMP);
+        glEnable(GL_BLEND);
+        glBlendEquation(GL_MAX);
+        const gpu::mat4 m = to_gpu_mat(world_matrix);
+        glUniformMatrix4fv(2, 1, GL_FALSE, &m.cols[0].x);
+        glUniform4f(3, 0.0f, 0.0f, 0.0f, float(SHADOW_CASCADES));
+        glUniform3f(4, float(world_axis.x), float(world_axis.y), float(world_axis.z));
+        bind_and_draw_scene();
+        ++layers_rendered_;
+        glDisable(GL_BLEND);
+        glDisable(GL_DEPTH_CLAMP);
+        glBlendEquation(GL_FUNC_ADD);
+        glEnable(GL_DEPTH_TEST);
+    }
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
     check_gl("shadow maps");
 }
@@ -275,6 +431,7 @@ void ShadowModule::bind() const {
     if (entries_.empty()) return;
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_SHADOWS, shadow_buffer_.get());
     glBindTextureUnit(TEX_SHADOW_MAPS, maps_.get());
+    if (world_index_ >= 0) glBindTextureUnit(TEX_WORLD_MAP, world_map_.get());
 }
 
 }  // namespace deferred

@@ -12,6 +12,20 @@
 // All maps are layers of one 2D array texture, so the number of shadowed
 // lights is not limited by texture units. Only lights that cast shadows,
 // have energy, and whose influence sphere reaches the view frustum get maps.
+//
+// Resolution per light from its projected footprint (fit()): over the
+// visible receivers the light reaches (a grid of sample 0's depth), the
+// texels a face/cascade needs so that one texel covers at most 1/quality of
+// a pixel there; the 90th percentile of that need, rounded up to a multiple
+// of 32, between 32 and the maximum setting. A light uses the lower-left
+// r x r corner of its layers (GpuShadow params.w = r / array size).
+// Lights without size (point/spot radius 0, sun angle 0) cast the same
+// shadow every sample: their maps are rendered once per frame.
+//
+// The world (offer_world()): per sample one orthographic RG32F map along a
+// direction of the sphere over the visible receivers' bounding sphere,
+// storing the nearest and the farthest geometry along it (MAX blending), so
+// it answers for that direction and its opposite.
 #pragma once
 
 #include "camera.h"
@@ -31,32 +45,70 @@ namespace deferred {
 class ShadowModule {
 public:
     // Per frame: forget last frame's selection.
-    void begin_frame(const CameraMatrices& camera, int resolution, std::size_t memory_budget);
+    // `max_resolution`: texels per face/cascade side at most; `quality`:
+    // texels per pixel of the receivers' footprint.
+    void begin_frame(const CameraMatrices& camera, int max_resolution, float quality, std::size_t memory_budget);
     // Offers a light; returns false if it cannot shadow anything visible.
     bool offer(std::size_t light_index, const Light& light, const gpu::GpuLight& packed);
+    // Asks for the world's occlusion map: each sample, one orthographic map
+    // along a new direction of the sphere, fitted to the visible receivers.
+    void offer_world();
     // Keeps as many offered lights as the array layers and the memory budget
     // allow (suns first, then by power over squared distance to the camera),
     // allocates their maps and returns light_index -> shadow index (-1: none).
     std::vector<int> allocate(std::size_t light_count);
     std::size_t dropped() const { return dropped_; }  // offered but over the limits
+    // A visible surface point: camera-relative position, view depth, and the
+    // width of a pixel there (metres).
+    struct Receiver {
+        glm::dvec3 position;
+        double depth, footprint;
+    };
+    // Chooses each kept light's resolution from the receivers it reaches and
+    // (re)allocates the array; call before the first render_sample().
+    void fit(const std::vector<Receiver>& receivers);
     // Renders every assigned light's maps for one film sample; `draw` issues
     // the scene's draw calls with the currently bound program.
-    void render_sample(ShaderLibrary& shaders, const std::array<float, 2>& u,
+    // `u`: the sample's point on the light shapes; `u_world`: its direction
+    // of the world (uniform on the sphere).
+    void render_sample(ShaderLibrary& shaders, const std::array<float, 2>& u, const std::array<float, 2>& u_world,
                        const std::function<void()>& bind_and_draw_scene);
+    int world_index() const { return world_index_; }  // shadow index of the world's map, -1: none
     void bind() const;
     bool empty() const { return entries_.empty(); }
-    std::size_t count() const { return entries_.size(); }
+    std::size_t count() const { return entries_.size() - (world_index_ >= 0 ? 1 : 0); }  // lights only
     std::size_t map_bytes() const { return bytes_; }
-    int resolution() const { return resolution_; }
+    int resolution() const { return resolution_; }  // the array's layer size after fit()
+    // Texels per side of each kept light's maps, in shadow index order (the
+    // world's map left out).
+    std::vector<int> resolutions() const;
+    std::size_t layers_rendered() const { return layers_rendered_; }  // since fit()
 
 private:
     struct Entry {
         gpu::GpuLight light;
         bool sun = false;
+        bool world = false;
         int first_layer = 0;
         std::size_t light_index = 0;
         double priority = 0;
+        int resolution = 0;
+        bool fixed_point = false;  // no size: the same maps every sample
+        bool rendered = false;
     };
+    // The sun's cascades: split depths and bounding spheres (camera-relative)
+    // of the view frustum's slices.
+    struct Cascades {
+        double split[SHADOW_CASCADE_COUNT + 1];
+        glm::dvec3 center[SHADOW_CASCADE_COUNT];
+        double radius[SHADOW_CASCADE_COUNT];
+    };
+    Cascades cascades() const;
+    float quality_ = 1.0f;
+    int world_index_ = -1;
+    glm::dvec3 receivers_center_{0.0};  // bounding sphere of the visible receivers
+    double receivers_radius_ = 0.0;
+    std::size_t layers_rendered_ = 0;
     std::size_t dropped_ = 0;
     CameraMatrices camera_{};
     int resolution_ = 1024;
@@ -65,6 +117,9 @@ private:
     int layers_ = 0;
     Texture maps_, depth_;
     Framebuffer fbo_;
+    Texture world_map_;  // RG32F, its own size (the world's entry resolution)
+    Framebuffer world_fbo_;
+    int world_allocated_ = 0;
     Buffer shadow_buffer_;
     int allocated_layers_ = 0, allocated_resolution_ = 0;
 };

@@ -110,9 +110,9 @@ def test_passes(checks):
     layer.use_pass_normal = True
     layer.use_pass_vector = True       # not produced by the renderer: must not appear
     layer.use_pass_shadow = True       # produced (EEVEE's convention): must appear
-    layer.use_pass_ambient_occlusion = True  # not produced
+    layer.use_pass_ambient_occlusion = True  # produced (world occlusion): must appear
     outputs = render_layers_outputs(scene)
-    checks.check(outputs == ["Image", "Alpha", "Depth", "Normal", "Shadow"],
+    checks.check(outputs == ["Image", "Alpha", "Depth", "Normal", "Shadow", "AO"],
                  "only enabled AND produced passes are registered", str(outputs))
     layer.use_pass_vector = layer.use_pass_shadow = layer.use_pass_ambient_occlusion = False
 

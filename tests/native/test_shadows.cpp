@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 using namespace deferred;
@@ -279,4 +280,74 @@ TEST(Shadows, ShadowPassIsShadowedOverUnshadowedLight) {
     const PassImage& sh = *f.find(Pass::Shadow);
     EXPECT_NEAR(pixel3(sh, 4, 4).x, 0.0, 1e-6);   // under the blocker (x ~ -0.7)
     EXPECT_NEAR(pixel3(sh, 60, 4).x, 1.0, 1e-6);  // in the open (x ~ +0.7)
+}
+
+namespace {
+// A floor with a cube under a point light (radius 0 or 0.2) and a sun; the
+// camera looks down at the cube from 3 m.
+FrameTimings footprint_frame(int width, float quality, float radius, int samples = 1) {
+    Renderer r;
+    tools::MeshArrays floor = tools::make_plane(10.0f, 4);
+    tools::MeshArrays box = tools::make_box(0.5f, 0.5f, 0.5f);
+    const std::uint32_t fm = r.add_mesh(floor.view()), bm = r.add_mesh(box.view());
+    const std::uint32_t mat = r.add_material(grey());
+    Mat4d I = identity_matrix();
+    r.add_instances(fm, I.data(), 1, nullptr, {mat});
+    Mat4d t = tools::translation(0, 0, 0.5);
+    r.add_instances(bm, t.data(), 1, nullptr, {mat});
+    Light point;
+    point.type = LightType::Point;
+    point.matrix = tools::translation(1.0, 0.5, 2.5);
+    point.energy = 500.0f;
+    point.radius = radius;
+    r.add_light(point);
+    Light sun;
+    sun.type = LightType::Sun;
+    const double eye[3] = {-3.0, 0.0, 3.0}, target[3] = {0.0, 0.0, 0.0};
+    sun.matrix = tools::look_at(eye, target);
+    sun.energy = 3.0f;
+    sun.angle = radius > 0 ? 0.05f : 0.0f;
+    r.add_light(sun);
+    World black;  // no world occlusion map
+    black.color = {0, 0, 0};
+    r.set_world(black);
+    Camera cam;
+    const double ceye[3] = {2.0, -2.0, 2.5}, ctarget[3] = {0.0, 0.0, 0.3};
+    cam.matrix = tools::look_at(ceye, ctarget);
+    cam.clip_end = 20.0f;
+    RenderSettings s;
+    s.width = width;
+    s.height = width * 9 / 16;
+    s.samples = samples;
+    s.shadow_quality = quality;
+    s.shadow_resolution = 8192;
+    return r.render(cam, s).timings;
+}
+}  // namespace
+
+TEST(Shadows, ResolutionFollowsTheProjectedFootprint) {
+    // Four times the pixels across: four times the texels (within the
+    // rounding to 32); twice the quality: twice the texels.
+    const FrameTimings small = footprint_frame(240, 1.0f, 0.0f);
+    const FrameTimings large = footprint_frame(960, 1.0f, 0.0f);
+    const FrameTimings fine = footprint_frame(240, 2.0f, 0.0f);
+    ASSERT_EQ(small.shadow_resolutions.size(), 2u);
+    for (std::size_t i = 0; i < 2; ++i) {
+        std::printf("light %zu: %d texels at 240 px, %d at 960 px, %d at 240 px quality 2\n", i,
+                    small.shadow_resolutions[i], large.shadow_resolutions[i], fine.shadow_resolutions[i]);
+        EXPECT_NEAR(double(large.shadow_resolutions[i]) / small.shadow_resolutions[i], 4.0, 4.0 * 32 / small.shadow_resolutions[i] + 0.01);
+        EXPECT_NEAR(double(fine.shadow_resolutions[i]) / small.shadow_resolutions[i], 2.0, 2.0 * 32 / small.shadow_resolutions[i] + 0.01);
+        EXPECT_LT(small.shadow_resolutions[i], 1024);  // the old fixed size was 1024 for any image
+    }
+    // The cap holds.
+    EXPECT_LE(*std::max_element(large.shadow_resolutions.begin(), large.shadow_resolutions.end()), 8192);
+}
+
+TEST(Shadows, LightsWithoutSizeRenderTheirMapsOnce) {
+    // 8 samples: a radius-0 point light (6 faces) and a sun of angle 0 (4
+    // cascades) draw 10 layers in all; with size, 10 per sample.
+    const FrameTimings hard = footprint_frame(160, 1.0f, 0.0f, 8);
+    const FrameTimings soft = footprint_frame(160, 1.0f, 0.2f, 8);
+    EXPECT_EQ(hard.shadow_layers_rendered, 10u);
+    EXPECT_EQ(soft.shadow_layers_rendered, 80u);
 }

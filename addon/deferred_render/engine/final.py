@@ -65,8 +65,9 @@ def _light_settings(scene):
     threshold = float(getattr(settings, "light_threshold", 1e-3)) if settings is not None else 1e-3
     exposure = float(getattr(scene.view_settings, "exposure", 0.0))
     shadow_resolution = int(getattr(settings, "shadow_resolution", 1024)) if settings is not None else 1024
+    shadow_quality = float(getattr(settings, "shadow_quality", 1.0)) if settings is not None else 1.0
     return {"light_culling": culling, "light_threshold": threshold / (2.0 ** exposure),
-            "shadow_resolution": shadow_resolution}
+            "shadow_resolution": shadow_resolution, "shadow_quality": shadow_quality}
 
 
 def _format_timings(timings):

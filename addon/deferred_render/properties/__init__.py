@@ -39,14 +39,26 @@ class DeferredRenderSettings(bpy.types.PropertyGroup):
         precision=5,
     )
     shadow_resolution: IntProperty(
-        name="Shadow Resolution",
+        name="Max Shadow Resolution",
         description=(
-            "Texels per side of each shadow cube face / sun cascade (lights with Cast Shadow "
-            "on); lowered automatically to fit the memory budget"
+            "Most texels per side of a shadow cube face / sun cascade (lights with Cast Shadow "
+            "on); each light gets what its footprint on screen needs (Shadow Quality), up to "
+            "this, lowered automatically to fit the memory budget"
         ),
         default=1024,
         min=64,
         max=8192,
+    )
+    shadow_quality: FloatProperty(
+        name="Shadow Quality",
+        description=(
+            "Shadow map texels per pixel of the visible surfaces a light reaches (90th "
+            "percentile); each light's maps are sized from this, up to Max Shadow Resolution"
+        ),
+        default=1.0,
+        min=0.05,
+        max=16.0,
+        soft_max=4.0,
     )
     device_index: IntProperty(
         name="Device",

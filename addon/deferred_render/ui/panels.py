@@ -50,6 +50,7 @@ class DEFERRED_RENDER_PT_lights(_EnginePanel, bpy.types.Panel):
         row = layout.row()
         row.active = settings.light_culling
         row.prop(settings, "light_threshold")
+        layout.prop(settings, "shadow_quality")
         layout.prop(settings, "shadow_resolution")
 
 

@@ -26,6 +26,8 @@ enum class Pass : std::uint32_t {
     Env,           // RGB: world colour where the background is seen
     Shadow,        // RGB: shadowed / unshadowed direct light (luminance; 1 = unshadowed), as
                    // EEVEE's Shadow pass (Cycles 3.x has none); 1 on background and unlit pixels
+    AO,            // RGB: ambient occlusion, the cosine-weighted visible fraction of the
+                   // hemisphere (occluders at any distance), background 0
     Count
 };
 

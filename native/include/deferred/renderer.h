@@ -72,10 +72,14 @@ struct RenderSettings {
     float light_threshold = 1e-3f;
     // Shadow maps for lights whose cast_shadow is on (one set per sample,
     // from that sample's point on the light: soft shadows converge with
-    // samples). Resolution per cube face / cascade, lowered to fit the
-    // memory budget.
+    // samples; lights without size are rendered once). Each light's
+    // resolution follows its projected footprint: shadow_quality texels per
+    // pixel of the visible surfaces it reaches (90th percentile), at most
+    // shadow_resolution per cube face / cascade side (clamped to 32..8192,
+    // lowered to fit the memory budget).
     bool shadows = true;
     int shadow_resolution = 1024;
+    float shadow_quality = 1.0f;
 };
 
 // One pass of a finished frame: rows bottom-up (row 0 is the bottom of the
@@ -95,6 +99,8 @@ struct FrameTimings {
     std::uint64_t tile_light_pairs = 0;  // entries in the culled per-tile light lists
     std::size_t shadow_map_bytes = 0;    // shadow map array + its depth buffer
     std::size_t shadowed_lights = 0;     // lights with shadow maps this frame
+    std::vector<int> shadow_resolutions;  // texels per side of each shadowed light's maps
+    std::size_t shadow_layers_rendered = 0;  // cube faces + cascades drawn over all samples
     std::size_t shadow_lights_dropped = 0;  // would cast shadows, over the layer/memory limits
     std::size_t gbuffer_bytes = 0;  // G-buffer + pass targets allocated for the frame
 };

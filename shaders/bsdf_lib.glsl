@@ -160,6 +160,22 @@ struct LobeEval {
     vec3 glossy;
 };
 
+/* Directional albedo of the Burley lobe without its colour, in closed form:
+ * (1/pi) integral over the hemisphere of principled_diffuse_factor, using
+ * the azimuthal averages <L.V> = mu mu_v, <(L.V)^2> = mu^2 mu_v^2 +
+ * (1 - mu^2)(1 - mu_v^2)/2 and integral mu^n (1 - mu)^5 = n! 5! / (n + 6)!
+ * (checked against quadrature to 1e-5). mu_v = N.V. */
+float principled_diffuse_albedo(float mu_v, float roughness) {
+    mu_v = clamp(mu_v, 0.0, 1.0);
+    float FV = schlick_fresnel(mu_v);
+    const float I15 = 1.0 / 42.0, I25 = 1.0 / 168.0, I35 = 1.0 / 504.0;
+    float t1 = (1.0 - 0.5 * FV) * (1.0 - I15);
+    float t2 = 2.0 * roughness * ((1.0 - FV) * (I15 + mu_v * I25) + FV * (0.5 + mu_v / 3.0));
+    float t3 = 2.0 * roughness * roughness * FV *
+               (I15 + 2.0 * mu_v * I25 + mu_v * mu_v * I35 + 0.5 * (1.0 - mu_v * mu_v) * (I15 - I35));
+    return t1 + t2 + t3;
+}
+
 /* The diffuse group alone (Burley + sheen), f cos for unit radiance. */
 vec3 principled_eval_diffuse(SurfaceParams s, PrincipledWeights w, vec3 N, vec3 V, vec3 L) {
     vec3 d = w.diffuse * principled_diffuse_factor(dot(N, L), dot(N, V), dot(L, V), s.roughness);

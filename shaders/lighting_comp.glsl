@@ -46,13 +46,25 @@ layout(binding = IMG_DIFF_LIGHT, rgba32f) uniform image2D diffuse_light;
 layout(binding = IMG_GLOSS_LIGHT, rgba32f) uniform image2D glossy_light;
 #endif
 
+/* Split-sum GGX directional albedo (F0 scale, bias) after Karis 2014. */
+vec2 karis_env_brdf(float roughness, float NdotV) {
+    const vec4 c0 = vec4(-1.0, -0.0275, -0.572, 0.022);
+    const vec4 c1 = vec4(1.0, 0.0425, 1.04, -0.04);
+    vec4 k = roughness * c0 + c1;
+    float a004 = min(k.x * k.x, exp2(-9.28 * max(NdotV, 0.0))) * k.x + k.y;
+    return vec2(-1.04, 1.04) * a004 + k.zw;
+}
+
 /* World light at max_bounces 0: the constant world colour Lw through the
  * rays that reach it.
- *  Unoccluded part, closed form: Lw times the diffuse closure colour
- *  (Lambertian irradiance pi Lw times f = c/pi) and times the GGX directional
- *  albedo of the specular closure, from the analytic fit of Karis 2014
- *  ("Physically Based Shading on Mobile"); both approximate what Cycles
- *  integrates.
+ *  Unoccluded part: Lw times each lobe's directional albedo. Burley diffuse:
+ *  closed form (principled_diffuse_albedo). Specular: E[F G1(L)] over GGX
+ *  visible normals (f cos / pdf = F G1(L)), and sheen: E[pi (1 - L.H)^5]
+ *  over cosine-distributed directions, 2 x 2 stratified points per film
+ *  sample placed at frame.sample_shift, so they converge over the samples to
+ *  the integrals Cycles computes. A mirror lobe reflects the world with its
+ *  Fresnel weight. Clearcoat: the split-sum fit of Karis 2014 ("Physically
+ *  Based Shading on Mobile") at IOR 1.5, an approximation.
  *  Occlusion, Monte Carlo over the film's samples (HAS_WORLD_OCCLUSION): each
  *  sample has one direction w of the sphere (uniform) and an orthographic
  *  map along it holding the nearest and farthest geometry, which gives the
@@ -61,22 +73,49 @@ layout(binding = IMG_GLOSS_LIGHT, rgba32f) uniform image2D glossy_light;
  *  The diffuse light blocked is subtracted as a control variate:
  *  Lw [A - 2 pi f(u) cos (1 - V(u))] has the expectation
  *  Lw [A - integral f cos (1 - V)] = Lw integral f cos V where A is the
- *  closed form, and no noise where nothing occludes. Ambient occlusion
+ *  unoccluded albedo above, and no noise where nothing occludes. Ambient occlusion
  *  AO = 1 - 2 cos(u) (1 - V(u)) (expectation: the cosine-weighted visible
- *  fraction, Cycles' AO pass) also scales the glossy part: specular
- *  occlusion from AO, an approximation (Cycles traces the lobe's own
- *  directions). */
+ *  fraction, Cycles' AO pass). The glossy part of rough lobes takes the same
+ *  control variate; for sharp lobes (alpha < 0.2) uniform directions would
+ *  be fireflies, so AO scales them: specular occlusion from AO, an
+ *  approximation (Cycles traces the lobe's own directions). */
+/* Lobes at least this rough (alpha >= 0.2, roughness >= 0.45) take their
+ * world occlusion from the sampled direction; sharper ones from AO. */
+#define GLOSSY_OCCLUSION_MIN_ALPHA2 0.04
+
 LightContribution world_light(PrincipledWeights w, SurfaceParams s, vec3 P, vec3 N, vec3 V, out float ao) {
     LightContribution r;
     vec3 Lw = frame.world_color.rgb;
     float NdotV = dot(N, V);
-    r.diffuse = Lw * (w.diffuse + w.sheen);
-    const vec4 c0 = vec4(-1.0, -0.0275, -0.572, 0.022);
-    const vec4 c1 = vec4(1.0, 0.0425, 1.04, -0.04);
-    vec4 k = s.roughness * c0 + c1;
-    float a004 = min(k.x * k.x, exp2(-9.28 * max(NdotV, 0.0))) * k.x + k.y;
-    vec2 AB = vec2(-1.04, 1.04) * a004 + k.zw;
-    r.glossy = Lw * (w.cspec0 * AB.x + AB.y) * w.specular;
+    r.diffuse = w.diffuse * principled_diffuse_albedo(NdotV, s.roughness);
+    r.glossy = principled_mirror_weight(w, N, V);
+    bool spec_lobe = w.specular != 0.0 && w.alpha2 > 1e-7;
+    if (spec_lobe || w.sheen != vec3(0.0)) {
+        vec3 T, B;
+        make_basis(N, T, B);
+        float alpha = sqrt(w.alpha2);
+        for (int j = 0; j < 2; ++j)
+            for (int i = 0; i < 2; ++i) {
+                vec2 u = (vec2(i, j) + frame.sample_shift.xy) * 0.5;
+                if (spec_lobe) {
+                    vec3 L = sample_ggx_vndf(N, V, alpha, u);
+                    float pdf = principled_specular_pdf(w, N, V, L);
+                    if (pdf > 0.0) r.glossy += principled_specular(w, N, V, L) * (0.25 / pdf);
+                }
+                if (w.sheen != vec3(0.0)) {
+                    /* Cosine-distributed: f cos / pdf = pi (1 - L.H)^5. */
+                    vec2 d = concentric_disk(u);
+                    vec3 L = T * d.x + B * d.y + N * sqrt(max(1.0 - dot(d, d), 0.0));
+                    r.diffuse += w.sheen * (0.25 * M_PI_F * principled_sheen_factor(N, V, L) / max(dot(N, L), 1e-8));
+                }
+            }
+    }
+    if (w.clearcoat > 0.0) {
+        vec2 AB = karis_env_brdf(sqrt(w.cc_alpha), NdotV);
+        r.glossy += vec3(0.25 * w.clearcoat * (0.04 * AB.x + AB.y));
+    }
+    r.diffuse *= Lw;
+    r.glossy *= Lw;
     ao = 1.0;
 #ifdef HAS_WORLD_OCCLUSION
     GpuShadow sh = shadows[int(frame.world_occlusion.x)];
@@ -88,7 +127,15 @@ LightContribution world_light(PrincipledWeights w, SurfaceParams s, vec3 P, vec3
         float blocked = 1.0 - world_visibility(sh, P, N, side);
         r.diffuse -= Lw * (2.0 * M_PI_F) * principled_eval_diffuse(s, w, N, V, u) * blocked;
         ao = 1.0 - 2.0 * cos_u * blocked;
-        r.glossy *= ao;
+        if (w.alpha2 >= GLOSSY_OCCLUSION_MIN_ALPHA2) {
+            /* A rough lobe: the same control variate (its f stays small). */
+            vec3 f = principled_specular(w, N, V, u) + vec3(principled_clearcoat(w, N, V, u));
+            r.glossy -= Lw * (2.0 * M_PI_F) * f * blocked;
+        } else {
+            /* A sharp lobe would make uniform directions fireflies: AO as
+             * its occlusion. */
+            r.glossy *= ao;
+        }
     }
 #endif
     return r;

@@ -19,6 +19,13 @@ gpu::mat4 to_gpu_mat(const glm::dmat4& m) {
 
 glm::dvec3 v3(const gpu::vec4& v) { return {v.x, v.y, v.z}; }
 
+// The world's map is tested in every direction, grazing ones included,
+// where the slope-scaled bias (up to 10 texels) hides occluders near the
+// receiver: it gets 4x the texel density of the lights' maps (measured on
+// the analytic scene against Cycles' AO pass, per object: at 1x our AO was
+// up to 7.6 % too high, i.e. occlusion missed; at 4x within 1.2 %).
+constexpr double kWorldQuality = 4.0;
+
 // The cube face basis of shadow_lib.glsl's cube_face(): forward F, right R, up U.
 void face_basis(int face, glm::dvec3& F, glm::dvec3& R, glm::dvec3& U) {
     const int axis = face / 2;
@@ -212,7 +219,7 @@ void ShadowModule::fit(const std::vector<Receiver>& receivers) {
         const gpu::GpuLight& l = e.light;
         if (e.world) {
             // One map over the receivers' bounding sphere.
-            for (const Receiver& p : receivers) need.push_back(quality_ * 2.0 * receivers_radius_ / p.footprint);
+            for (const Receiver& p : receivers) need.push_back(kWorldQuality * quality_ * 2.0 * receivers_radius_ / p.footprint);
         } else if (e.sun) {
             // A cascade of radius r spans 2r over `resolution` texels.
             for (const Receiver& p : receivers) {

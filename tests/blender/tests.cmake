@@ -30,6 +30,7 @@ set(DEFERRED_BLENDER_TESTS
     bad_scenes
     memory
     light_culling
+    world_ao
 )
 
 foreach(_name IN LISTS DEFERRED_BLENDER_TESTS)

@@ -577,4 +577,26 @@ double irradiance(const deferred::Light& light, dvec3 P, dvec3 N) {
     return Le * ellipse_projected_solid_angle(c, f.half_u, f.half_v, N);
 }
 
+Lobes hemisphere_albedo(const deferred::Material& m, dvec3 N, dvec3 V, int n) {
+    N = glm::normalize(N);
+    const dvec3 up = std::abs(N.z) < 0.999 ? dvec3(0, 0, 1) : dvec3(1, 0, 0);
+    const dvec3 T = glm::normalize(glm::cross(up, N)), B = glm::cross(N, T);
+    Lobes sum;
+    // d omega = d(cos theta) d phi: cells of equal solid angle.
+    const double cell = (1.0 / n) * (2.0 * M_PI / (4 * n));
+    for (int i = 0; i < n; ++i) {
+        const double c = (i + 0.5) / n, s = std::sqrt(std::max(0.0, 1.0 - c * c));
+        for (int j = 0; j < 4 * n; ++j) {
+            const double phi = 2.0 * M_PI * (j + 0.5) / (4 * n);
+            const dvec3 L = T * (s * std::cos(phi)) + B * (s * std::sin(phi)) + N * c;
+            const Lobes e = eval_principled(m, N, V, L);
+            sum.diffuse += e.diffuse * cell;
+            sum.sheen += e.sheen * cell;
+            sum.specular += e.specular * cell;
+            sum.clearcoat += e.clearcoat * cell;
+        }
+    }
+    return sum;
+}
+
 }  // namespace oracle

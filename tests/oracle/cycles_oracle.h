@@ -39,6 +39,12 @@ struct Lobes {
 };
 Lobes eval_principled(const deferred::Material& m, glm::dvec3 N, glm::dvec3 V, glm::dvec3 L);
 
+// Directional albedo of each lobe: the integral of eval_principled over the
+// hemisphere of N (what a constant white world gives an unoccluded point),
+// by the midpoint rule in (cos theta, phi) with n x 4n cells; good for the
+// smooth lobes (diffuse, sheen, rough specular), not for sharp highlights.
+Lobes hemisphere_albedo(const deferred::Material& m, glm::dvec3 N, glm::dvec3 V, int n = 256);
+
 // Pass colours (Cycles' shader_bsdf_diffuse / shader_bsdf_glossy: the sum of
 // the closure weights). DiffCol = base*(1-m) [+ sheen weight]; GlossCol = 1
 // for the specular closure [+ 1 for clearcoat]. A closure Cycles does not

@@ -33,6 +33,11 @@ def main():
         scene.deferred_render.samples = args.samples
     if args.percentage is not None:
         scene.render.resolution_percentage = args.percentage
+    # Every pass the engine produces: the flags saved in the samples, plus
+    # the passes added since they were generated (Shadow, AO).
+    for layer in scene.view_layers:
+        layer.use_pass_shadow = True
+        layer.use_pass_ambient_occlusion = True
     out = os.path.abspath(args.output)
     os.makedirs(os.path.dirname(out), exist_ok=True)
 

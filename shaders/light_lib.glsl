@@ -220,8 +220,10 @@ LightContribution shade_planar_light(vec3 c, vec3 a, vec3 b, bool ellipse, bool 
             vec3 spec = principled_specular(w, N, V, L);
             float cc = principled_clearcoat(w, N, V, L);
             if (bsdf_sampling) {
-                float pl = t2 / (cos_l * area), pb = principled_specular_pdf(w, N, V, L);
-                spec *= pl * pl / (pl * pl + pb * pb);
+                /* Power heuristic pl^2 / (pl^2 + pb^2), as a ratio: pl alone
+                 * overflows float for tiny lights (1 / area). */
+                float ratio = min(principled_specular_pdf(w, N, V, L) * cos_l * area / t2, 1e18);
+                spec *= 1.0 / (1.0 + ratio * ratio);
             }
             mc_diffuse += (diff * att - diffuse_at_J * (att_center * max(dot(N, L), 0.0))) * geom;
             mc_glossy += (spec + vec3(cc)) * (att * geom);
@@ -233,11 +235,13 @@ LightContribution shade_planar_light(vec3 c, vec3 a, vec3 b, bool ellipse, bool 
                 float tb, cos_b;
                 if (emitter_hit(c, a, b, ellipse, emit_dir, Lb, tb, cos_b)) {
                     float pb = principled_specular_pdf(w, N, V, Lb);
-                    if (pb > 0.0) {
-                        float pl = tb * tb / (cos_b * area);
+                    if (pb > 1e-30) {
+                        /* f / pb (= F G1 <= 1) times the power heuristic
+                         * 1 / (1 + (pl/pb)^2). */
+                        float ratio = min(tb * tb / (cos_b * area * pb), 1e18);
                         float attb = spot ? spot_attenuation(light, -Lb) : 1.0;
                         mc_glossy += principled_specular(w, N, V, Lb) *
-                                     (attb * pb / (pl * pl + pb * pb) / float(G * G));
+                                     (attb / pb / (1.0 + ratio * ratio) / float(G * G));
                     }
                 }
             }

@@ -25,8 +25,31 @@ layout(location = OUT_IDS) out uvec2 out_ids;
 layout(location = OUT_UV) out vec2 out_uv;
 #endif
 
+/* A per-pixel value in [0, 1) (integer hash, Jarzynski & Olano 2020, pcg). */
+float pixel_hash(uvec2 p) {
+    uint v = p.x * 1973u + p.y * 9277u;
+    v = v * 747796405u + 2891336453u;
+    uint w = ((v >> ((v >> 28u) + 4u)) ^ v) * 277803737u;
+    return float((w >> 22u) ^ w) * (1.0 / 4294967296.0);
+}
+
+/* A Mix Shader chain: take the alternative with its probability, using one
+ * uniform number per pixel and sample (the golden-ratio sequence rotated per
+ * pixel, so each pixel's choices are stratified over the samples). */
+GpuMaterial pick_material(uint id) {
+    GpuMaterial m = materials[id];
+    float u = fract(pixel_hash(uvec2(gl_FragCoord.xy)) + frame.sample_shift.z);
+    for (int k = 0; k < 16 && m.mix.x >= 0.0; ++k) {
+        float p = m.mix.y;
+        if (u >= p) break;
+        u = u / max(p, 1e-30);
+        m = materials[uint(m.mix.x)];
+    }
+    return m;
+}
+
 void main() {
-    GpuMaterial m = materials[v_material];
+    GpuMaterial m = pick_material(v_material);
 
     /* Geometric normal from the triangle's winding, in world space. Cycles
      * flips the normals of a surface hit from behind; a mirrored instance

@@ -53,14 +53,17 @@ SHARED_ASSERT_SIZE(GpuLight, 96);
  *   base_alpha : rgb base colour, a alpha
  *   params0    : metallic, roughness, specular, specular_tint
  *   params1    : sheen, sheen_tint, clearcoat, clearcoat_roughness
- *   emission   : rgb emission colour x strength, w = material pass index */
+ *   emission   : rgb emission colour x strength, w = material pass index
+ *   mix        : x material id taken instead with probability y (stochastic Mix Shader),
+ *                x < 0: none; zw unused */
 SHARED_STRUCT(GpuMaterial) {
     vec4 base_alpha;
     vec4 params0;
     vec4 params1;
     vec4 emission;
+    vec4 mix;
 };
-SHARED_ASSERT_SIZE(GpuMaterial, 64);
+SHARED_ASSERT_SIZE(GpuMaterial, 80);
 
 /* One mesh instance.
  *   model         : object -> camera-relative world
@@ -84,7 +87,9 @@ SHARED_ASSERT_SIZE(GpuInstance, 144);
  *   mist            : start, 1/depth, falloff (0 quadratic, 1 linear, 2 inverse quadratic), unused
  *   counts          : x light count, y requested pass bits, z light-shape points K per sample, w samples
  *   sample_shift    : xy this sample's point in [0,1)^2 inside every cell of the light-shape
- *                     grid and on the sun's disk (0.5: the centre, sample 0), zw unused
+ *                     grid and on the sun's disk (0.5: the centre, sample 0), z the
+ *                     sample's point of the 1D golden-ratio sequence (stochastic material
+ *                     mixes, rotated per pixel), w unused
  *   tiles           : x tiles per row, y tile rows, z 1 if light culling is on, w the pixel
  *                     filter's reach in whole pixels (tile frusta are widened by it)
  *   world_occlusion : x index (GpuShadow) of this sample's world-occlusion map, < 0 without

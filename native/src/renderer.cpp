@@ -259,6 +259,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         g.params1 = {m.sheen, m.sheen_tint, m.clearcoat, m.clearcoat_roughness};
         g.emission = {m.emission[0] * m.emission_strength, m.emission[1] * m.emission_strength,
                       m.emission[2] * m.emission_strength, float(m.pass_index)};
+        g.mix = {float(m.mix_with), m.mix_probability, 0.0f, 0.0f};
         materials.push_back(g);
     }
     Buffer instance_buffer = make_storage_buffer(instances.data(), instances.size() * sizeof(gpu::GpuInstance), "instances");
@@ -380,7 +381,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         fc.projection = to_gpu(projection);
         fc.inv_projection = to_gpu(glm::inverse(projection));
         // Where in each light-shape cell (and on the sun's disk) this sample looks.
-        fc.sample_shift = {u[2], u[3], 0.0f, 0.0f};
+        fc.sample_shift = {u[2], u[3], float(std::fmod(0.5 + sample * 0.6180339887498949, 1.0)), 0.0f};
         glNamedBufferSubData(frame_buffer.get(), 0, sizeof(fc), &fc);
         glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
 

@@ -199,6 +199,18 @@ std::uint32_t SceneStore::add_mesh(const MeshData& m) {
 
 std::uint32_t SceneStore::add_material(const Material& m) {
     validate_material(m);
+    if (m.mix_with >= 0) {
+        if (std::size_t(m.mix_with) >= materials_.size())
+            invalid("material: mix_with " + std::to_string(m.mix_with) + " is not an earlier material (" +
+                    std::to_string(materials_.size()) + " materials)");
+        int depth = 1;
+        for (std::int32_t k = m.mix_with; k >= 0; k = materials_[std::size_t(k)].mix_with) ++depth;
+        if (depth > kMaxMixChain)
+            invalid("material: a mix chain longer than " + std::to_string(kMaxMixChain) + " materials");
+    } else if (m.mix_with != -1) {
+        invalid("material: mix_with must be -1 (no mix) or a material id");
+    }
+    require_range(m.mix_probability, 0, 1, "material", "mix_probability");
     materials_.push_back(m);
     return static_cast<std::uint32_t>(materials_.size() - 1);
 }

@@ -216,8 +216,12 @@ def test_showcase(checks):
                  "Add(Principled, Emission) -> BSDF + emission radiance", str(mat["emission"]))
     cyl, _, slots = instance_of(rec, 4)
     mat = rec.materials[slots[0]]
-    checks.check(abs(mat["metallic"] - 0.3) < 1e-6 and np.allclose(mat["base_color"], (0.38, 0.73, 0.38), atol=1e-5),
-                 "Mix(Diffuse, Glossy, 0.3) -> lerp of the parameter sets", str(mat))
+    alt = rec.materials[mat.get("mix_with", -1)] if mat.get("mix_with", -1) >= 0 else {}
+    checks.check(mat["metallic"] == 0.0 and np.allclose(mat["base_color"], (0.2, 0.7, 0.2), atol=1e-6)
+                 and abs(mat["mix_probability"] - 0.3) < 1e-6 and alt.get("metallic") == 1.0
+                 and abs(alt.get("roughness", 0) - 0.25) < 1e-6 and alt.get("mix_with") == -1,
+                 "Mix(Diffuse, Glossy, 0.3) -> stochastic mix: Diffuse, else Glossy with probability 0.3",
+                 f"{mat} / {alt}")
 
 
 def test_instancing(checks):

@@ -238,3 +238,70 @@ TEST(MirrorReflection, RoughnessZeroReflectsAreaLightExactly) {
     EXPECT_EQ(inside, 12 * 12);
     EXPECT_EQ(wrong, 0);
 }
+
+// A Mix Shader of two BSDFs that one parameter set cannot represent (a
+// diffuse and a glossy metal): each sample shades a pixel with one of them,
+// chosen with the mix probability and stratified over the samples, so the
+// image converges to the weighted sum of the two materials' images.
+TEST(MaterialMix, StochasticMixConvergesToTheWeightedSum) {
+    auto render_with = [](const std::vector<Material>& chain, int samples) {
+        Renderer r;
+        tools::MeshArrays plane = tools::make_plane(20.0f);
+        const std::uint32_t mesh = r.add_mesh(plane.view());
+        std::uint32_t id = 0;
+        for (const Material& m : chain) id = r.add_material(m);
+        Mat4d I = identity_matrix();
+        r.add_instances(mesh, I.data(), 1, nullptr, {id});
+        Light square = make_light(LightType::Area, 0.3, 0.0, 1.0, 200.0f);
+        square.size = 1.0f;
+        r.add_light(square);
+        World black;
+        black.color = {0, 0, 0};
+        r.set_world(black);
+        RenderSettings s;
+        s.width = 32;
+        s.height = 32;
+        s.samples = samples;
+        s.filter_width = 0.01f;
+        s.passes = {Pass::DiffCol};
+        return r.render(deferred::testing::top_down_ortho(5.0, 3.0f), s);
+    };
+    Material diffuse = diffuse_only();
+    Material metal = rough_material();
+    metal.metallic = 1.0f;
+    metal.roughness = 0.3f;
+    const FrameResult a = render_with({diffuse}, 64), b = render_with({metal}, 64);
+    Material head = diffuse;
+    head.mix_with = 0;  // the metal, added first
+    head.mix_probability = 0.3f;
+    double previous = 1e9;
+    for (int samples : {4, 64}) {
+        const FrameResult mix = render_with({metal, head}, samples);
+        double se = 0, scale = 0, worst_col = 0;
+        for (int y = 0; y < 32; ++y)
+            for (int x = 0; x < 32; ++x) {
+                const glm::dvec3 expect = 0.7 * pixel3(*a.find(Pass::Combined), x, y) + 0.3 * pixel3(*b.find(Pass::Combined), x, y);
+                const glm::dvec3 d = pixel3(*mix.find(Pass::Combined), x, y) - expect;
+                se += glm::dot(d, d);
+                scale = std::max(scale, expect.x);
+                const glm::dvec3 col = 0.7 * pixel3(*a.find(Pass::DiffCol), x, y) + 0.3 * pixel3(*b.find(Pass::DiffCol), x, y);
+                worst_col = std::max(worst_col, glm::length(pixel3(*mix.find(Pass::DiffCol), x, y) - col));
+            }
+        const double rmse = std::sqrt(se / (3.0 * 32 * 32)) / scale;
+        std::printf("stochastic mix, %2d samples: RMSE %.4f of the brightest pixel, DiffCol max error %.4f\n",
+                    samples, rmse, worst_col);
+        EXPECT_LT(rmse, previous);
+        previous = rmse;
+        if (samples == 64) {
+            EXPECT_LT(rmse, 0.01);
+            // DiffCol: the share of samples taking the metal is 0.3 to within
+            // about 2 of the 64 choices (2/64 x |DiffCol| 0.94 = 0.03).
+            EXPECT_LT(worst_col, 0.035);
+        }
+    }
+    // The chain must point at earlier materials (no cycles).
+    Renderer r;
+    Material bad = diffuse;
+    bad.mix_with = 0;
+    EXPECT_THROW(r.add_material(bad), InvalidInput);
+}

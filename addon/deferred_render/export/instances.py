@@ -102,7 +102,7 @@ class SceneExporter:
             if notes:
                 self._warn_once(("material", key), material_export.warning_text(material, notes))
             try:
-                mat_id = self.renderer.add_material(**params)
+                mat_id = material_export.add_materials(self.renderer.add_material, params)
             except ValueError as ex:  # refused by the native validation: default surface
                 name = material.name if material is not None else "<default>"
                 self._warn_once(("material-refused", key), f"Material '{name}': {ex} (rendered with the default surface)")

@@ -13,9 +13,14 @@ per material. The node tree is reduced to that set:
 - Emission      -> black, non-reflective surface with that emission.
 - Add Shader    -> exact when at most one side reflects: that side's BSDF
   plus the emission of both.
-- Mix Shader    -> with a constant factor: every parameter interpolated
-  linearly (exact for colours, emission and lobe weights; an approximation
-  when the two sides' roughness differs). Factor 0 or 1 picks one side.
+- Mix Shader    -> with a constant factor. Sides that differ only in
+  colours (and emission) are mixed as one parameter set, exactly; a side
+  that only emits scales the other side's lobes. Otherwise (e.g. Diffuse +
+  Glossy, two roughnesses) the material becomes a *stochastic mix*: up to
+  MAX_COMPONENTS parameter sets with weights, one chosen per pixel and film
+  sample (``Renderer.add_material(mix_with=, mix_probability=)``), so the
+  accumulated image converges to Cycles' weighted closures. Factor 0 or 1
+  picks one side.
 - Reroute nodes are followed.
 
 Anything else (textures, groups, Transmission, Subsurface, normal maps...)
@@ -238,7 +243,63 @@ def _mix(a, b, t):
     return out
 
 
+# A stochastic mix: a list of (parameter set, weight), weights summing to 1.
+MAX_COMPONENTS = 8
+
+# Parameters that must be equal for two sets to mix exactly as one set
+# (radiance is linear in the colours and emission only).
+_SHAPE_PARAMS = ("metallic", "roughness", "specular", "specular_tint", "sheen", "sheen_tint",
+                 "clearcoat", "clearcoat_roughness", "alpha")
+
+
+def _components(x):
+    return x if isinstance(x, list) else [(x, 1.0)]
+
+
+def _exactly_mixable(a, b):
+    """True if (1-t) a + t b is the parameter set with interpolated colours:
+    same lobe shapes, and the base colour entering only linearly (no
+    specular or sheen tint, which divide by its luminance)."""
+    if any(a[k] != b[k] for k in _SHAPE_PARAMS):
+        return False
+    return a["specular_tint"] == 0.0 and (a["sheen"] == 0.0 or a["sheen_tint"] == 0.0)
+
+
+def _mixture(a, b, t, notes):
+    """(1 - t) a + t b for parameter sets or mixtures."""
+    if not isinstance(a, list) and not isinstance(b, list) and \
+            (not _reflects(a) or not _reflects(b) or _exactly_mixable(a, b)):
+        return _mix(a, b, t)
+    if not isinstance(a, list) and not _reflects(a):   # emission mixed into each component
+        return [(_mix(a, p, t), w) for p, w in _components(b)]
+    if not isinstance(b, list) and not _reflects(b):
+        return [(_mix(p, b, t), w) for p, w in _components(a)]
+    out = [(p, (1.0 - t) * w) for p, w in _components(a)] + [(p, t * w) for p, w in _components(b)]
+    merged = []
+    for p, w in out:
+        for i, (q, v) in enumerate(merged):
+            if _exactly_mixable(p, q):
+                merged[i] = (_mix(q, p, w / (v + w)), v + w)
+                break
+        else:
+            merged.append((p, w))
+    if len(merged) > MAX_COMPONENTS:
+        notes.append(f"more than {MAX_COMPONENTS} different shaders mixed (the smallest merged as parameters)")
+        merged.sort(key=lambda c: -c[1])
+        while len(merged) > MAX_COMPONENTS:
+            p, w = merged.pop()
+            q, v = merged[-1]
+            merged[-1] = (_mix(q, p, w / (v + w)), v + w)
+    return merged[0][0] if len(merged) == 1 else merged
+
+
 def _add(a, b, notes):
+    if isinstance(a, list) or isinstance(b, list):
+        # Emission added to a mixture: added to each component.
+        emitter, mixture = (b, a) if isinstance(a, list) else (a, b)
+        if isinstance(emitter, list) or _reflects(emitter):
+            raise _Unreduced("Add Shader of two reflecting BSDFs")
+        return [(_add(p, emitter, notes), w) for p, w in mixture]
     if _reflects(a) and _reflects(b):
         raise _Unreduced("Add Shader of two reflecting BSDFs")
     base = a if _reflects(a) else b
@@ -250,7 +311,8 @@ def _add(a, b, notes):
 
 
 def _reduce(node, notes, depth=0):
-    """Parameter set of a shader node (full dict), or raise _Unreduced."""
+    """Parameter set of a shader node (full dict) or a stochastic mix (a list
+    of (dict, weight)), or raise _Unreduced."""
     if depth > 32:
         raise _Unreduced("shader tree too deep")
     kind = node.bl_idname
@@ -280,7 +342,7 @@ def _reduce(node, notes, depth=0):
             return sides[0]
         if fac >= 1.0:
             return sides[1]
-        return _mix(sides[0], sides[1], fac)
+        return _mixture(sides[0], sides[1], fac, notes)
     raise _Unreduced(f"{node.bl_label or kind} shader")
 
 
@@ -340,7 +402,9 @@ def _sanitize(params, notes=None):
 def material_params(material):
     """Return (params, not_understood) for a material (None: default surface).
 
-    ``params`` are keyword arguments of ``Renderer.add_material``;
+    ``params`` are keyword arguments of ``Renderer.add_material``; for a
+    stochastic mix they also hold ``components``, a list of (keyword
+    arguments, weight) that add_materials() turns into a chain;
     ``not_understood`` lists what the reduction could not represent (empty if
     the material is rendered as Blender describes it).
     """
@@ -377,6 +441,13 @@ def material_params(material):
     except _Unreduced as ex:
         notes.insert(0, f"{ex} (used the viewport display colour)")
         return viewport_params(material), notes
+    if isinstance(params, list):
+        components = [(_sanitize(p, notes), w) for p, w in params]
+        for p, _ in components:
+            p["pass_index"] = int(material.pass_index)
+        params = dict(components[0][0])
+        params["components"] = components
+        return params, notes
     params = _sanitize(params, notes)
     params["pass_index"] = int(material.pass_index)
     return params, notes
@@ -385,3 +456,20 @@ def material_params(material):
 def warning_text(material, notes):
     name = material.name if material is not None else "<default>"
     return f"Material '{name}': not understood: " + "; ".join(notes)
+
+
+def add_materials(add_material, params):
+    """Create the material (a chain for a stochastic mix) with
+    ``add_material(**kwargs) -> id``; returns the id instances refer to."""
+    components = params.get("components")
+    if not components:
+        return add_material(**params)
+    # Last component first; each earlier one points at the rest of the chain
+    # and takes it with the rest's share of the weight.
+    next_id, rest = -1, 0.0
+    for p, w in reversed(components):
+        total = rest + w
+        probability = rest / total if next_id >= 0 and total > 0.0 else 0.0
+        next_id = add_material(**p, mix_with=next_id, mix_probability=probability)
+        rest = total
+    return next_id

@@ -49,7 +49,16 @@ struct Material {
     float emission_strength = 1.0f;
     float alpha = 1.0f;
     std::uint32_t pass_index = 0;  // IndexMA
+    // Stochastic mix (a Mix Shader of BSDFs that one parameter set cannot
+    // represent): each film sample shades a pixel with this material with
+    // probability 1 - mix_probability, or with material `mix_with` (an
+    // earlier id, itself possibly mixed: a chain of at most kMaxMixChain)
+    // with probability mix_probability, so the accumulated image is the
+    // weighted sum of the two, as Cycles' closure weights make it.
+    std::int32_t mix_with = -1;
+    float mix_probability = 0.0f;
 };
+constexpr int kMaxMixChain = 16;
 
 enum class LightType : std::uint32_t { Point = 0, Spot = 1, Sun = 2, Area = 3 };
 enum class AreaShape : std::uint32_t { Square = 0, Rectangle = 1, Disk = 2, Ellipse = 3 };

@@ -207,7 +207,7 @@ void declare_renderer(py::module_& m) {
              py::arg("mix_with") = -1, py::arg("mix_probability") = 0.0f)
         .def("add_instances",
              [](PyRenderer& self, const py::object& mesh_id_obj, const py::object& matrices,
-                const py::object& object_indices, const py::object& material_slots) {
+                const py::object& object_indices, const py::object& material_slots, bool cast_shadow) {
                  const std::uint32_t mesh_id = index_from(mesh_id_obj, "add_instances: mesh_id");
                  py::ssize_t n = 0, k = 0;
                  const double* rows = borrow<double>(matrices, "matrices", {-1, 4, 4}, &n);
@@ -231,10 +231,10 @@ void declare_renderer(py::module_& m) {
                          slots.push_back(index_from(h, "material_slots: element " + std::to_string(slots.size())));
                  }
                  py::gil_scoped_release release;
-                 self.get().add_instances(mesh_id, cols.data(), std::size_t(n), ids, slots);
+                 self.get().add_instances(mesh_id, cols.data(), std::size_t(n), ids, slots, cast_shadow);
              },
              py::arg("mesh_id"), py::arg("matrices"), py::kw_only(), py::arg("object_indices") = py::none(),
-             py::arg("material_slots") = py::none())
+             py::arg("material_slots") = py::none(), py::arg("cast_shadow") = true)
         .def("add_light",
              [](PyRenderer& self, const std::string& type, const py::object& matrix, const py::object& color,
                 float energy, float radius, float spot_size, float spot_blend, float angle, const std::string& shape,

@@ -228,13 +228,14 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     std::vector<gpu::GpuInstance> instances;
     instances.reserve(scene.instance_count());
     std::vector<std::uint32_t> slots;
-    struct Draw { std::uint32_t mesh, first, count; };
+    struct Draw { std::uint32_t mesh, first, count; bool cast_shadow; };
     std::vector<Draw> draws;
     for (const InstanceBatch& b : scene.batches()) {
         const std::uint32_t slot_offset = static_cast<std::uint32_t>(slots.size());
         slots.insert(slots.end(), b.material_slots.begin(), b.material_slots.end());
         const std::size_t n = b.object_indices.size();
-        draws.push_back({b.mesh_id, static_cast<std::uint32_t>(instances.size()), static_cast<std::uint32_t>(n)});
+        draws.push_back({b.mesh_id, static_cast<std::uint32_t>(instances.size()), static_cast<std::uint32_t>(n),
+                         b.cast_shadow});
         for (std::size_t i = 0; i < n; ++i) {
             Mat4d m;
             std::copy(b.matrices.begin() + long(i * 16), b.matrices.begin() + long(i * 16 + 16), m.begin());
@@ -345,16 +346,17 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     const GLuint groups_y = GLuint((settings.height + LIGHTING_GROUP_SIZE - 1) / LIGHTING_GROUP_SIZE);
     double geometry_ms = 0, lighting_ms = 0, passes_ms = 0, culling_ms = 0, shadow_ms = 0;
 
-    // Every mesh's instances, with the currently bound program (the geometry
-    // pass and the shadow maps share the vertex stage).
-    auto draw_scene = [&]() {
+    // Every mesh's instances (or only the shadow casters), with the currently
+    // bound program (the geometry pass and the shadow maps share the vertex
+    // stage).
+    auto draw_instances = [&](bool casters_only) {
         glBindVertexArray(empty_vao.get());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_INSTANCES, instance_buffer.get());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_MATERIAL_SLOTS, slot_buffer.get());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_MATERIALS, material_buffer.get());
         for (const Draw& d : draws) {
             const GpuMesh& mesh = scene.meshes()[d.mesh];
-            if (mesh.triangle_count == 0) continue;
+            if (mesh.triangle_count == 0 || (casters_only && !d.cast_shadow)) continue;
             auto bind = [&](GLuint slot, const Buffer& b) {
                 glBindBufferBase(GL_SHADER_STORAGE_BUFFER, slot, b ? b.get() : dummy_ssbo.get());
             };
@@ -367,7 +369,9 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
             glUniform1ui(1, mesh.flags);
             glDrawArraysInstanced(GL_TRIANGLES, 0, GLsizei(mesh.triangle_count * 3), GLsizei(d.count));
         }
-    };
+    };    auto draw_scene = [&]() { draw_instances(false); };
+    auto draw_shadow_casters = [&]() { draw_instances(true); };
+
 
     for (int sample = 0; sample < settings.samples; ++sample) {
         check_cancel();
@@ -402,7 +406,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         // at sample 0 from what the visible surfaces need.
         if (!shadows.empty()) {
             if (sample == 0) shadows.fit(visible_receivers(cam, settings.width, settings.height));
-            shadows.render_sample(*shaders, {u[2], u[3]}, world_sample_point(sample), draw_scene);
+            shadows.render_sample(*shaders, {u[2], u[3]}, world_sample_point(sample), draw_shadow_casters);
             shadow_ms += timer.lap_ms();
         }
 
@@ -528,8 +532,10 @@ std::uint32_t Renderer::add_material(const Material& material) {
 }
 
 void Renderer::add_instances(std::uint32_t mesh_id, const double* matrices, std::size_t count,
-                             const std::uint32_t* object_indices, const std::vector<std::uint32_t>& material_slots) {
-    impl_->thread.run([&] { impl_->scene.add_instances(mesh_id, matrices, count, object_indices, material_slots); });
+                             const std::uint32_t* object_indices, const std::vector<std::uint32_t>& material_slots,
+                             bool cast_shadow) {
+    impl_->thread.run(
+        [&] { impl_->scene.add_instances(mesh_id, matrices, count, object_indices, material_slots, cast_shadow); });
 }
 
 void Renderer::add_light(const Light& light) {

@@ -56,6 +56,7 @@ struct InstanceBatch {
     std::vector<double> matrices;             // 16 per instance, column-major
     std::vector<std::uint32_t> object_indices; // one per instance
     std::vector<std::uint32_t> material_slots; // slot -> material id
+    bool cast_shadow = true;                   // drawn into shadow and world occlusion maps
 };
 
 class SceneStore {
@@ -64,7 +65,8 @@ public:
     std::uint32_t add_mesh(const MeshData& mesh);  // validates, uploads
     std::uint32_t add_material(const Material& m);
     void add_instances(std::uint32_t mesh_id, const double* matrices, std::size_t count,
-                       const std::uint32_t* object_indices, const std::vector<std::uint32_t>& slots);
+                       const std::uint32_t* object_indices, const std::vector<std::uint32_t>& slots,
+                       bool cast_shadow = true);
     void add_light(const Light& light);
     void set_world(const World& world);
 

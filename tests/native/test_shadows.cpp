@@ -351,3 +351,46 @@ TEST(Shadows, LightsWithoutSizeRenderTheirMapsOnce) {
     EXPECT_EQ(hard.shadow_layers_rendered, 10u);
     EXPECT_EQ(soft.shadow_layers_rendered, 80u);
 }
+
+TEST(Shadows, InstancesThatCastNoShadowBlockNothing) {
+    // A plate between a point light (and the world) and the floor, seen from
+    // between them: with cast_shadow off (Blender's ray visibility "Shadow")
+    // the floor is lit as if the plate were not there; with it on, shadowed.
+    auto floor_light = [](bool plate, bool plate_casts) {
+        Renderer r;
+        tools::MeshArrays floor = tools::make_plane(10.0f, 4);
+        tools::MeshArrays board = tools::make_plane(1.0f);
+        const std::uint32_t fm = r.add_mesh(floor.view()), bm = r.add_mesh(board.view());
+        const std::uint32_t mat = r.add_material(grey());
+        Mat4d I = identity_matrix();
+        r.add_instances(fm, I.data(), 1, nullptr, {mat});
+        Mat4d up = tools::translation(0, 0, 1.0);
+        if (plate) r.add_instances(bm, up.data(), 1, nullptr, {mat}, plate_casts);
+        Light l;
+        l.type = LightType::Point;
+        l.matrix = tools::translation(0.0, 0.0, 3.0);
+        l.energy = 300.0f;
+        l.radius = 0.0f;
+        r.add_light(l);
+        World world;
+        world.color = {0.2f, 0.2f, 0.2f};
+        r.set_world(world);
+        RenderSettings s;
+        s.width = 16;
+        s.height = 16;
+        s.samples = 4;
+        return r.render(deferred::testing::top_down_ortho(0.5, 1.0f), s);
+    };
+    const FrameResult none = floor_light(false, false), ghost = floor_light(true, false),
+                      solid = floor_light(true, true);
+    double worst = 0, darkest = 1e9;
+    for (int y = 0; y < 16; ++y)
+        for (int x = 0; x < 16; ++x) {
+            const double open = pixel3(*none.find(Pass::Combined), x, y).x;
+            worst = std::max(worst, std::abs(pixel3(*ghost.find(Pass::Combined), x, y).x - open) / open);
+            darkest = std::min(darkest, open - pixel3(*solid.find(Pass::Combined), x, y).x);
+        }
+    std::printf("plate that casts no shadow: max relative change %.2e; casting: darker by >= %.3f\n", worst, darkest);
+    EXPECT_LT(worst, 1e-6);
+    EXPECT_GT(darkest, 0.1);
+}

@@ -57,11 +57,12 @@ class ExportStats:
 
 
 class _Group:
-    __slots__ = ("mesh_id", "material_ids", "matrices", "object_indices", "names")
+    __slots__ = ("mesh_id", "material_ids", "cast_shadow", "matrices", "object_indices", "names")
 
-    def __init__(self, mesh_id, material_ids):
+    def __init__(self, mesh_id, material_ids, cast_shadow):
         self.mesh_id = mesh_id
         self.material_ids = material_ids
+        self.cast_shadow = cast_shadow
         self.matrices = []
         self.object_indices = []
         self.names = []
@@ -197,10 +198,13 @@ class SceneExporter:
             return
         mesh_id, triangles = entry
         material_ids = self._slot_material_ids(ob)
-        group_key = (mesh_id, material_ids)
+        # Object > Visibility > Ray Visibility > Shadow: off, the object
+        # blocks no light (Cycles' shadow rays pass it) and no world light.
+        cast_shadow = bool(getattr(ob, "visible_shadow", True))
+        group_key = (mesh_id, material_ids, cast_shadow)
         group = self._groups.get(group_key)
         if group is None:
-            group = self._groups[group_key] = _Group(mesh_id, material_ids)
+            group = self._groups[group_key] = _Group(mesh_id, material_ids, cast_shadow)
         group.matrices.append(matrix)
         group.object_indices.append(ob.pass_index)
         group.names.append(ob.name)
@@ -229,7 +233,8 @@ class SceneExporter:
             try:
                 self.renderer.add_instances(group.mesh_id, matrices,
                                             object_indices=object_indices,
-                                            material_slots=list(group.material_ids))
+                                            material_slots=list(group.material_ids),
+                                            cast_shadow=group.cast_shadow)
             except ValueError as ex:  # refused by the native validation
                 names = ", ".join(f"'{n}'" for n in group.names[:3]) + (" ..." if len(group.names) > 3 else "")
                 self.warn(f"{len(group.names)} object(s) skipped ({names}): {ex}")

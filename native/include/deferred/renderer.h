@@ -126,10 +126,12 @@ public:
     std::uint32_t add_material(const Material& material);
     // `count` instances of `mesh_id`: world matrices (column-major, 16 doubles
     // each), object pass indices (may be null: 0), and a material slot map
-    // (slot -> material id; empty: slot i -> material i).
+    // (slot -> material id; empty: slot i -> material i). `cast_shadow`
+    // false: the instances are seen but block no light and no world light
+    // (Blender's Object > Visibility > Ray Visibility > Shadow).
     void add_instances(std::uint32_t mesh_id, const double* matrices, std::size_t count,
                        const std::uint32_t* object_indices,
-                       const std::vector<std::uint32_t>& material_slots);
+                       const std::vector<std::uint32_t>& material_slots, bool cast_shadow = true);
     void add_light(const Light& light);
     void set_world(const World& world);
 

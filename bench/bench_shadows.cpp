@@ -1,6 +1,8 @@
 // Shadow-map benchmark: the cost of shadows per light type and its share of
 // the frame, and how it grows with the number of shadow-casting lights.
-// Scene: a floor with 16 boxes; one sample; shadow maps 1024^2 per face.
+// Scene: a floor with 16 boxes, a black world (the world's occlusion map is
+// its own row: a grey world and no light); one sample; each light's map
+// size follows its footprint (shadow_quality 1, at most 1024).
 // Usage: deferred_bench_shadows [width height]
 #include "builtin_scenes.h"
 
@@ -22,6 +24,9 @@ void build_geometry(Renderer& r) {
         Mat4d t = tools::translation(-6.0 + 4.0 * (i % 4), -6.0 + 4.0 * (i / 4), 0.5);
         r.add_instances(bm, t.data(), 1, nullptr, {mat});
     }
+    World black;
+    black.color = {0, 0, 0};
+    r.set_world(black);
 }
 
 Light make(LightType type, double x, double y) {
@@ -54,17 +59,30 @@ int main(int argc, char** argv) {
         const double eye[3] = {0, -14, 10}, target[3] = {0, 0, 0};
         cam.matrix = tools::look_at(eye, target);
         cam.lens = 30.0f;
-        std::printf("GL: %s, %dx%d, 1 sample, shadow maps 1024^2 (ms, one frame after a warm-up)\n\n",
-                    r.gl_info().renderer.c_str(), w, h);
-        std::printf("| light | frame without shadows | frame with shadows | shadow maps | share of frame | map MiB |\n");
-        std::printf("|---|---:|---:|---:|---:|---:|\n");
+        std::printf("GL: %s, %dx%d, 1 sample (ms, one frame after a warm-up)\n\n", r.gl_info().renderer.c_str(), w,
+                    h);
+        std::printf("| light | frame without shadows | frame with shadows | shadow maps | share of frame | texels | map MiB |\n");
+        std::printf("|---|---:|---:|---:|---:|---:|---:|\n");
         const char* names[] = {"point", "spot", "sun", "area"};
         for (LightType type : {LightType::Point, LightType::Spot, LightType::Sun, LightType::Area}) {
             r.clear_scene();
             build_geometry(r);
             r.add_light(make(type, 2.0, -3.0));
             const FrameTimings off = frame(r, cam, w, h, false), on = frame(r, cam, w, h, true);
-            std::printf("| %s | %.0f | %.0f | %.0f | %.0f %% | %.0f |\n", names[int(type)], off.total_ms, on.total_ms,
+            std::printf("| %s | %.0f | %.0f | %.0f | %.0f %% | %d | %.0f |\n", names[int(type)], off.total_ms,
+                        on.total_ms, on.shadow_ms, 100.0 * on.shadow_ms / on.total_ms,
+                        on.shadow_resolutions.empty() ? 0 : on.shadow_resolutions[0],
+                        double(on.shadow_map_bytes) / (1 << 20));
+        }
+        {
+            // The world's occlusion map alone: a grey world, no light.
+            r.clear_scene();
+            build_geometry(r);
+            World grey;
+            grey.color = {0.5f, 0.5f, 0.5f};
+            r.set_world(grey);
+            const FrameTimings off = frame(r, cam, w, h, false), on = frame(r, cam, w, h, true);
+            std::printf("| world (occlusion map) | %.0f | %.0f | %.0f | %.0f %% | - | %.0f |\n", off.total_ms, on.total_ms,
                         on.shadow_ms, 100.0 * on.shadow_ms / on.total_ms, double(on.shadow_map_bytes) / (1 << 20));
         }
         std::printf("\n| shadowed point lights | frame | shadow maps | per light |\n|---:|---:|---:|---:|\n");

@@ -21,6 +21,24 @@ inline Camera top_down_ortho(double h, float extent) {
     return cam;
 }
 
+// One instance of a z = 0 plane (half size `half`, `subdivisions` per side)
+// with material `m` at `matrix` (identity: the floor); returns the material id.
+inline std::uint32_t add_plane(Renderer& r, const Material& m, float half = 20.0f, int subdivisions = 1,
+                               const Mat4d& matrix = identity_matrix(), bool cast_shadow = true) {
+    tools::MeshArrays plane = tools::make_plane(half, subdivisions);
+    const std::uint32_t mesh = r.add_mesh(plane.view());
+    const std::uint32_t mat = r.add_material(m);
+    r.add_instances(mesh, matrix.data(), 1, nullptr, {mat}, cast_shadow);
+    return mat;
+}
+
+// A constant world colour.
+inline void set_world_color(Renderer& r, float red, float green, float blue) {
+    World w;
+    w.color = {red, green, blue};
+    r.set_world(w);
+}
+
 inline glm::dvec3 pixel3(const PassImage& img, int x, int y) {
     const float* p = &img.pixels[(std::size_t(y) * img.width + x) * img.channels];
     return {p[0], img.channels > 1 ? p[1] : p[0], img.channels > 2 ? p[2] : p[0]};

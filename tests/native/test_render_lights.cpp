@@ -194,21 +194,15 @@ INSTANTIATE_TEST_SUITE_P(Lights, PlaneUnderLight, ::testing::ValuesIn(light_case
 // light, and black elsewhere (metallic: no diffuse).
 TEST(MirrorReflection, RoughnessZeroReflectsAreaLightExactly) {
     Renderer r;
-    tools::MeshArrays plane = tools::make_plane(20.0f);
-    const std::uint32_t mesh = r.add_mesh(plane.view());
     Material m = rough_material();
     m.metallic = 1.0f;
     m.roughness = 0.0f;
-    const std::uint32_t mat = r.add_material(m);
-    Mat4d I = identity_matrix();
-    r.add_instances(mesh, I.data(), 1, nullptr, {mat});
+    deferred::testing::add_plane(r, m);
     Light square = make_light(LightType::Area, 0.0, 0.0, 1.0, 200.0f);
     square.shape = AreaShape::Square;
     square.size = 1.0f;
     r.add_light(square);
-    World black;
-    black.color = {0, 0, 0};
-    r.set_world(black);
+    deferred::testing::set_world_color(r, 0, 0, 0);
     RenderSettings s;
     s.width = 48;
     s.height = 48;
@@ -255,9 +249,7 @@ TEST(MaterialMix, StochasticMixConvergesToTheWeightedSum) {
         Light square = make_light(LightType::Area, 0.3, 0.0, 1.0, 200.0f);
         square.size = 1.0f;
         r.add_light(square);
-        World black;
-        black.color = {0, 0, 0};
-        r.set_world(black);
+        deferred::testing::set_world_color(r, 0, 0, 0);
         RenderSettings s;
         s.width = 32;
         s.height = 32;

@@ -308,9 +308,7 @@ FrameTimings footprint_frame(int width, float quality, float radius, int samples
     sun.energy = 3.0f;
     sun.angle = radius > 0 ? 0.05f : 0.0f;
     r.add_light(sun);
-    World black;  // no world occlusion map
-    black.color = {0, 0, 0};
-    r.set_world(black);
+    deferred::testing::set_world_color(r, 0, 0, 0);  // no world occlusion map
     Camera cam;
     const double ceye[3] = {2.0, -2.0, 2.5}, ctarget[3] = {0.0, 0.0, 0.3};
     cam.matrix = tools::look_at(ceye, ctarget);
@@ -358,23 +356,15 @@ TEST(Shadows, InstancesThatCastNoShadowBlockNothing) {
     // the floor is lit as if the plate were not there; with it on, shadowed.
     auto floor_light = [](bool plate, bool plate_casts) {
         Renderer r;
-        tools::MeshArrays floor = tools::make_plane(10.0f, 4);
-        tools::MeshArrays board = tools::make_plane(1.0f);
-        const std::uint32_t fm = r.add_mesh(floor.view()), bm = r.add_mesh(board.view());
-        const std::uint32_t mat = r.add_material(grey());
-        Mat4d I = identity_matrix();
-        r.add_instances(fm, I.data(), 1, nullptr, {mat});
-        Mat4d up = tools::translation(0, 0, 1.0);
-        if (plate) r.add_instances(bm, up.data(), 1, nullptr, {mat}, plate_casts);
+        deferred::testing::add_plane(r, grey(), 10.0f, 4);
+        if (plate) deferred::testing::add_plane(r, grey(), 1.0f, 1, tools::translation(0, 0, 1.0), plate_casts);
         Light l;
         l.type = LightType::Point;
         l.matrix = tools::translation(0.0, 0.0, 3.0);
         l.energy = 300.0f;
         l.radius = 0.0f;
         r.add_light(l);
-        World world;
-        world.color = {0.2f, 0.2f, 0.2f};
-        r.set_world(world);
+        deferred::testing::set_world_color(r, 0.2f, 0.2f, 0.2f);
         RenderSettings s;
         s.width = 16;
         s.height = 16;

@@ -31,6 +31,46 @@ double plate_blocked_fraction(double px, double py, double a, double h) {
     return f;
 }
 
+// An open floor (nothing above it) under a constant world, seen in
+// perspective from `eye`, with Position and Depth.
+FrameResult open_floor(const Material& m, const glm::vec3& world, const double eye[3], const double target[3],
+                       int width, int height, int samples, PassSet passes = {}) {
+    Renderer r;
+    deferred::testing::add_plane(r, m, 50.0f, 8);
+    deferred::testing::set_world_color(r, world.x, world.y, world.z);
+    Camera cam;
+    cam.matrix = tools::look_at(eye, target);
+    RenderSettings s;
+    s.width = width;
+    s.height = height;
+    s.samples = samples;
+    s.filter_width = 0.01f;
+    s.passes = passes;
+    s.passes.insert(Pass::Position);
+    s.passes.insert(Pass::Depth);
+    return r.render(cam, s);
+}
+
+// Largest relative error of Combined against world x the oracle's
+// directional albedo (every lobe) over every `stride`-th floor pixel.
+double max_error_against_albedo(const FrameResult& f, const Material& m, const glm::vec3& world, const double eye[3],
+                                int stride, int quadrature) {
+    const PassImage& c = *f.find(Pass::Combined);
+    const PassImage& pos = *f.find(Pass::Position);
+    const PassImage& depth = *f.find(Pass::Depth);
+    double worst = 0;
+    for (int y = 0; y < c.height; ++y)
+        for (int x = 0; x < c.width; ++x) {
+            if ((x + y * c.width) % stride != 0 || pixel3(depth, x, y).x > 1e9) continue;
+            const glm::dvec3 V = glm::normalize(glm::dvec3(eye[0], eye[1], eye[2]) - pixel3(pos, x, y));
+            const oracle::Lobes a = oracle::hemisphere_albedo(m, glm::dvec3(0, 0, 1), V, quadrature);
+            const glm::dvec3 expect = (a.diffuse + a.sheen + a.specular + a.clearcoat) * glm::dvec3(world);
+            const glm::dvec3 got = pixel3(c, x, y);
+            for (int k = 0; k < 3; ++k) worst = std::max(worst, std::abs(got[k] - expect[k]) / expect[k]);
+        }
+    return worst;
+}
+
 Material white_floor() {
     Material m;
     m.base_color = {0.75f, 0.75f, 0.75f};
@@ -47,44 +87,21 @@ TEST(WorldLight, OpenFloorIsLitExactlyByTheWorld) {
     // whatever the sample's world direction (a false occlusion in any of the
     // 16 maps would darken pixels). Perspective at a grazing view so the
     // floor spans many depths and view angles.
-    Renderer r;
-    tools::MeshArrays floor = tools::make_plane(50.0f, 8);
-    const std::uint32_t mesh = r.add_mesh(floor.view());
-    const std::uint32_t mat = r.add_material(white_floor());
-    Mat4d I = identity_matrix();
-    r.add_instances(mesh, I.data(), 1, nullptr, {mat});
-    World world;
-    world.color = {1.0f, 0.5f, 0.25f};
-    r.set_world(world);
-    Camera cam;
+    const glm::vec3 world(1.0f, 0.5f, 0.25f);
     const double eye[3] = {0.0, -6.0, 1.0}, target[3] = {0.0, 10.0, 0.0};
-    cam.matrix = tools::look_at(eye, target);
-    RenderSettings s;
-    s.width = 96;
-    s.height = 64;
-    s.samples = 16;
-    s.filter_width = 0.01f;
-    s.passes = {Pass::AO, Pass::Depth, Pass::Position};
-    FrameResult f = r.render(cam, s);
-    const PassImage& pos = *f.find(Pass::Position);
-    const PassImage& c = *f.find(Pass::Combined);
+    const FrameResult f = open_floor(white_floor(), world, eye, target, 96, 64, 16, {Pass::AO});
     const PassImage& ao = *f.find(Pass::AO);
     const PassImage& depth = *f.find(Pass::Depth);
-    double worst = 0, worst_ao = 0;
+    double worst_ao = 0;
     int floor_pixels = 0;
-    for (int y = 0; y < s.height; ++y)
-        for (int x = 0; x < s.width; ++x) {
+    for (int y = 0; y < ao.height; ++y)
+        for (int x = 0; x < ao.width; ++x) {
             if (pixel3(depth, x, y).x > 1e9) continue;
             ++floor_pixels;
-            const glm::dvec3 got = pixel3(c, x, y);
-            if ((x + y) % 7 == 0) {  // the quadrature is slow: every 7th pixel
-                const glm::dvec3 V = glm::normalize(glm::dvec3(eye[0], eye[1], eye[2]) - pixel3(pos, x, y));
-                const glm::dvec3 albedo = oracle::hemisphere_albedo(white_floor(), glm::dvec3(0, 0, 1), V, 64).diffuse;
-                for (int k = 0; k < 3; ++k)
-                    worst = std::max(worst, std::abs(got[k] - albedo[k] * world.color[k]) / (albedo[k] * world.color[k]));
-            }
             worst_ao = std::max(worst_ao, std::abs(pixel3(ao, x, y).x - 1.0));
         }
+    // The quadrature is slow: every 7th pixel.
+    const double worst = max_error_against_albedo(f, white_floor(), world, eye, 7, 64);
     std::printf("open floor under the world: %d pixels, max relative error %.2e, max |AO - 1| %.2e\n",
                 floor_pixels, worst, worst_ao);
     EXPECT_GT(floor_pixels, 1000);
@@ -97,17 +114,9 @@ TEST(WorldLight, AmbientOcclusionUnderAPlateConvergesToItsFormFactor) {
     // between them at the 1 m around the centre. AO there is 1 minus the
     // plate's form factor (0.554 blocked at the centre).
     Renderer r;
-    tools::MeshArrays floor = tools::make_plane(20.0f, 4);
-    tools::MeshArrays plate = tools::make_plane(1.0f);
-    const std::uint32_t fm = r.add_mesh(floor.view()), pm = r.add_mesh(plate.view());
-    const std::uint32_t mat = r.add_material(white_floor());
-    Mat4d I = identity_matrix();
-    r.add_instances(fm, I.data(), 1, nullptr, {mat});
-    Mat4d up = tools::translation(0, 0, 1.0);
-    r.add_instances(pm, up.data(), 1, nullptr, {mat});
-    World world;
-    world.color = {1.0f, 1.0f, 1.0f};
-    r.set_world(world);
+    deferred::testing::add_plane(r, white_floor(), 20.0f, 4);
+    deferred::testing::add_plane(r, white_floor(), 1.0f, 1, tools::translation(0, 0, 1.0));
+    deferred::testing::set_world_color(r, 1.0f, 1.0f, 1.0f);
     const double centre = 1.0 - plate_blocked_fraction(0, 0, 1, 1);
     // The world's map has 4 x quality texels per pixel of the receivers; the
     // plate's edges land within a texel, a small over-occlusion that a finer
@@ -159,39 +168,11 @@ TEST(WorldLight, SpecularAndSheenAlbedoConvergeToTheOracle) {
     Material cloth = white_floor();
     cloth.sheen = 1.0f;
     cloth.sheen_tint = 0.0f;
+    const glm::vec3 white(1.0f);
+    const double eye[3] = {0.0, -4.0, 2.0}, target[3] = {0.0, 2.0, 0.0};
     for (const Material& m : {metal, cloth}) {
-        Renderer r;
-        tools::MeshArrays floor = tools::make_plane(50.0f, 8);
-        const std::uint32_t mesh = r.add_mesh(floor.view());
-        const std::uint32_t mat = r.add_material(m);
-        Mat4d I = identity_matrix();
-        r.add_instances(mesh, I.data(), 1, nullptr, {mat});
-        World world;
-        world.color = {1.0f, 1.0f, 1.0f};
-        r.set_world(world);
-        Camera cam;
-        const double eye[3] = {0.0, -4.0, 2.0}, target[3] = {0.0, 2.0, 0.0};
-        cam.matrix = tools::look_at(eye, target);
-        RenderSettings s;
-        s.width = 48;
-        s.height = 32;
-        s.samples = 64;
-        s.filter_width = 0.01f;
-        s.passes = {Pass::Position, Pass::Depth};
-        FrameResult f = r.render(cam, s);
-        const PassImage& c = *f.find(Pass::Combined);
-        const PassImage& pos = *f.find(Pass::Position);
-        const PassImage& depth = *f.find(Pass::Depth);
-        double worst = 0;
-        for (int y = 0; y < s.height; y += 3)
-            for (int x = 0; x < s.width; x += 3) {
-                if (pixel3(depth, x, y).x > 1e9) continue;
-                const glm::dvec3 V = glm::normalize(glm::dvec3(eye[0], eye[1], eye[2]) - pixel3(pos, x, y));
-                const oracle::Lobes a = oracle::hemisphere_albedo(m, glm::dvec3(0, 0, 1), V, 128);
-                const glm::dvec3 expect = a.diffuse + a.sheen + a.specular + a.clearcoat;
-                const glm::dvec3 got = pixel3(c, x, y);
-                for (int k = 0; k < 3; ++k) worst = std::max(worst, std::abs(got[k] - expect[k]) / expect[k]);
-            }
+        const FrameResult f = open_floor(m, white, eye, target, 48, 32, 64);
+        const double worst = max_error_against_albedo(f, m, white, eye, 3, 128);
         std::printf("world on an open floor, %s: max relative error %.2e at 64 samples\n",
                     m.metallic > 0 ? "metal roughness 0.4" : "diffuse + sheen", worst);
         EXPECT_LT(worst, 0.01);

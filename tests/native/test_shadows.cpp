@@ -20,6 +20,15 @@ Material grey() {
     return m;
 }
 
+// A 10 m floor with a 1 m grey cube resting on it at the origin.
+void add_cube_on_floor(Renderer& r) {
+    const std::uint32_t mat = deferred::testing::add_plane(r, grey(), 10.0f, 4);
+    tools::MeshArrays box = tools::make_box(0.5f, 0.5f, 0.5f);
+    const std::uint32_t bm = r.add_mesh(box.view());
+    Mat4d t = tools::translation(0, 0, 0.5);
+    r.add_instances(bm, t.data(), 1, nullptr, {mat});
+}
+
 // Combined with and without shadows for the same scene.
 std::pair<FrameResult, FrameResult> render_both(Renderer& r, const Camera& cam, int w, int h, int samples) {
     RenderSettings s;
@@ -218,14 +227,7 @@ TEST(Shadows, CubeRestingOnThePlaneCastsAnAttachedShadow) {
     // face: the lit gap is measured in pixels along each image row.
     for (LightType type : {LightType::Spot, LightType::Sun}) {
         Renderer r;
-        tools::MeshArrays floor = tools::make_plane(10.0f, 4);
-        tools::MeshArrays box = tools::make_box(0.5f, 0.5f, 0.5f);
-        const std::uint32_t fm = r.add_mesh(floor.view()), bm = r.add_mesh(box.view());
-        const std::uint32_t mat = r.add_material(grey());
-        Mat4d I = identity_matrix();
-        r.add_instances(fm, I.data(), 1, nullptr, {mat});
-        Mat4d t = tools::translation(0, 0, 0.5);
-        r.add_instances(bm, t.data(), 1, nullptr, {mat});
+        add_cube_on_floor(r);
         Light l;
         l.type = type;
         const double eye[3] = {-3.0, 0.0, 3.0}, target[3] = {0.0, 0.0, 0.0};
@@ -287,14 +289,7 @@ namespace {
 // camera looks down at the cube from 3 m.
 FrameTimings footprint_frame(int width, float quality, float radius, int samples = 1) {
     Renderer r;
-    tools::MeshArrays floor = tools::make_plane(10.0f, 4);
-    tools::MeshArrays box = tools::make_box(0.5f, 0.5f, 0.5f);
-    const std::uint32_t fm = r.add_mesh(floor.view()), bm = r.add_mesh(box.view());
-    const std::uint32_t mat = r.add_material(grey());
-    Mat4d I = identity_matrix();
-    r.add_instances(fm, I.data(), 1, nullptr, {mat});
-    Mat4d t = tools::translation(0, 0, 0.5);
-    r.add_instances(bm, t.data(), 1, nullptr, {mat});
+    add_cube_on_floor(r);
     Light point;
     point.type = LightType::Point;
     point.matrix = tools::translation(1.0, 0.5, 2.5);

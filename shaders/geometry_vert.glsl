@@ -14,6 +14,10 @@ layout(std430, binding = SSBO_MATERIAL_SLOTS) readonly buffer Slots { uint mater
 
 layout(location = 0) uniform uint instance_offset;
 layout(location = 1) uniform uint mesh_flags;  /* 1: normals, 2: uvs, 4: material indices */
+/* Only the instances that can be seen (by the camera, or cast into the
+ * shadow map being drawn) are drawn, listed in instance_remap from
+ * instance_offset on. */
+layout(std430, binding = SSBO_INSTANCE_REMAP) readonly buffer Remap { uint instance_remap[]; };
 #ifdef SHADOW_PASS
 /* Shadow maps (shadow_frag.glsl): camera-relative world -> the face's clip space. */
 layout(location = 2) uniform mat4 shadow_view_projection;
@@ -29,7 +33,7 @@ flat out uint v_mirrored;
 void main() {
     const uint corner = uint(gl_VertexID);
     const uint triangle = corner / 3u;
-    GpuInstance inst = instances[instance_offset + uint(gl_InstanceID)];
+    GpuInstance inst = instances[instance_remap[instance_offset + uint(gl_InstanceID)]];
 
     const uint vi = indices[corner];
     vec3 p = vec3(positions[3u * vi], positions[3u * vi + 1u], positions[3u * vi + 2u]);

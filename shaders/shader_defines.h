@@ -20,6 +20,7 @@
 #define SSBO_TILE_LIGHTS 10
 #define SSBO_CULL_COUNTER 11
 #define SSBO_SHADOWS 12
+#define SSBO_INSTANCE_REMAP 13 /* shadow maps: the instances left after culling, per draw */
 
 /* Textures sampled by compute passes (G-buffer inputs) */
 #define TEX_DEPTH 0

@@ -227,6 +227,10 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     // --- Sync: pack per-frame buffers, camera-relative in double. ---
     std::vector<gpu::GpuInstance> instances;
     instances.reserve(scene.instance_count());
+    // Camera-relative bounding sphere of every instance (shadow-map culling).
+    struct Bound { glm::dvec3 center; double radius; };
+    std::vector<Bound> bounds;
+    bounds.reserve(scene.instance_count());
     std::vector<std::uint32_t> slots;
     struct Draw { std::uint32_t mesh, first, count; bool cast_shadow; };
     std::vector<Draw> draws;
@@ -243,6 +247,11 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
             model[3] = glm::dvec4(glm::dvec3(model[3]) - cam.position, 1.0);
             const glm::dmat3 linear(model);
             const double det = glm::determinant(linear);
+            const GpuMesh& mesh = scene.meshes()[b.mesh_id];
+            const double scale = std::max({glm::length(linear[0]), glm::length(linear[1]), glm::length(linear[2])});
+            bounds.push_back({glm::dvec3(model * glm::dvec4(mesh.bound_center[0], mesh.bound_center[1],
+                                                              mesh.bound_center[2], 1.0)),
+                              mesh.bound_radius * scale});
             glm::dmat3 nm = std::abs(det) > 1e-300 ? glm::transpose(glm::inverse(linear)) : glm::dmat3(1.0);
             gpu::GpuInstance g{};
             g.model = to_gpu(model);
@@ -346,31 +355,81 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     const GLuint groups_y = GLuint((settings.height + LIGHTING_GROUP_SIZE - 1) / LIGHTING_GROUP_SIZE);
     double geometry_ms = 0, lighting_ms = 0, passes_ms = 0, culling_ms = 0, shadow_ms = 0;
 
-    // Every mesh's instances (or only the shadow casters), with the currently
-    // bound program (the geometry pass and the shadow maps share the vertex
-    // stage).
-    auto draw_instances = [&](bool casters_only) {
+    auto bind_mesh = [&](const GpuMesh& mesh) {
+        auto bind = [&](GLuint slot, const Buffer& b) {
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, slot, b ? b.get() : dummy_ssbo.get());
+        };
+        bind(SSBO_POSITIONS, mesh.positions);
+        bind(SSBO_INDICES, mesh.indices);
+        bind(SSBO_NORMALS, mesh.normals);
+        bind(SSBO_UVS, mesh.uvs);
+        bind(SSBO_MATERIAL_INDICES, mesh.material_indices);
+    };
+    auto bind_scene_buffers = [&]() {
         glBindVertexArray(empty_vao.get());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_INSTANCES, instance_buffer.get());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_MATERIAL_SLOTS, slot_buffer.get());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_MATERIALS, material_buffer.get());
+    };
+    // The instances whose bounding sphere passes `keep`, drawn with the
+    // currently bound program through the remap buffer (geometry_vert.glsl):
+    // the geometry pass keeps what the camera can see, each shadow map what
+    // can cast into it (casters_only: without the cast_shadow-off ones).
+    std::vector<std::uint32_t> remap;
+    Buffer remap_buffer;
+    std::size_t remap_capacity = 0;
+    std::uint64_t shadow_instances_drawn = 0, camera_instances_drawn = 0;
+    auto draw_culled = [&](const ShadowModule::CasterTest& keep, bool casters_only) -> std::uint64_t {
+        remap.clear();
+        struct Culled { const Draw* draw; std::uint32_t first, count; };
+        std::vector<Culled> culled;
         for (const Draw& d : draws) {
-            const GpuMesh& mesh = scene.meshes()[d.mesh];
-            if (mesh.triangle_count == 0 || (casters_only && !d.cast_shadow)) continue;
-            auto bind = [&](GLuint slot, const Buffer& b) {
-                glBindBufferBase(GL_SHADER_STORAGE_BUFFER, slot, b ? b.get() : dummy_ssbo.get());
-            };
-            bind(SSBO_POSITIONS, mesh.positions);
-            bind(SSBO_INDICES, mesh.indices);
-            bind(SSBO_NORMALS, mesh.normals);
-            bind(SSBO_UVS, mesh.uvs);
-            bind(SSBO_MATERIAL_INDICES, mesh.material_indices);
-            glUniform1ui(0, d.first);
-            glUniform1ui(1, mesh.flags);
-            glDrawArraysInstanced(GL_TRIANGLES, 0, GLsizei(mesh.triangle_count * 3), GLsizei(d.count));
+            if ((casters_only && !d.cast_shadow) || scene.meshes()[d.mesh].triangle_count == 0) continue;
+            const std::uint32_t first = std::uint32_t(remap.size());
+            for (std::uint32_t i = d.first; i < d.first + d.count; ++i)
+                if (keep(bounds[i].center, bounds[i].radius)) remap.push_back(i);
+            if (remap.size() > first) culled.push_back({&d, first, std::uint32_t(remap.size()) - first});
         }
-    };    auto draw_scene = [&]() { draw_instances(false); };
-    auto draw_shadow_casters = [&]() { draw_instances(true); };
+        if (culled.empty()) return 0;
+        if (remap.size() > remap_capacity) {
+            remap_capacity = std::max<std::size_t>(remap.size(), instances.size());
+            remap_buffer = make_storage_buffer(nullptr, remap_capacity * sizeof(std::uint32_t), "instance remap");
+        }
+        glNamedBufferSubData(remap_buffer.get(), 0, GLsizeiptr(remap.size() * sizeof(std::uint32_t)), remap.data());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_INSTANCE_REMAP, remap_buffer.get());
+        bind_scene_buffers();
+        for (const Culled& c : culled) {
+            const GpuMesh& mesh = scene.meshes()[c.draw->mesh];
+            bind_mesh(mesh);
+            glUniform1ui(0, c.first);
+            glUniform1ui(1, mesh.flags);
+            glDrawArraysInstanced(GL_TRIANGLES, 0, GLsizei(mesh.triangle_count * 3), GLsizei(c.count));
+        }
+        return remap.size();
+    };
+    // The camera's frustum, widened by the pixel filter's reach (jittered
+    // samples look that far) and a pixel, in the view space of `cam`.
+    const double margin_px = double(reach) + 1.0;
+    const glm::dvec4 vp = cam.viewplane;
+    const double px = (vp.y - vp.x) / settings.width * margin_px, py = (vp.w - vp.z) / settings.height * margin_px;
+    const double left = vp.x - px, right = vp.y + px, bottom = vp.z - py, top = vp.w + py;
+    const glm::dmat3 to_view(cam.view);
+    auto in_view = [&, left, right, bottom, top](const glm::dvec3& c, double r) {
+        const glm::dvec3 v = to_view * c;
+        const double d = -v.z;
+        if (d + r < cam.clip_start || d - r > cam.clip_end) return false;
+        if (cam.orthographic)
+            return v.x + r >= left && v.x - r <= right && v.y + r >= bottom && v.y - r <= top;
+        auto inside = [&](double x, double lo, double hi) {
+            return (lo * d - x) / std::sqrt(1.0 + lo * lo) <= r && (x - hi * d) / std::sqrt(1.0 + hi * hi) <= r;
+        };
+        return inside(v.x, left, right) && inside(v.y, bottom, top);
+    };
+    auto draw_scene = [&]() { camera_instances_drawn += draw_culled(in_view, false); };
+    auto draw_shadow_casters = [&](const ShadowModule::CasterTest& casts) {
+        shadow_instances_drawn += draw_culled(casts, true);
+    };
+
 
 
     for (int sample = 0; sample < settings.samples; ++sample) {
@@ -498,6 +557,8 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     result.timings.shadowed_lights = shadows.count();
     result.timings.shadow_resolutions = shadows.resolutions();
     result.timings.shadow_layers_rendered = shadows.layers_rendered();
+    result.timings.shadow_instances_drawn = shadow_instances_drawn;
+    result.timings.camera_instances_drawn = camera_instances_drawn;
     result.timings.shadow_lights_dropped = shadows.dropped();
     result.timings.tile_light_pairs = culled ? culling.last_index_count() : 0;
     result.timings.passes_ms = passes_ms;

@@ -178,6 +178,22 @@ std::uint32_t SceneStore::add_mesh(const MeshData& m) {
     GpuMesh g;
     g.triangle_count = static_cast<std::uint32_t>(m.triangle_count);
     g.max_material_index = max_mat;
+    if (m.vertex_count > 0) {
+        double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
+        for (std::size_t v = 0; v < m.vertex_count; ++v)
+            for (int k = 0; k < 3; ++k) {
+                lo[k] = std::min(lo[k], double(m.positions[v * 3 + k]));
+                hi[k] = std::max(hi[k], double(m.positions[v * 3 + k]));
+            }
+        for (int k = 0; k < 3; ++k) g.bound_center[k] = 0.5 * (lo[k] + hi[k]);
+        double r2 = 0.0;
+        for (std::size_t v = 0; v < m.vertex_count; ++v) {
+            double d2 = 0.0;
+            for (int k = 0; k < 3; ++k) d2 += (m.positions[v * 3 + k] - g.bound_center[k]) * (m.positions[v * 3 + k] - g.bound_center[k]);
+            r2 = std::max(r2, d2);
+        }
+        g.bound_radius = std::sqrt(r2);
+    }
     g.positions = make_storage_buffer(m.positions, m.vertex_count * 3 * sizeof(float), "positions");
     g.indices = make_storage_buffer(m.indices, m.triangle_count * 3 * sizeof(std::uint32_t), "indices");
     if (m.corner_normals) {

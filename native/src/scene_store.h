@@ -18,6 +18,10 @@ struct GpuMesh {
     std::uint32_t triangle_count = 0;
     std::uint32_t flags = 0;          // 1 normals, 2 uvs, 4 material indices (geometry_vert.glsl)
     std::int32_t max_material_index = 0;
+    // Bounding sphere of the vertices (object space), for culling instances
+    // out of shadow maps.
+    double bound_center[3] = {0.0, 0.0, 0.0};
+    double bound_radius = 0.0;
 };
 
 // Input contract of the scene API (README, "Hard cases and bad input").

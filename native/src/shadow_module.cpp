@@ -88,6 +88,38 @@ glm::dmat4 ortho_map(const glm::dvec3& axis, const glm::dvec3& center, double ra
     return m;
 }
 
+// Casters of a cube face from `origin`: spheres that reach into the face's
+// frustum (tan <= SHADOW_CUBE_OVERLAP around F) within `reach`.
+ShadowModule::CasterTest face_casters(int face, const glm::dvec3& origin, double reach) {
+    glm::dvec3 F, R, U;
+    face_basis(face, F, R, U);
+    // Side planes of the frustum x <= k z: unit normal (1, -k)/sqrt(1 + k^2).
+    const double k = SHADOW_CUBE_OVERLAP, inv = 1.0 / std::sqrt(1.0 + k * k);
+    return [=](const glm::dvec3& c, double r) {
+        const glm::dvec3 v = c - origin;
+        const double z = glm::dot(v, F);
+        if (z < -r || glm::length(v) - r > reach) return false;
+        const double x = glm::dot(v, R), y = glm::dot(v, U);
+        return (std::abs(x) - k * z) * inv <= r && (std::abs(y) - k * z) * inv <= r;
+    };
+}
+
+// Casters of an orthographic map over the sphere (center, radius) along
+// `axis`: spheres inside its square cross-section; `light_side_only`: only
+// those before the sphere's far end along the axis (a one-sided map; the
+// world's map keeps both sides).
+ShadowModule::CasterTest ortho_casters(const glm::dvec3& axis, const glm::dvec3& center, double radius,
+                                       bool light_side_only) {
+    const glm::dvec3 R = glm::normalize(glm::cross(axis, std::abs(axis.z) < 0.999 ? glm::dvec3(0, 0, 1) : glm::dvec3(1, 0, 0)));
+    const glm::dvec3 U = glm::cross(R, axis);
+    const double far_end = glm::dot(center, axis) + radius;
+    return [=](const glm::dvec3& c, double r) {
+        const glm::dvec3 v = c - center;
+        if (std::abs(glm::dot(v, R)) > radius + r || std::abs(glm::dot(v, U)) > radius + r) return false;
+        return !light_side_only || glm::dot(c, axis) - r <= far_end;
+    };
+}
+
 }  // namespace
 
 void ShadowModule::begin_frame(const CameraMatrices& camera, int max_resolution, float quality,
@@ -295,8 +327,7 @@ std::vector<int> ShadowModule::resolutions() const {
 }
 
 void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float, 2>& u,
-                                 const std::array<float, 2>& u_world,
-                                 const std::function<void()>& bind_and_draw_scene) {
+                                 const std::array<float, 2>& u_world, const DrawCasters& draw_casters) {
     if (entries_.empty()) return;
     ShaderVariant variant;
     variant.defines.push_back("SHADOW_PASS");
@@ -310,7 +341,7 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
 
     std::vector<gpu::GpuShadow> shadows(entries_.size());
     auto draw_layer = [&](int layer, const glm::dmat4& view_projection, const glm::dvec3& origin, int kind,
-                          const glm::dvec3& axis) {
+                          const glm::dvec3& axis, const CasterTest& casts) {
         glNamedFramebufferTextureLayer(fbo_.get(), GL_COLOR_ATTACHMENT0, maps_.get(), 0, layer);
         const GLenum draw = GL_COLOR_ATTACHMENT0;
         glNamedFramebufferDrawBuffers(fbo_.get(), 1, &draw);
@@ -322,7 +353,7 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
         glUniformMatrix4fv(2, 1, GL_FALSE, &m.cols[0].x);
         glUniform4f(3, float(origin.x), float(origin.y), float(origin.z), float(kind));
         glUniform3f(4, float(axis.x), float(axis.y), float(axis.z));
-        bind_and_draw_scene();
+        draw_casters(casts);
         ++layers_rendered_;
     };
 
@@ -368,7 +399,9 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
             for (int k = 0; k < SHADOW_CASCADE_COUNT; ++k) {
                 const glm::dmat4 m = ortho_map(axis, cs.center[k], cs.radius[k], camera_.clip_end);
                 g.cascade[k] = to_gpu_mat(m);
-                if (draw) draw_layer(e.first_layer + k, m, glm::dvec3(0.0), SHADOW_CASCADES, axis);
+                if (draw)
+                    draw_layer(e.first_layer + k, m, glm::dvec3(0.0), SHADOW_CASCADES, axis,
+                               ortho_casters(axis, cs.center[k], cs.radius[k], true));
             }
             g.point = {float(axis.x), float(axis.y), float(axis.z), float(e.first_layer)};
             g.params = {float(SHADOW_CASCADES), float(e.resolution), 0.0f, uv_scale};
@@ -389,11 +422,16 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
             } else if (l.strength.w > 0) {
                 disk = concentric_disk(u[0], u[1]) * double(l.strength.w);
             }
+            // A caster between the light and a receiver it reaches is nearer
+            // than the receiver: nothing beyond the influence radius casts.
+            const double reach = l.params.z >= 0.0f ? double(l.params.z) : 1e300;
             for (int face = 0; face < 6; ++face) {
                 glm::dvec3 F, R, U;
                 face_basis(face, F, R, U);
                 const glm::dvec3 pf = p + R * disk.x + U * disk.y;
-                if (draw) draw_layer(e.first_layer + face, cube_face_matrix(face, pf), pf, SHADOW_CUBE, glm::dvec3(0.0));
+                if (draw)
+                    draw_layer(e.first_layer + face, cube_face_matrix(face, pf), pf, SHADOW_CUBE, glm::dvec3(0.0),
+                               face_casters(face, pf, reach));
             }
             g.point = {float(p.x), float(p.y), float(p.z), float(e.first_layer)};
             g.params = {float(SHADOW_CUBE), float(e.resolution), float(2.0 * SHADOW_CUBE_OVERLAP / e.resolution),
@@ -423,7 +461,7 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
         glUniformMatrix4fv(2, 1, GL_FALSE, &m.cols[0].x);
         glUniform4f(3, 0.0f, 0.0f, 0.0f, float(SHADOW_CASCADES));
         glUniform3f(4, float(world_axis.x), float(world_axis.y), float(world_axis.z));
-        bind_and_draw_scene();
+        draw_casters(ortho_casters(world_axis, receivers_center_, receivers_radius_, false));
         ++layers_rendered_;
         glDisable(GL_BLEND);
         glDisable(GL_DEPTH_CLAMP);

@@ -69,10 +69,16 @@ public:
     void fit(const std::vector<Receiver>& receivers);
     // Renders every assigned light's maps for one film sample; `draw` issues
     // the scene's draw calls with the currently bound program.
+    // Whether an instance's bounding sphere (camera-relative centre, radius)
+    // can cast into the map being drawn.
+    using CasterTest = std::function<bool(const glm::dvec3&, double)>;
+    // Draws the scene's shadow casters that pass the test, with the
+    // currently bound program.
+    using DrawCasters = std::function<void(const CasterTest&)>;
     // `u`: the sample's point on the light shapes; `u_world`: its direction
     // of the world (uniform on the sphere).
     void render_sample(ShaderLibrary& shaders, const std::array<float, 2>& u, const std::array<float, 2>& u_world,
-                       const std::function<void()>& bind_and_draw_scene);
+                       const DrawCasters& draw_casters);
     int world_index() const { return world_index_; }  // shadow index of the world's map, -1: none
     void bind() const;
     bool empty() const { return entries_.empty(); }

@@ -25,7 +25,9 @@
 // The world (offer_world()): per sample one orthographic RG32F map along a
 // direction of the sphere over the visible receivers' bounding sphere,
 // storing the nearest and the farthest geometry along it (MAX blending), so
-// it answers for that direction and its opposite.
+// it answers for that direction and its opposite; 4x the lights' texel
+// density. Each map draws only the instances whose bounding sphere can cast
+// into it (the caller's DrawCasters applies the test).
 #pragma once
 
 #include "camera.h"
@@ -54,8 +56,9 @@ public:
     // along a new direction of the sphere, fitted to the visible receivers.
     void offer_world();
     // Keeps as many offered lights as the array layers and the memory budget
-    // allow (suns first, then by power over squared distance to the camera),
-    // allocates their maps and returns light_index -> shadow index (-1: none).
+    // allow (the world and suns first, then by power over squared distance
+    // to the camera) and returns light_index -> shadow index (-1: none); the
+    // maps are allocated by fit().
     std::vector<int> allocate(std::size_t light_count);
     std::size_t dropped() const { return dropped_; }  // offered but over the limits
     // A visible surface point: camera-relative position, view depth, and the
@@ -67,14 +70,13 @@ public:
     // Chooses each kept light's resolution from the receivers it reaches and
     // (re)allocates the array; call before the first render_sample().
     void fit(const std::vector<Receiver>& receivers);
-    // Renders every assigned light's maps for one film sample; `draw` issues
-    // the scene's draw calls with the currently bound program.
     // Whether an instance's bounding sphere (camera-relative centre, radius)
     // can cast into the map being drawn.
     using CasterTest = std::function<bool(const glm::dvec3&, double)>;
     // Draws the scene's shadow casters that pass the test, with the
     // currently bound program.
     using DrawCasters = std::function<void(const CasterTest&)>;
+    // Renders every kept light's maps (and the world's) for one film sample.
     // `u`: the sample's point on the light shapes; `u_world`: its direction
     // of the world (uniform on the sphere).
     void render_sample(ShaderLibrary& shaders, const std::array<float, 2>& u, const std::array<float, 2>& u_world,

@@ -67,6 +67,24 @@ inline Mat4d rotation_z(double angle, double tx = 0, double ty = 0, double tz = 
     return m;
 }
 
+// The parameter corners of the material (issue 7): every roughness given x
+// metallic 0/1 x specular 0/0.5 x base colour 0/1.
+inline std::vector<Material> corner_materials(std::initializer_list<float> roughnesses) {
+    std::vector<Material> out;
+    for (float roughness : roughnesses)
+        for (float metallic : {0.0f, 1.0f})
+            for (float specular : {0.0f, 0.5f})
+                for (float base : {0.0f, 1.0f}) {
+                    Material m;
+                    m.base_color = {base, base, base};
+                    m.roughness = roughness;
+                    m.metallic = metallic;
+                    m.specular = specular;
+                    out.push_back(m);
+                }
+    return out;
+}
+
 // The library's own Mat4d -> glm conversion and the native tests' camera.
 using deferred::to_glm;
 inline Camera top_down(double h, float extent) { return deferred::testing::top_down_ortho(h, extent); }

@@ -61,20 +61,10 @@ glm::dvec3 dir(double e, double phi) { return {std::cos(e) * std::cos(phi), std:
 // Same floats for the oracle as for the GPU.
 glm::dvec3 as_float(glm::dvec3 v) { return glm::dvec3(glm::vec3(v)); }
 
+// The shared corners (roughness 0, 0.01, 0.5, 1) plus clearcoat and sheen at their ends.
 std::vector<Material> corner_materials() {
-    std::vector<Material> out;
-    for (float roughness : {0.0f, 0.01f, 0.5f, 1.0f})
-        for (float metallic : {0.0f, 1.0f})
-            for (float specular : {0.0f, 0.5f})
-                for (float base : {0.0f, 1.0f}) {
-                    Material m;
-                    m.base_color = {base, base, base};
-                    m.roughness = roughness;
-                    m.metallic = metallic;
-                    m.specular = specular;
-                    out.push_back(m);
-                }
-    Material cc;  // clearcoat and sheen at their ends
+    std::vector<Material> out = robustness::corner_materials({0.0f, 0.01f, 0.5f, 1.0f});
+    Material cc;
     cc.clearcoat = 1.0f;
     cc.clearcoat_roughness = 0.0f;
     cc.sheen = 1.0f;

@@ -19,16 +19,7 @@ using namespace deferred::robustness;
 
 namespace {
 
-glm::dvec3 px3(const PassImage& img, int x, int y) {
-    const float* p = pixel(img, x, y);
-    return {p[0], img.channels > 1 ? p[1] : p[0], img.channels > 2 ? p[2] : p[0]};
-}
-
-World black_world() {
-    World w;
-    w.color = {0, 0, 0};
-    return w;
-}
+using deferred::testing::pixel3;
 
 // The built-in showcase (tools/builtin_scenes.cpp), everything moved by
 // `o` (camera too).
@@ -45,6 +36,44 @@ std::uint32_t add_plane(Renderer& r, float half, const Mat4d& m, const Material&
     const std::uint32_t id = r.add_material(mat);
     r.add_instances(mesh, m.data(), 1, &object_index, {id});
     return mesh;
+}
+
+// Combined against the oracle's direct light from `lights` at the rendered
+// Position and Normal (passes Position, Normal; with Depth, background pixels
+// are skipped): the largest relative error, floored at 1 % of the oracle's
+// brightest value, and the brightest values of both.
+struct OracleComparison {
+    double max_relative = 0, oracle_max = 0, gpu_max = 0;
+};
+OracleComparison compare_with_oracle(const FrameResult& f, const std::vector<Light>& lights, const Material& m,
+                                     const glm::dvec3& cam_pos) {
+    const PassImage& C = *f.find(Pass::Combined);
+    const PassImage& P = *f.find(Pass::Position);
+    const PassImage& N = *f.find(Pass::Normal);
+    const PassImage* D = f.find(Pass::Depth);
+    OracleComparison out;
+    std::vector<std::pair<double, double>> values;
+    for (int y = 0; y < C.height; ++y)
+        for (int x = 0; x < C.width; ++x) {
+            if (D && *pixel(*D, x, y) > 1e9f) continue;  // background
+            const glm::dvec3 p = pixel3(P, x, y), n = glm::normalize(pixel3(N, x, y));
+            const glm::dvec3 v = glm::normalize(cam_pos - p);
+            glm::dvec3 expect(0.0);
+            for (const Light& l : lights) {
+                const oracle::Shade sh = oracle::shade(l, m, p, n, v, 1);
+                expect += sh.diffuse + sh.glossy;
+            }
+            const glm::dvec3 got = pixel3(C, x, y);
+            for (int k = 0; k < 3; ++k) {
+                values.emplace_back(got[k], expect[k]);
+                out.oracle_max = std::max(out.oracle_max, expect[k]);
+                out.gpu_max = std::max(out.gpu_max, got[k]);
+            }
+        }
+    for (auto [g, o] : values)
+        out.max_relative = std::max(out.max_relative,
+                                    std::abs(g - o) / std::max(std::abs(o), 0.01 * std::max(out.oracle_max, 1e-3)));
+    return out;
 }
 
 double max_abs_diff(const PassImage& a, const PassImage& b, int channels = -1) {
@@ -111,14 +140,14 @@ TEST(HardCases, ShowcaseFarFromOrigin) {
                     }
                 if (!interior) continue;
                 // Shading: relative difference (floor 1e-3) on pixels away from edges.
-                const glm::dvec3 a = px3(*ref.find(Pass::Combined), x, y), b = px3(*f.find(Pass::Combined), x, y);
+                const glm::dvec3 a = pixel3(*ref.find(Pass::Combined), x, y), b = pixel3(*f.find(Pass::Combined), x, y);
                 for (int k = 0; k < 3; ++k)
                     worst_shading = std::max(worst_shading, std::abs(a[k] - b[k]) / std::max(std::abs(a[k]), 1e-3));
                 const double da = *pixel(*ref.find(Pass::Depth), x, y), db = *pixel(*f.find(Pass::Depth), x, y);
                 if (da < 1e9) worst_depth = std::max(worst_depth, std::abs(da - db) / da);
                 if (v != 0) {
-                    const glm::dvec3 pa = px3(*ref.find(Pass::Position), x, y) + o,
-                                     pb = px3(*f.find(Pass::Position), x, y);
+                    const glm::dvec3 pa = pixel3(*ref.find(Pass::Position), x, y) + o,
+                                     pb = pixel3(*f.find(Pass::Position), x, y);
                     worst_position = std::max(worst_position, glm::length(pa - pb));
                 }
             }
@@ -229,50 +258,21 @@ TEST(HardCases, MaterialCornersMatchOracle) {
     s.passes = {Pass::Combined, Pass::Position, Pass::Normal, Pass::GlossDir, Pass::GlossCol};
     double worst = 0, worst_firefly = 0, worst_delta_gloss = 0;
     int cases = 0;
-    for (float roughness : {0.0f, 1.0f})
-        for (float metallic : {0.0f, 1.0f})
-            for (float specular : {0.0f, 0.5f})
-                for (float base : {0.0f, 1.0f}) {
-                    Material m;
-                    m.base_color = {base, base, base};
-                    m.roughness = roughness;
-                    m.metallic = metallic;
-                    m.specular = specular;
-                    r.clear_scene();
-                    add_plane(r, 5.0f, identity_matrix(), m, 1);
-                    r.add_light(point);
-                    r.add_light(sun);
-                    r.set_world(black_world());
-                    const FrameResult f = r.render(cam, s);
-                    ASSERT_TRUE(check_finite(f).ok()) << check_finite(f).first;
-                    const PassImage& C = *f.find(Pass::Combined);
-                    const PassImage& P = *f.find(Pass::Position);
-                    const PassImage& N = *f.find(Pass::Normal);
-                    std::vector<std::pair<double, double>> values;
-                    double oracle_max = 0, gpu_max = 0;
-                    for (int y = 0; y < s.height; ++y)
-                        for (int x = 0; x < s.width; ++x) {
-                            const glm::dvec3 p = px3(P, x, y), n = glm::normalize(px3(N, x, y));
-                            const glm::dvec3 v = glm::normalize(cam_pos - p);
-                            const oracle::Shade a = oracle::shade(point, m, p, n, v, 1);
-                            const oracle::Shade b = oracle::shade(sun, m, p, n, v, 1);
-                            const glm::dvec3 expect = a.diffuse + a.glossy + b.diffuse + b.glossy;
-                            const glm::dvec3 got = px3(C, x, y);
-                            for (int k = 0; k < 3; ++k) {
-                                values.emplace_back(got[k], expect[k]);
-                                oracle_max = std::max(oracle_max, expect[k]);
-                                gpu_max = std::max(gpu_max, got[k]);
-                            }
-                        }
-                    double err = 0;
-                    for (auto [g, o] : values)
-                        err = std::max(err, std::abs(g - o) / std::max(std::abs(o), 0.01 * std::max(oracle_max, 1e-3)));
-                    worst = std::max(worst, err);
-                    if (oracle_max > 0) worst_firefly = std::max(worst_firefly, gpu_max / oracle_max - 1.0);
-                    else worst_firefly = std::max(worst_firefly, gpu_max);
-                    if (roughness == 0.0f) worst_delta_gloss = std::max(worst_delta_gloss, max_value(*f.find(Pass::GlossDir)));
-                    ++cases;
-                }
+    for (const Material& m : corner_materials({0.0f, 1.0f})) {
+        r.clear_scene();
+        add_plane(r, 5.0f, identity_matrix(), m, 1);
+        r.add_light(point);
+        r.add_light(sun);
+        deferred::testing::set_world_color(r, 0, 0, 0);
+        const FrameResult f = r.render(cam, s);
+        ASSERT_TRUE(check_finite(f).ok()) << check_finite(f).first;
+        const OracleComparison c = compare_with_oracle(f, {point, sun}, m, cam_pos);
+        worst = std::max(worst, c.max_relative);
+        if (c.oracle_max > 0) worst_firefly = std::max(worst_firefly, c.gpu_max / c.oracle_max - 1.0);
+        else worst_firefly = std::max(worst_firefly, c.gpu_max);
+        if (m.roughness == 0.0f) worst_delta_gloss = std::max(worst_delta_gloss, max_value(*f.find(Pass::GlossDir)));
+        ++cases;
+    }
     std::printf("material corners (%d materials, point r=0 + sun): max relative error vs oracle %.3g, "
                 "brightest pixel above the oracle's brightest by %.2e, glossy light at roughness 0: %.3g\n",
                 cases, worst, worst_firefly, worst_delta_gloss);
@@ -313,7 +313,7 @@ TEST(HardCases, GrazingViewAndLight) {
             point.energy = 1e4f;
             point.matrix = tools::translation(30, 5, 1e-3);
             r.add_light(point);
-            r.set_world(black_world());
+            deferred::testing::set_world_color(r, 0, 0, 0);
             const double ve = view_deg * M_PI / 180;
             Camera cam;
             const double eye[3] = {-20 * std::cos(ve), 0, 20 * std::sin(ve)}, target[3] = {0, 0, 0};
@@ -325,30 +325,9 @@ TEST(HardCases, GrazingViewAndLight) {
             const FiniteReport fin = check_finite(f);
             nonfinite += int(fin.bad);
             EXPECT_TRUE(fin.ok()) << "view " << view_deg << " deg, light " << light_deg << " deg: " << fin.first;
-            const PassImage& C = *f.find(Pass::Combined);
-            const PassImage& P = *f.find(Pass::Position);
-            const PassImage& N = *f.find(Pass::Normal);
-            const PassImage& D = *f.find(Pass::Depth);
-            double oracle_max = 0, gpu_max = 0, err = 0;
-            std::vector<std::pair<double, double>> values;
-            for (int y = 0; y < s.height; ++y)
-                for (int x = 0; x < s.width; ++x) {
-                    if (*pixel(D, x, y) > 1e9f) continue;  // background (above the horizon)
-                    const glm::dvec3 p = px3(P, x, y), n = glm::normalize(px3(N, x, y));
-                    const glm::dvec3 v = glm::normalize(cam_pos - p);
-                    const oracle::Shade a = oracle::shade(sun, m, p, n, v, 1);
-                    const oracle::Shade b = oracle::shade(point, m, p, n, v, 1);
-                    const glm::dvec3 expect = a.diffuse + a.glossy + b.diffuse + b.glossy;
-                    const glm::dvec3 got = px3(C, x, y);
-                    for (int k = 0; k < 3; ++k) {
-                        values.emplace_back(got[k], expect[k]);
-                        oracle_max = std::max(oracle_max, expect[k]);
-                        gpu_max = std::max(gpu_max, got[k]);
-                    }
-                }
-            for (auto [g, o] : values) err = std::max(err, std::abs(g - o) / std::max(std::abs(o), 0.01 * oracle_max));
-            worst = std::max(worst, err);
-            if (oracle_max > 0) worst_firefly = std::max(worst_firefly, gpu_max / oracle_max - 1.0);
+            const OracleComparison c = compare_with_oracle(f, {sun, point}, m, cam_pos);
+            worst = std::max(worst, c.max_relative);
+            if (c.oracle_max > 0) worst_firefly = std::max(worst_firefly, c.gpu_max / c.oracle_max - 1.0);
         }
     std::printf("grazing view 1..0.01 deg x light 1..0 deg: non-finite %d, max relative error vs oracle (at the "
                 "rendered P, N) %.3g, brightest pixel above the oracle's brightest by %.2e\n",
@@ -390,7 +369,7 @@ TEST(HardCases, ShadingNormalsFacingAway) {
             r.add_instances(mesh, I.data(), 1, nullptr, {mat});
             light.matrix = tools::translation(0.5, 0.2, cam_z > 0 ? 1.5 : -1.5);
             r.add_light(light);
-            r.set_world(black_world());
+            deferred::testing::set_world_color(r, 0, 0, 0);
             Camera cam = [&] {
                 const double eye[3] = {0.1, 0.0, cam_z}, target[3] = {0, 0, 0};
                 Camera c;
@@ -412,11 +391,11 @@ TEST(HardCases, ShadingNormalsFacingAway) {
             std::vector<std::pair<double, double>> values;
             for (int y = 0; y < s.height; ++y)
                 for (int x = 0; x < s.width; ++x) {
-                    const glm::dvec3 n = px3(N, x, y);
+                    const glm::dvec3 n = pixel3(N, x, y);
                     worst_normal = std::max(worst_normal, glm::length(n - expect_n));
-                    const glm::dvec3 p = px3(P, x, y), v = glm::normalize(cam_pos - p);
+                    const glm::dvec3 p = pixel3(P, x, y), v = glm::normalize(cam_pos - p);
                     const oracle::Shade o = oracle::shade(light, m, p, glm::normalize(n), v, 1);
-                    const glm::dvec3 got = px3(C, x, y);
+                    const glm::dvec3 got = pixel3(C, x, y);
                     for (int k = 0; k < 3; ++k) {
                         values.emplace_back(got[k], o.diffuse[k] + o.glossy[k]);
                         oracle_max = std::max(oracle_max, o.diffuse[k] + o.glossy[k]);
@@ -443,7 +422,7 @@ FrameResult lit_floor(Renderer& r, const std::vector<Light>& lights, int size = 
     m.roughness = 0.5f;
     add_plane(r, 10.0f, identity_matrix(), m, 1);
     for (const Light& l : lights) r.add_light(l);
-    r.set_world(black_world());
+    deferred::testing::set_world_color(r, 0, 0, 0);
     RenderSettings s;
     s.width = size;
     s.height = size;
@@ -579,8 +558,8 @@ TEST(HardCases, TinyAreaLightsMatchOracle) {
         const PassImage& P = *f.find(Pass::Position);
         for (int y = 0; y < 32; ++y)
             for (int x = 0; x < 32; ++x) {
-                const oracle::Shade o = oracle::shade(l, m, px3(P, x, y), glm::dvec3(0, 0, 1), glm::dvec3(0, 0, 1), 4);
-                const glm::dvec3 got = px3(*f.find(Pass::Combined), x, y), e = o.diffuse + o.glossy;
+                const oracle::Shade o = oracle::shade(l, m, pixel3(P, x, y), glm::dvec3(0, 0, 1), glm::dvec3(0, 0, 1), 4);
+                const glm::dvec3 got = pixel3(*f.find(Pass::Combined), x, y), e = o.diffuse + o.glossy;
                 for (int k = 0; k < 3; ++k) {
                     peak = std::max(peak, e[k]);
                     err = std::max(err, std::abs(got[k] - e[k]));
@@ -712,7 +691,7 @@ TEST(HardCases, MirroredAndNonUniformScale) {
         for (int y = 0; y < 32; ++y)
             for (int x = 0; x < 32; ++x)
                 if (*pixel(*f.find(Pass::IndexOB), x, y) == 1.0f)
-                    worst_inward = std::min(worst_inward, glm::dot(px3(N, x, y), glm::normalize(px3(P, x, y))));
+                    worst_inward = std::min(worst_inward, glm::dot(pixel3(N, x, y), glm::normalize(pixel3(P, x, y))));
     }
     // Non-uniform scale: a 45 deg slope z = x with its exact normal, scaled
     // by (3, 1, 0.5) and rotated: the normal must follow the inverse transpose.
@@ -732,7 +711,7 @@ TEST(HardCases, MirroredAndNonUniformScale) {
     for (int y = 0; y < 32; ++y)
         for (int x = 0; x < 32; ++x)
             if (*pixel(*fs.find(Pass::IndexOB), x, y) == 1.0f) {
-                const double c = std::clamp(glm::dot(glm::normalize(px3(*fs.find(Pass::Normal), x, y)), expect), -1.0, 1.0);
+                const double c = std::clamp(glm::dot(glm::normalize(pixel3(*fs.find(Pass::Normal), x, y)), expect), -1.0, 1.0);
                 worst_deg = std::max(worst_deg, std::acos(c) * 180 / M_PI);
             }
     std::printf("mirrored spheres (-1,1,1), (1,-1,1), (-1,-1,-1): max diff vs unmirrored %.3g, min N.outward %.4f; "

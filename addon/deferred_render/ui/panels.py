@@ -23,15 +23,18 @@ class _EnginePanel:
     def poll(cls, context):
         return context.engine in cls.COMPAT_ENGINES
 
+    def split_layout(self):
+        """The panel's layout with labels on the left, as Blender's own panels."""
+        layout = self.split_layout()
+        return layout
+
 
 class DEFERRED_RENDER_PT_sampling(_EnginePanel, bpy.types.Panel):
     bl_label = "Sampling"
     bl_context = "render"
 
     def draw(self, context):
-        layout = self.layout
-        layout.use_property_split = True
-        layout.use_property_decorate = False
+        layout = self.split_layout()
         settings = context.scene.deferred_render
         layout.prop(settings, "samples")
 
@@ -42,9 +45,7 @@ class DEFERRED_RENDER_PT_lights(_EnginePanel, bpy.types.Panel):
     bl_options = {'DEFAULT_CLOSED'}
 
     def draw(self, context):
-        layout = self.layout
-        layout.use_property_split = True
-        layout.use_property_decorate = False
+        layout = self.split_layout()
         settings = context.scene.deferred_render
         layout.prop(settings, "light_culling")
         row = layout.row()
@@ -60,9 +61,7 @@ class DEFERRED_RENDER_PT_film(_EnginePanel, bpy.types.Panel):
     bl_options = {'DEFAULT_CLOSED'}
 
     def draw(self, context):
-        layout = self.layout
-        layout.use_property_split = True
-        layout.use_property_decorate = False
+        layout = self.split_layout()
         layout.prop(context.scene.render, "film_transparent", text="Transparent")
 
 
@@ -72,9 +71,7 @@ class DEFERRED_RENDER_PT_device(_EnginePanel, bpy.types.Panel):
     bl_options = {'DEFAULT_CLOSED'}
 
     def draw(self, context):
-        layout = self.layout
-        layout.use_property_split = True
-        layout.use_property_decorate = False
+        layout = self.split_layout()
         layout.prop(context.scene.deferred_render, "device_index")
         error = native.error_message()
         if error:
@@ -123,9 +120,7 @@ class DEFERRED_RENDER_PT_passes(_EnginePanel, bpy.types.Panel):
     bl_context = "view_layer"
 
     def draw(self, context):
-        layout = self.layout
-        layout.use_property_split = True
-        layout.use_property_decorate = False
+        layout = self.split_layout()
         view_layer = context.view_layer
         mod = native.try_load()
         if mod is None:
@@ -180,9 +175,7 @@ class DEFERRED_RENDER_PT_material_settings(_EnginePanel, bpy.types.Panel):
         return mat is not None and not mat.grease_pencil and context.engine in cls.COMPAT_ENGINES
 
     def draw(self, context):
-        layout = self.layout
-        layout.use_property_split = True
-        layout.use_property_decorate = False
+        layout = self.split_layout()
         layout.prop(context.material, "pass_index")
 
 

@@ -25,6 +25,24 @@ layout(location = OUT_IDS) out uvec2 out_ids;
 layout(location = OUT_UV) out vec2 out_uv;
 #endif
 
+#ifdef MATERIAL_GRAPH
+/* A node material (material_lib.glsl, nodes/, the generated graph). */
+in vec3 v_object_position;
+in vec3 v_object_normal;
+flat in uint v_instance;
+#if MATERIAL_ATTRIBUTE_COUNT > 0
+in vec4 v_attr[MATERIAL_ATTRIBUTE_COUNT];
+#endif
+layout(std430, binding = SSBO_INSTANCES) readonly buffer Instances { GpuInstance instances[]; };
+layout(location = 11) uniform vec3 texspace_location;
+layout(location = 12) uniform vec3 texspace_size;
+#if MATERIAL_IMAGE_COUNT > 0
+layout(binding = TEX_MATERIAL_IMAGE0) uniform sampler2D material_images[MATERIAL_IMAGE_COUNT];
+#endif
+/* Generated: includes material_lib.glsl and nodes/node_lib.glsl, then the graph. */
+#include "material_graph.glsl"
+#endif
+
 /* A per-pixel value in [0, 1) (integer hash, Jarzynski & Olano 2020, pcg). */
 float pixel_hash(uvec2 p) {
     uint v = p.x * 1973u + p.y * 9277u;
@@ -48,8 +66,56 @@ GpuMaterial pick_material(uint id) {
     return m;
 }
 
+#ifdef MATERIAL_GRAPH
+/* Fill the shading point the node library reads (Cycles' ShaderData). */
+void shading_point_init(vec3 N, vec3 Ng, vec3 V, bool back) {
+    GpuInstance inst = instances[v_instance];
+    g_sd.P = v_position + frame.camera_position.xyz;
+    g_sd.N = N;
+    g_sd.Ng = Ng;
+    g_sd.I = V;
+    g_sd.P_object = v_object_position;
+    /* Generated: the texture space, (P - (location - size)) / (2 size). */
+    vec3 size = texspace_size;
+    size = vec3(size.x != 0.0 ? size.x : 1e-8, size.y != 0.0 ? size.y : 1e-8, size.z != 0.0 ? size.z : 1e-8);
+    g_sd.generated = (v_object_position - (texspace_location - size)) / (2.0 * size);
+    g_sd.uv = vec3(v_uv, 0.0);
+    g_sd.object_to_world = mat3(inst.model);
+    g_sd.normal_to_world = mat3(inst.normal_matrix);
+    /* object_inverse_normal_transform: normalize(M^T N). */
+    g_sd.N_object = safe_normalize(transpose(g_sd.object_to_world) * N);
+    g_sd.N_object_smooth = dot(v_object_normal, v_object_normal) > 0.0 ? v_object_normal
+                                                                       : transpose(g_sd.object_to_world) * (back ? -Ng : Ng);
+    g_sd.object_location = inst.model[3].xyz + frame.camera_position.xyz;
+    g_sd.object_color = inst.color;
+    g_sd.object_index = float(inst.ids.x);
+    g_sd.material_index = materials[v_material].emission.w;
+    g_sd.object_random = inst.info.x;
+    g_sd.backfacing = back ? 1.0 : 0.0;
+    vec3 view = (frame.view * vec4(v_position, 1.0)).xyz;
+    g_sd.P_view = vec3(view.xy, -view.z);
+    g_sd.view_depth = -view.z;
+    g_sd.view_distance = length(v_position);
+    vec2 ndc = gl_FragCoord.xy * frame.viewport.zw * 2.0 - 1.0 - frame.jitter.xy;
+    g_sd.window = ndc * 0.5 + 0.5;
+    g_sd.dPdx = dFdxFine(v_position);
+    g_sd.dPdy = dFdyFine(v_position);
+    for (int k = 0; k < 8; ++k) g_sd.attr[k] = vec4(0.0);
+#if MATERIAL_ATTRIBUTE_COUNT > 0
+    for (int k = 0; k < MATERIAL_ATTRIBUTE_COUNT; ++k) g_sd.attr[k] = v_attr[k];
+#endif
+}
+
+float finite_or(float x, float fallback) { return (isnan(x) || isinf(x)) ? fallback : x; }
+vec3 finite_or(vec3 v, vec3 fallback) {
+    return vec3(finite_or(v.x, fallback.x), finite_or(v.y, fallback.y), finite_or(v.z, fallback.z));
+}
+#endif
+
 void main() {
+#ifndef MATERIAL_GRAPH
     GpuMaterial m = pick_material(v_material);
+#endif
 
     /* Geometric normal from the triangle's winding, in world space. Cycles
      * flips the normals of a surface hit from behind; a mirrored instance
@@ -65,6 +131,30 @@ void main() {
         if (back) N = -N;
     }
 
+#ifdef MATERIAL_GRAPH
+    /* Evaluate the graph; a NaN or infinity a node produces becomes the
+     * neutral value, never a G-buffer NaN. */
+    shading_point_init(N, Ng, V, back);
+    g_const_base = int(materials[v_material].mix.z);
+    g_mix_u = fract(pixel_hash(uvec2(gl_FragCoord.xy)) + frame.sample_shift.z);
+    Closure c;
+    material_graph_eval(c);
+    vec3 shading_normal = finite_or(c.N, N);
+    shading_normal = dot(shading_normal, shading_normal) > 0.0 ? normalize(shading_normal) : N;
+    out_emission = vec4(clamp(finite_or(c.emission, vec3(0.0)), vec3(0.0), vec3(65504.0)), 1.0);
+    out_base = vec4(clamp(finite_or(c.base_color, vec3(0.0)), vec3(0.0), vec3(65504.0)),
+                    clamp(finite_or(c.alpha, 1.0), 0.0, 1.0));
+    out_params0 = vec4(clamp(finite_or(c.metallic, 0.0), 0.0, 1.0), clamp(finite_or(c.roughness, 0.5), 0.0, 1.0),
+                       clamp(finite_or(c.specular, 0.0), 0.0, 12.0), clamp(finite_or(c.specular_tint, 0.0), 0.0, 1.0));
+    out_normal = octahedral_encode(shading_normal);
+#ifdef GBUF_PARAMS1
+    out_params1 = clamp(vec4(finite_or(c.sheen, 0.0), finite_or(c.sheen_tint, 0.0), finite_or(c.clearcoat, 0.0),
+                             finite_or(c.clearcoat_roughness, 0.0)), vec4(0.0), vec4(1.0));
+#endif
+#ifdef GBUF_IDS
+    out_ids = uvec2(v_object_index, uint(materials[v_material].emission.w));
+#endif
+#else
     out_emission = vec4(min(m.emission.rgb, vec3(65504.0)), 1.0);
     out_base = m.base_alpha;
     out_params0 = m.params0;
@@ -74,6 +164,7 @@ void main() {
 #endif
 #ifdef GBUF_IDS
     out_ids = uvec2(v_object_index, uint(m.emission.w));
+#endif
 #endif
 #ifdef GBUF_UV
     out_uv = v_uv;

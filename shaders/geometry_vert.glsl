@@ -23,6 +23,20 @@ layout(std430, binding = SSBO_INSTANCE_REMAP) readonly buffer Remap { uint insta
 layout(location = 2) uniform mat4 shadow_view_projection;
 #endif
 
+#ifdef MATERIAL_GRAPH
+/* Node materials: the mesh's named per-corner attributes, one float array;
+ * slot k of the material reads attribute_layout[k] = (offset in floats or -1
+ * when the mesh lacks it, components, 1 for object-space directions). */
+layout(std430, binding = SSBO_ATTRIBUTES) readonly buffer Attributes { float corner_attributes[]; };
+layout(location = 3) uniform ivec4 attribute_layout[8];
+out vec3 v_object_position;
+out vec3 v_object_normal;
+flat out uint v_instance;
+#if MATERIAL_ATTRIBUTE_COUNT > 0
+out vec4 v_attr[MATERIAL_ATTRIBUTE_COUNT];
+#endif
+#endif
+
 out vec3 v_position;  /* camera-relative world */
 out vec3 v_normal;    /* world, unnormalised */
 out vec2 v_uv;
@@ -33,7 +47,8 @@ flat out uint v_mirrored;
 void main() {
     const uint corner = uint(gl_VertexID);
     const uint triangle = corner / 3u;
-    GpuInstance inst = instances[instance_remap[instance_offset + uint(gl_InstanceID)]];
+    const uint instance = instance_remap[instance_offset + uint(gl_InstanceID)];
+    GpuInstance inst = instances[instance];
 
     const uint vi = indices[corner];
     vec3 p = vec3(positions[3u * vi], positions[3u * vi + 1u], positions[3u * vi + 2u]);
@@ -46,10 +61,30 @@ void main() {
 #endif
 
     v_normal = vec3(0.0);
+    vec3 n = vec3(0.0);
     if ((mesh_flags & 1u) != 0u) {
-        vec3 n = vec3(corner_normals[3u * corner], corner_normals[3u * corner + 1u], corner_normals[3u * corner + 2u]);
+        n = vec3(corner_normals[3u * corner], corner_normals[3u * corner + 1u], corner_normals[3u * corner + 2u]);
         v_normal = mat3(inst.normal_matrix) * n;
     }
+#ifdef MATERIAL_GRAPH
+    v_object_position = p;
+    v_object_normal = n;
+    v_instance = instance;
+#if MATERIAL_ATTRIBUTE_COUNT > 0
+    for (int k = 0; k < MATERIAL_ATTRIBUTE_COUNT; ++k) {
+        const ivec4 layout_k = attribute_layout[k];
+        vec4 a = vec4(0.0);
+        if (layout_k.x >= 0) {
+            a = vec4(0.0, 0.0, 0.0, 1.0);
+            const int base = layout_k.x + int(corner) * layout_k.y;
+            for (int c = 0; c < layout_k.y; ++c) a[c] = corner_attributes[base + c];
+            if (layout_k.y == 1) a.xyz = vec3(a.x);  /* a float attribute: every component */
+            if (layout_k.z != 0) a.xyz = mat3(inst.model) * a.xyz;
+        }
+        v_attr[k] = a;
+    }
+#endif
+#endif
     v_uv = (mesh_flags & 2u) != 0u ? corner_uvs[corner] : vec2(0.0);
 
     /* Slot -> material id through the instance's slot map; out-of-range slots

@@ -21,6 +21,8 @@
 #define SSBO_CULL_COUNTER 11
 #define SSBO_SHADOWS 12
 #define SSBO_INSTANCE_REMAP 13 /* shadow maps: the instances left after culling, per draw */
+#define SSBO_MATERIAL_CONSTANTS 14 /* node materials: per-material constants (material_lib.glsl) */
+#define SSBO_ATTRIBUTES 15     /* node materials: the mesh's named per-corner attributes */
 
 /* Textures sampled by compute passes (G-buffer inputs) */
 #define TEX_DEPTH 0
@@ -36,6 +38,8 @@
 #define TEX_SHADOW_MAPS 10
 #define TEX_SHADOW_LIGHT 11
 #define TEX_WORLD_MAP 12    /* RG32F: (-nearest, farthest) depth along the world direction */
+/* Node materials: image slot k of the drawn material at unit TEX_MATERIAL_IMAGE0 + k */
+#define TEX_MATERIAL_IMAGE0 16
 
 /* Images written by compute passes */
 #define IMG_FILM 0        /* Combined accumulation */

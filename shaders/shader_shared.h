@@ -55,7 +55,8 @@ SHARED_ASSERT_SIZE(GpuLight, 96);
  *   params1    : sheen, sheen_tint, clearcoat, clearcoat_roughness
  *   emission   : rgb emission colour x strength, w = material pass index
  *   mix        : x material id taken instead with probability y (stochastic Mix Shader),
- *                x < 0: none; zw unused */
+ *                x < 0: none; z offset of a node material's constants in the constants
+ *                buffer; w unused */
 SHARED_STRUCT(GpuMaterial) {
     vec4 base_alpha;
     vec4 params0;
@@ -69,13 +70,17 @@ SHARED_ASSERT_SIZE(GpuMaterial, 80);
  *   model         : object -> camera-relative world
  *   normal_matrix : inverse transpose of model's 3x3 (w column unused)
  *   ids           : x object pass index, y offset of its material slot map in
- *                   the slot buffer, z slot count, w 1 if mirrored (negative determinant) */
+ *                   the slot buffer, z slot count, w 1 if mirrored (negative determinant)
+ *   color         : Object > Viewport Display colour (Object Info Color, Alpha)
+ *   info          : x Object Info Random (Cycles' per-object/per-instance value), yzw unused */
 SHARED_STRUCT(GpuInstance) {
     mat4 model;
     mat4 normal_matrix;
     uvec4 ids;
+    vec4 color;
+    vec4 info;
 };
-SHARED_ASSERT_SIZE(GpuInstance, 144);
+SHARED_ASSERT_SIZE(GpuInstance, 176);
 
 /* Per-frame constants (std140 uniform block FrameBlock).
  *   view            : camera-relative world -> view (rotation only)
@@ -93,7 +98,8 @@ SHARED_ASSERT_SIZE(GpuInstance, 144);
  *   tiles           : x tiles per row, y tile rows, z 1 if light culling is on, w the pixel
  *                     filter's reach in whole pixels (tile frusta are widened by it)
  *   world_occlusion : x index (GpuShadow) of this sample's world-occlusion map, < 0 without
- *                     one; yzw unused */
+ *                     one; yzw unused
+ *   jitter          : xy this sample's pixel-filter offset in NDC (added by projection), zw unused */
 SHARED_STRUCT(FrameConstants) {
     mat4 view;
     mat4 projection;
@@ -107,8 +113,9 @@ SHARED_STRUCT(FrameConstants) {
     vec4 sample_shift;
     uvec4 tiles;
     vec4 world_occlusion;
+    vec4 jitter;
 };
-SHARED_ASSERT_SIZE(FrameConstants, 384);
+SHARED_ASSERT_SIZE(FrameConstants, 400);
 
 /* One shadow-casting light's maps for the current film sample.
  *   point         : xyz the sample's point on the light (camera-relative), w first layer in the

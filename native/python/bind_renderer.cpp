@@ -76,6 +76,84 @@ std::uint32_t index_from(const py::handle& obj, const std::string& what) {
     return std::uint32_t(v);
 }
 
+SocketType socket_type_from(const py::handle& obj, const std::string& what) {
+    const std::string t = py::str(obj);
+    if (t == "float") return SocketType::Float;
+    if (t == "color") return SocketType::Color;
+    if (t == "vector") return SocketType::Vector;
+    if (t == "closure") return SocketType::Closure;
+    throw py::value_error(what + ": type '" + t + "' is not one of float, color, vector, closure");
+}
+
+int int_from(const py::handle& obj, const std::string& what) {
+    if (!PyIndex_Check(obj.ptr()) || py::isinstance<py::bool_>(obj))
+        throw py::value_error(what + ": expected an integer");
+    const long long v = PyLong_AsLongLong(py::reinterpret_steal<py::object>(PyNumber_Index(obj.ptr())).ptr());
+    if (PyErr_Occurred() || v < -(1LL << 30) || v > (1LL << 30)) {
+        PyErr_Clear();
+        throw py::value_error(what + ": integer out of range");
+    }
+    return int(v);
+}
+
+// The add-on's graph dict (materials/builder.py) -> MaterialGraph. Shapes
+// and kinds are checked here; links, offsets and names by the renderer.
+MaterialGraph graph_from_python(const py::dict& d) {
+    MaterialGraph g;
+    const py::list nodes = d["nodes"].cast<py::list>();
+    for (std::size_t i = 0; i < nodes.size(); ++i) {
+        const py::dict n = nodes[i].cast<py::dict>();
+        const std::string where = "graph node " + std::to_string(i);
+        GraphNode node;
+        node.func = n["func"].cast<std::string>();
+        for (const py::handle& a : n["args"].cast<py::list>()) {
+            const py::tuple t = py::reinterpret_borrow<py::object>(a).cast<py::tuple>();
+            const std::string kind = t[0].cast<std::string>();
+            GraphArg arg;
+            if (kind == "int" && t.size() == 2) {
+                arg.kind = GraphArg::Kind::Int;
+                arg.value = int_from(t[1], where);
+            } else if (kind == "const" && t.size() == 3) {
+                arg.kind = GraphArg::Kind::Const;
+                arg.type = socket_type_from(t[1], where);
+                arg.value = int_from(t[2], where);
+            } else if (kind == "block" && t.size() == 2) {
+                arg.kind = GraphArg::Kind::Block;
+                arg.value = int_from(t[1], where);
+            } else if (kind == "link" && t.size() == 5) {
+                arg.kind = GraphArg::Kind::Link;
+                arg.type = socket_type_from(t[1], where);
+                arg.node = int_from(t[2], where);
+                arg.output = int_from(t[3], where);
+                arg.from = socket_type_from(t[4], where);
+            } else if (kind == "shading" && t.size() == 2) {
+                arg.kind = GraphArg::Kind::Shading;
+                arg.name = t[1].cast<std::string>();
+            } else if (kind == "image" && t.size() == 2) {
+                arg.kind = GraphArg::Kind::Image;
+                arg.value = int_from(t[1], where);
+            } else {
+                throw py::value_error(where + ": unknown argument " + std::string(py::str(py::repr(t))).substr(0, 80));
+            }
+            node.args.push_back(std::move(arg));
+        }
+        for (const py::handle& o : n["outputs"].cast<py::list>()) node.outputs.push_back(socket_type_from(o, where));
+        g.nodes.push_back(std::move(node));
+    }
+    if (d.contains("surface") && !d["surface"].is_none()) {
+        const py::tuple s = d["surface"].cast<py::tuple>();
+        g.surface_node = int_from(s[0], "graph surface");
+        g.surface_output = int_from(s[1], "graph surface");
+    }
+    if (d.contains("constants"))
+        for (const py::handle& c : d["constants"]) g.constants.push_back(c.cast<float>());
+    if (d.contains("images"))
+        for (const py::handle& im : d["images"]) g.images.push_back(index_from(im, "graph images"));
+    if (d.contains("attributes"))
+        for (const py::handle& a : d["attributes"]) g.attributes.push_back(a.cast<std::string>());
+    return g;
+}
+
 // Hands a pass to Python without copying: the numpy array owns the vector.
 py::array_t<float> to_numpy(PassImage&& img) {
     auto* owned = new std::vector<float>(std::move(img.pixels));
@@ -138,6 +216,9 @@ void declare_renderer(py::module_& m) {
             d["readback_ms"] = self.last.readback_ms;
             d["total_ms"] = self.last.total_ms;
             d["gbuffer_bytes"] = self.last.gbuffer_bytes;
+            d["programs_compiled"] = self.last.programs_compiled;
+            d["compile_ms"] = self.last.compile_ms;
+            d["material_programs"] = self.last.material_programs;
             return d;
         })
         .def("clear_scene", [](PyRenderer& self) { self.get().clear_scene(); })
@@ -146,7 +227,8 @@ void declare_renderer(py::module_& m) {
         .def("add_mesh",
              [](PyRenderer& self, const py::object& positions, const py::object& indices,
                 const py::object& corner_normals, const py::object& corner_uvs,
-                const py::object& material_indices) {
+                const py::object& material_indices, const py::object& attributes, const py::object& texspace_location,
+                const py::object& texspace_size) {
                  MeshData mesh;
                  py::ssize_t nv = 0, nt = 0, n = 0;
                  mesh.positions = borrow<float>(positions, "positions", {-1, 3}, &nv);
@@ -171,11 +253,58 @@ void declare_renderer(py::module_& m) {
                          throw py::value_error("material_indices: expected " + std::to_string(nt) +
                                                " values (one per triangle), got " + std::to_string(n));
                  }
+                 if (!attributes.is_none()) {
+                     // (name, (3T, C) float32 array, direction) per attribute.
+                     for (const py::handle& a : attributes) {
+                         const py::tuple t = py::reinterpret_borrow<py::object>(a).cast<py::tuple>();
+                         if (t.size() != 3) throw py::value_error("attributes: expected (name, array, direction) tuples");
+                         CornerAttribute attr;
+                         attr.name = t[0].cast<std::string>();
+                         const std::string what = "attribute '" + attr.name + "'";
+                         py::array arr = t[1].cast<py::array>();
+                         if (arr.ndim() != 2) throw py::value_error(what + ": expected a (3T, C) array");
+                         attr.components = int(arr.shape(1));
+                         attr.data = borrow<float>(arr, what.c_str(), {3 * nt, -1});
+                         attr.direction = t[2].cast<bool>();
+                         mesh.attributes.push_back(attr);
+                     }
+                 }
+                 if (!texspace_location.is_none()) mesh.texspace_location = vec3_from(texspace_location, "texspace_location");
+                 if (!texspace_size.is_none()) mesh.texspace_size = vec3_from(texspace_size, "texspace_size");
                  py::gil_scoped_release release;
                  return self.get().add_mesh(mesh);
              },
              py::arg("positions"), py::arg("indices"), py::kw_only(), py::arg("corner_normals") = py::none(),
-             py::arg("corner_uvs") = py::none(), py::arg("material_indices") = py::none())
+             py::arg("corner_uvs") = py::none(), py::arg("material_indices") = py::none(),
+             py::arg("attributes") = py::none(), py::arg("texspace_location") = py::none(),
+             py::arg("texspace_size") = py::none())
+        .def("add_image",
+             [](PyRenderer& self, const py::object& pixels) {
+                 ImageData image;
+                 py::ssize_t h = 0;
+                 if (!py::isinstance<py::array>(pixels)) throw py::value_error("add_image: expected a numpy array");
+                 py::array a = pixels.cast<py::array>();
+                 if (a.ndim() != 3 || a.shape(2) != 4) throw py::value_error("add_image: expected an (H, W, 4) array");
+                 if (a.dtype().equal(py::dtype::of<std::uint8_t>()))
+                     image.bytes = borrow<std::uint8_t>(a, "add_image", {-1, -1, 4}, &h);
+                 else
+                     image.floats = borrow<float>(a, "add_image (uint8 or float32)", {-1, -1, 4}, &h);
+                 image.height = int(h);
+                 image.width = int(a.shape(1));
+                 py::gil_scoped_release release;
+                 return self.get().add_image(image);
+             },
+             py::arg("pixels"), "An RGBA image (H, W, 4), uint8 or float32, row 0 at the bottom; returns its id.")
+        .def("add_graph_material",
+             [](PyRenderer& self, const py::dict& graph, const py::object& pass_index) {
+                 Material base;
+                 base.pass_index = index_from(pass_index, "add_graph_material: pass_index");
+                 MaterialGraph g = graph_from_python(graph);
+                 py::gil_scoped_release release;
+                 return self.get().add_graph_material(base, g);
+             },
+             py::arg("graph"), py::kw_only(), py::arg("pass_index") = 0,
+             "A node material from the add-on's graph dict (materials/builder.py); returns the material id.")
         .def("add_material",
              [](PyRenderer& self, const py::object& base_color, float metallic, float roughness, float specular,
                 float specular_tint, float sheen, float sheen_tint, float clearcoat, float clearcoat_roughness,
@@ -207,7 +336,8 @@ void declare_renderer(py::module_& m) {
              py::arg("mix_with") = -1, py::arg("mix_probability") = 0.0f)
         .def("add_instances",
              [](PyRenderer& self, const py::object& mesh_id_obj, const py::object& matrices,
-                const py::object& object_indices, const py::object& material_slots, bool cast_shadow) {
+                const py::object& object_indices, const py::object& material_slots, bool cast_shadow,
+                const py::object& colors_obj, const py::object& randoms_obj) {
                  const std::uint32_t mesh_id = index_from(mesh_id_obj, "add_instances: mesh_id");
                  py::ssize_t n = 0, k = 0;
                  const double* rows = borrow<double>(matrices, "matrices", {-1, 4, 4}, &n);
@@ -230,11 +360,16 @@ void declare_renderer(py::module_& m) {
                      for (const py::handle& h : material_slots)
                          slots.push_back(index_from(h, "material_slots: element " + std::to_string(slots.size())));
                  }
+                 const float* colors = nullptr;
+                 const float* randoms = nullptr;
+                 if (!colors_obj.is_none()) colors = borrow<float>(colors_obj, "colors", {n, 4});
+                 if (!randoms_obj.is_none()) randoms = borrow<float>(randoms_obj, "randoms", {n});
                  py::gil_scoped_release release;
-                 self.get().add_instances(mesh_id, cols.data(), std::size_t(n), ids, slots, cast_shadow);
+                 self.get().add_instances(mesh_id, cols.data(), std::size_t(n), ids, slots, cast_shadow, colors, randoms);
              },
              py::arg("mesh_id"), py::arg("matrices"), py::kw_only(), py::arg("object_indices") = py::none(),
-             py::arg("material_slots") = py::none(), py::arg("cast_shadow") = true)
+             py::arg("material_slots") = py::none(), py::arg("cast_shadow") = true, py::arg("colors") = py::none(),
+             py::arg("randoms") = py::none())
         .def("add_light",
              [](PyRenderer& self, const std::string& type, const py::object& matrix, const py::object& color,
                 float energy, float radius, float spot_size, float spot_blend, float angle, const std::string& shape,

@@ -10,6 +10,7 @@
 #include "gl_util.h"
 #include "light_culling.h"
 #include "light_module.h"
+#include "material_module.h"
 #include "render_thread.h"
 #include "scene_store.h"
 #include "shader_library.h"
@@ -82,6 +83,7 @@ struct Renderer::Impl {
     GLInfo info;
     std::optional<ShaderLibrary> shaders;
     SceneStore scene;
+    MaterialModule materials;
     GBuffer gbuffer;
     LightModule lights;
     LightCulling culling;
@@ -106,6 +108,7 @@ struct Renderer::Impl {
             culling = LightCulling();
             shadows = ShadowModule();
             scene.clear();
+            materials.clear();
             shaders.reset();
             empty_vao.reset();
             dummy_ssbo.reset();
@@ -193,7 +196,8 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     const PassSet& wanted = settings.passes;
     GBufferFeatures features;
     for (const Material& m : scene.materials())
-        if (m.sheen > 1e-5f || m.clearcoat > 1e-5f) features.params1 = true;
+        if (m.graph < 0 && (m.sheen > 1e-5f || m.clearcoat > 1e-5f)) features.params1 = true;
+    if (materials.uses_params1()) features.params1 = true;
     features.ids = wanted.contains(Pass::IndexOB) || wanted.contains(Pass::IndexMA);
     features.uv = wanted.contains(Pass::UV);
     const bool light_split = wanted.contains(Pass::DiffDir) || wanted.contains(Pass::GlossDir);
@@ -222,6 +226,8 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
 
     FrameResult result;
     StageTimer timer;
+    const std::size_t compiles_before = shaders->compile_count();
+    const double compile_ms_before = shaders->compile_ms();
     const CameraMatrices cam = build_camera(camera_in, settings.width, settings.height);
 
     // --- Sync: pack per-frame buffers, camera-relative in double. ---
@@ -232,14 +238,15 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     std::vector<Bound> bounds;
     bounds.reserve(scene.instance_count());
     std::vector<std::uint32_t> slots;
-    struct Draw { std::uint32_t mesh, first, count; bool cast_shadow; };
+    // One per batch: its instances [first, first + count) and its slot map.
+    struct Draw { std::uint32_t mesh, first, count; bool cast_shadow; std::uint32_t slot_offset, slot_count; };
     std::vector<Draw> draws;
     for (const InstanceBatch& b : scene.batches()) {
         const std::uint32_t slot_offset = static_cast<std::uint32_t>(slots.size());
         slots.insert(slots.end(), b.material_slots.begin(), b.material_slots.end());
         const std::size_t n = b.object_indices.size();
         draws.push_back({b.mesh_id, static_cast<std::uint32_t>(instances.size()), static_cast<std::uint32_t>(n),
-                         b.cast_shadow});
+                         b.cast_shadow, slot_offset, static_cast<std::uint32_t>(b.material_slots.size())});
         for (std::size_t i = 0; i < n; ++i) {
             Mat4d m;
             std::copy(b.matrices.begin() + long(i * 16), b.matrices.begin() + long(i * 16 + 16), m.begin());
@@ -258,10 +265,12 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
             g.normal_matrix = to_gpu(glm::dmat4(nm));
             g.ids = {b.object_indices[i], slot_offset, static_cast<std::uint32_t>(b.material_slots.size()),
                      det < 0 ? 1u : 0u};
+            g.color = {b.colors[i * 4], b.colors[i * 4 + 1], b.colors[i * 4 + 2], b.colors[i * 4 + 3]};
+            g.info = {b.randoms[i], 0.0f, 0.0f, 0.0f};
             instances.push_back(g);
         }
     }
-    std::vector<gpu::GpuMaterial> materials;
+    std::vector<gpu::GpuMaterial> gpu_materials;
     for (const Material& m : scene.materials()) {
         gpu::GpuMaterial g{};
         g.base_alpha = {m.base_color[0], m.base_color[1], m.base_color[2], m.alpha};
@@ -269,12 +278,14 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         g.params1 = {m.sheen, m.sheen_tint, m.clearcoat, m.clearcoat_roughness};
         g.emission = {m.emission[0] * m.emission_strength, m.emission[1] * m.emission_strength,
                       m.emission[2] * m.emission_strength, float(m.pass_index)};
-        g.mix = {float(m.mix_with), m.mix_probability, 0.0f, 0.0f};
-        materials.push_back(g);
+        const float constants = m.graph >= 0 ? float(materials.constants_offset(std::uint32_t(m.graph))) : 0.0f;
+        g.mix = {float(m.mix_with), m.mix_probability, constants, 0.0f};
+        gpu_materials.push_back(g);
     }
     Buffer instance_buffer = make_storage_buffer(instances.data(), instances.size() * sizeof(gpu::GpuInstance), "instances");
     Buffer slot_buffer = make_storage_buffer(slots.data(), slots.size() * sizeof(std::uint32_t), "material slots");
-    Buffer material_buffer = make_storage_buffer(materials.data(), materials.size() * sizeof(gpu::GpuMaterial), "materials");
+    Buffer material_buffer = make_storage_buffer(gpu_materials.data(), gpu_materials.size() * sizeof(gpu::GpuMaterial), "materials");
+    this->materials.upload_constants();
     shadows.begin_frame(cam, settings.shadow_resolution, settings.shadow_quality, memory_budget_bytes() / 4);
     // The world's occlusion map, when the world lights anything or the AO
     // pass is asked for.
@@ -379,18 +390,20 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     Buffer remap_buffer;
     std::size_t remap_capacity = 0;
     std::uint64_t shadow_instances_drawn = 0, camera_instances_drawn = 0;
-    auto draw_culled = [&](const ShadowModule::CasterTest& keep, bool casters_only) -> std::uint64_t {
+    struct Culled { const Draw* draw; std::uint32_t first, count; };
+    std::vector<Culled> visible;
+    // Fills `visible` and the remap buffer with the instances that pass `keep`.
+    auto cull = [&](const ShadowModule::CasterTest& keep, bool casters_only) -> std::uint64_t {
         remap.clear();
-        struct Culled { const Draw* draw; std::uint32_t first, count; };
-        std::vector<Culled> culled;
+        visible.clear();
         for (const Draw& d : draws) {
             if ((casters_only && !d.cast_shadow) || scene.meshes()[d.mesh].triangle_count == 0) continue;
             const std::uint32_t first = std::uint32_t(remap.size());
             for (std::uint32_t i = d.first; i < d.first + d.count; ++i)
                 if (keep(bounds[i].center, bounds[i].radius)) remap.push_back(i);
-            if (remap.size() > first) culled.push_back({&d, first, std::uint32_t(remap.size()) - first});
+            if (remap.size() > first) visible.push_back({&d, first, std::uint32_t(remap.size()) - first});
         }
-        if (culled.empty()) return 0;
+        if (visible.empty()) return 0;
         if (remap.size() > remap_capacity) {
             remap_capacity = std::max<std::size_t>(remap.size(), instances.size());
             remap_buffer = make_storage_buffer(nullptr, remap_capacity * sizeof(std::uint32_t), "instance remap");
@@ -398,14 +411,73 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         glNamedBufferSubData(remap_buffer.get(), 0, GLsizeiptr(remap.size() * sizeof(std::uint32_t)), remap.data());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_INSTANCE_REMAP, remap_buffer.get());
         bind_scene_buffers();
-        for (const Culled& c : culled) {
-            const GpuMesh& mesh = scene.meshes()[c.draw->mesh];
-            bind_mesh(mesh);
-            glUniform1ui(0, c.first);
-            glUniform1ui(1, mesh.flags);
-            glDrawArraysInstanced(GL_TRIANGLES, 0, GLsizei(mesh.triangle_count * 3), GLsizei(c.count));
-        }
         return remap.size();
+    };
+    // Draws triangles [first, first + count) of the visible instances of one batch.
+    auto draw_range = [&](const Culled& c, std::uint32_t first, std::uint32_t count) {
+        if (count == 0) return;
+        const GpuMesh& mesh = scene.meshes()[c.draw->mesh];
+        bind_mesh(mesh);
+        glUniform1ui(0, c.first);
+        glUniform1ui(1, mesh.flags);
+        glDrawArraysInstanced(GL_TRIANGLES, GLint(first * 3), GLsizei(count * 3), GLsizei(c.count));
+    };
+    auto draw_culled = [&](const ShadowModule::CasterTest& keep, bool casters_only) -> std::uint64_t {
+        const std::uint64_t n = cull(keep, casters_only);
+        for (const Culled& c : visible) draw_range(c, 0, scene.meshes()[c.draw->mesh].triangle_count);
+        return n;
+    };
+    // The material drawing slot s of a batch.
+    auto slot_material = [&](const Draw& d, std::size_t s) -> const Material& {
+        const std::uint32_t slot = std::uint32_t(std::min<std::size_t>(s, std::max(d.slot_count, 1u) - 1));
+        return scene.materials()[slots[d.slot_offset + slot]];
+    };
+    // Node-material programs, compiled before the first sample (a graph
+    // used by no visible slot still compiles: the set is the scene's).
+    std::vector<std::pair<std::uint32_t, GLuint>> graph_programs;  // material id -> program
+    for (std::uint32_t id = 0; id < scene.materials().size(); ++id)
+        if (scene.materials()[id].graph >= 0)
+            graph_programs.emplace_back(id, this->materials.program(*shaders, std::uint32_t(scene.materials()[id].graph),
+                                                                    base_variant));
+    {
+        std::vector<GLuint> distinct;
+        for (auto& [id, p] : graph_programs)
+            if (std::find(distinct.begin(), distinct.end(), p) == distinct.end()) distinct.push_back(p);
+        result.timings.material_programs = distinct.size();
+    }
+    // The geometry pass: constant materials with the shared program, then
+    // each node material with its own over the slot ranges that use it.
+    auto draw_geometry = [&](const ShadowModule::CasterTest& keep) -> std::uint64_t {
+        const std::uint64_t n = cull(keep, false);
+        glUseProgram(geometry);
+        for (const Culled& c : visible) {
+            const GpuMesh& mesh = scene.meshes()[c.draw->mesh];
+            if (graph_programs.empty()) {
+                draw_range(c, 0, mesh.triangle_count);
+                continue;
+            }
+            for (std::size_t s = 0; s < mesh.slot_ranges.size(); ++s)
+                if (slot_material(*c.draw, s).graph < 0) draw_range(c, mesh.slot_ranges[s].first, mesh.slot_ranges[s].second);
+        }
+        if (graph_programs.empty()) return n;
+        this->materials.bind_constants();
+        for (auto& [id, program] : graph_programs) {
+            const Material& material = scene.materials()[id];
+            bool bound = false;
+            for (const Culled& c : visible) {
+                const GpuMesh& mesh = scene.meshes()[c.draw->mesh];
+                for (std::size_t s = 0; s < mesh.slot_ranges.size(); ++s) {
+                    if (&slot_material(*c.draw, s) != &material || mesh.slot_ranges[s].second == 0) continue;
+                    if (!bound) glUseProgram(program);
+                    bound = true;
+                    this->materials.bind_for_draw(std::uint32_t(material.graph), mesh);
+                    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_ATTRIBUTES,
+                                     mesh.attributes ? mesh.attributes.get() : dummy_ssbo.get());
+                    draw_range(c, mesh.slot_ranges[s].first, mesh.slot_ranges[s].second);
+                }
+            }
+        }
+        return n;
     };
     // The camera's frustum, widened by the pixel filter's reach (jittered
     // samples look that far) and a pixel, in the view space of `cam`.
@@ -425,7 +497,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         };
         return inside(v.x, left, right) && inside(v.y, bottom, top);
     };
-    auto draw_scene = [&]() { camera_instances_drawn += draw_culled(in_view, false); };
+    auto draw_scene = [&]() { camera_instances_drawn += draw_geometry(in_view); };
     auto draw_shadow_casters = [&](const ShadowModule::CasterTest& casts) {
         shadow_instances_drawn += draw_culled(casts, true);
     };
@@ -442,6 +514,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         jitter[3][1] = 2.0 * oy / settings.height;
         const glm::dmat4 projection = jitter * cam.projection;
         fc.projection = to_gpu(projection);
+        fc.jitter = {float(jitter[3][0]), float(jitter[3][1]), 0.0f, 0.0f};
         fc.inv_projection = to_gpu(glm::inverse(projection));
         // Where in each light-shape cell (and on the sun's disk) this sample looks.
         fc.sample_shift = {u[2], u[3], float(std::fmod(0.5 + sample * 0.6180339887498949, 1.0)), 0.0f};
@@ -455,7 +528,6 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         glDepthMask(GL_TRUE);
         glDisable(GL_CULL_FACE);  // two-sided, as Cycles
         glDisable(GL_BLEND);
-        glUseProgram(geometry);
         draw_scene();
         glBindFramebuffer(GL_FRAMEBUFFER, 0);
         check_gl("geometry pass");
@@ -562,6 +634,8 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     result.timings.shadow_lights_dropped = shadows.dropped();
     result.timings.tile_light_pairs = culled ? culling.last_index_count() : 0;
     result.timings.passes_ms = passes_ms;
+    result.timings.programs_compiled = shaders->compile_count() - compiles_before;
+    result.timings.compile_ms = shaders->compile_ms() - compile_ms_before;
     result.timings.total_ms = result.timings.upload_ms + shadow_ms + geometry_ms + culling_ms + lighting_ms + passes_ms +
                               result.timings.readback_ms;
     return result;
@@ -581,7 +655,10 @@ Renderer::~Renderer() = default;
 const GLInfo& Renderer::gl_info() const { return impl_->info; }
 
 void Renderer::clear_scene() {
-    impl_->thread.run([&] { impl_->scene.clear(); });
+    impl_->thread.run([&] {
+        impl_->scene.clear();
+        impl_->materials.clear();
+    });
 }
 
 std::uint32_t Renderer::add_mesh(const MeshData& mesh) {
@@ -589,14 +666,33 @@ std::uint32_t Renderer::add_mesh(const MeshData& mesh) {
 }
 
 std::uint32_t Renderer::add_material(const Material& material) {
-    return impl_->thread.run([&] { return impl_->scene.add_material(material); });
+    Material m = material;
+    m.graph = -1;  // graphs come through add_graph_material
+    return impl_->thread.run([&] { return impl_->scene.add_material(m); });
+}
+
+std::uint32_t Renderer::add_image(const ImageData& image) {
+    return impl_->thread.run([&] { return impl_->materials.add_image(image); });
+}
+
+std::uint32_t Renderer::add_graph_material(const Material& base, const MaterialGraph& graph) {
+    return impl_->thread.run([&] {
+        validate_material(base);
+        Material m = base;
+        m.mix_with = -1;
+        m.mix_probability = 0.0f;
+        m.graph = std::int32_t(impl_->materials.add_graph(graph));
+        return impl_->scene.add_material(m);
+    });
 }
 
 void Renderer::add_instances(std::uint32_t mesh_id, const double* matrices, std::size_t count,
                              const std::uint32_t* object_indices, const std::vector<std::uint32_t>& material_slots,
-                             bool cast_shadow) {
-    impl_->thread.run(
-        [&] { impl_->scene.add_instances(mesh_id, matrices, count, object_indices, material_slots, cast_shadow); });
+                             bool cast_shadow, const float* colors, const float* randoms) {
+    impl_->thread.run([&] {
+        impl_->scene.add_instances(mesh_id, matrices, count, object_indices, material_slots, cast_shadow, colors,
+                                   randoms);
+    });
 }
 
 void Renderer::add_light(const Light& light) {

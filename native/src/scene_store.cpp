@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <limits>
 #include <string>
+#include <type_traits>
 
 namespace deferred {
 
@@ -79,6 +80,19 @@ std::int32_t validate_mesh(const MeshData& m) {
                     " is out of range for " + std::to_string(m.vertex_count) + " vertices");
     if (m.corner_normals) require_finite(m.corner_normals, m.triangle_count * 9, "corner_normals");
     if (m.corner_uvs) require_finite(m.corner_uvs, m.triangle_count * 6, "corner_uvs");
+    for (std::size_t a = 0; a < m.attributes.size(); ++a) {
+        const CornerAttribute& attr = m.attributes[a];
+        const std::string what = "attribute '" + attr.name + "'";
+        if (attr.name.empty()) invalid("attributes: element " + std::to_string(a) + " has no name");
+        if (attr.components < 1 || attr.components > 4) invalid(what + ": components must be 1..4");
+        if (m.triangle_count > 0 && !attr.data) invalid(what + ": null data");
+        require_finite(attr.data, m.triangle_count * 3 * std::size_t(attr.components), what.c_str());
+        for (std::size_t b = 0; b < a; ++b)
+            if (m.attributes[b].name == attr.name) invalid(what + ": given twice");
+    }
+    for (int k = 0; k < 3; ++k)
+        if (!std::isfinite(m.texspace_location[std::size_t(k)]) || !std::isfinite(m.texspace_size[std::size_t(k)]))
+            invalid("texspace: location and size must be finite");
     std::int32_t max_mat = 0;
     if (m.material_indices) {
         for (std::size_t t = 0; t < m.triangle_count; ++t) {
@@ -194,20 +208,76 @@ std::uint32_t SceneStore::add_mesh(const MeshData& m) {
         }
         g.bound_radius = std::sqrt(r2);
     }
+    // Triangles sorted by material slot (stable), so each slot is one draw
+    // range: node materials bind a program per slot. Per-triangle and
+    // per-corner arrays are permuted together; unsorted input is copied.
+    const std::size_t nt = m.triangle_count;
+    std::vector<std::uint32_t> order;
+    bool sorted = true;
+    if (m.material_indices)
+        for (std::size_t t = 1; t < nt && sorted; ++t) sorted = m.material_indices[t - 1] <= m.material_indices[t];
+    if (!sorted) {
+        order.resize(nt);
+        for (std::size_t t = 0; t < nt; ++t) order[t] = std::uint32_t(t);
+        std::stable_sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
+            return m.material_indices[a] < m.material_indices[b];
+        });
+    }
+    // Per-triangle element of `width` values (T::value_type) in sorted order.
+    auto permuted = [&](const auto* data, std::size_t width) {
+        using T = std::remove_const_t<std::remove_pointer_t<decltype(data)>>;
+        std::vector<T> out(nt * width);
+        for (std::size_t t = 0; t < nt; ++t)
+            std::copy(data + order[t] * width, data + (order[t] + 1) * width, out.begin() + long(t * width));
+        return out;
+    };
+    auto upload = [&](const auto* data, std::size_t width, const char* what) {
+        using T = std::remove_const_t<std::remove_pointer_t<decltype(data)>>;
+        if (sorted) return make_storage_buffer(data, nt * width * sizeof(T), what);
+        std::vector<T> p = permuted(data, width);
+        return make_storage_buffer(p.data(), p.size() * sizeof(T), what);
+    };
     g.positions = make_storage_buffer(m.positions, m.vertex_count * 3 * sizeof(float), "positions");
-    g.indices = make_storage_buffer(m.indices, m.triangle_count * 3 * sizeof(std::uint32_t), "indices");
+    g.indices = upload(m.indices, 3, "indices");
     if (m.corner_normals) {
-        g.normals = make_storage_buffer(m.corner_normals, m.triangle_count * 9 * sizeof(float), "corner_normals");
+        g.normals = upload(m.corner_normals, 9, "corner_normals");
         g.flags |= 1u;
     }
     if (m.corner_uvs) {
-        g.uvs = make_storage_buffer(m.corner_uvs, m.triangle_count * 6 * sizeof(float), "corner_uvs");
+        g.uvs = upload(m.corner_uvs, 6, "corner_uvs");
         g.flags |= 2u;
     }
+    g.slot_ranges.assign(std::size_t(max_mat) + 1, {0u, 0u});
     if (m.material_indices) {
-        g.material_indices = make_storage_buffer(m.material_indices, m.triangle_count * sizeof(std::int32_t),
-                                                 "material_indices");
+        std::vector<std::int32_t> mi = sorted ? std::vector<std::int32_t>(m.material_indices, m.material_indices + nt)
+                                              : permuted(m.material_indices, 1);
+        for (std::size_t t = 0; t < nt; ++t) {
+            auto& r = g.slot_ranges[std::size_t(mi[t])];
+            if (r.second == 0) r.first = std::uint32_t(t);
+            ++r.second;
+        }
+        g.material_indices = make_storage_buffer(mi.data(), nt * sizeof(std::int32_t), "material_indices");
         g.flags |= 4u;
+    } else {
+        g.slot_ranges[0] = {0u, std::uint32_t(nt)};
+    }
+    if (!m.attributes.empty()) {
+        std::vector<float> all;
+        for (const CornerAttribute& a : m.attributes) {
+            const std::size_t width = 3 * std::size_t(a.components);
+            g.attribute_layout.push_back({a.name, std::uint32_t(all.size()), a.components, a.direction});
+            if (sorted) {
+                all.insert(all.end(), a.data, a.data + nt * width);
+            } else {
+                std::vector<float> p = permuted(a.data, width);
+                all.insert(all.end(), p.begin(), p.end());
+            }
+        }
+        g.attributes = make_storage_buffer(all.data(), all.size() * sizeof(float), "corner attributes");
+    }
+    for (int k = 0; k < 3; ++k) {
+        g.texspace_location[k] = m.texspace_location[std::size_t(k)];
+        g.texspace_size[k] = m.texspace_size[std::size_t(k)];
     }
     meshes_.push_back(std::move(g));
     return static_cast<std::uint32_t>(meshes_.size() - 1);
@@ -233,11 +303,13 @@ std::uint32_t SceneStore::add_material(const Material& m) {
 
 void SceneStore::add_instances(std::uint32_t mesh_id, const double* matrices, std::size_t count,
                                const std::uint32_t* object_indices, const std::vector<std::uint32_t>& slots,
-                               bool cast_shadow) {
+                               bool cast_shadow, const float* colors, const float* randoms) {
     if (mesh_id >= meshes_.size())
         invalid("add_instances: mesh id " + std::to_string(mesh_id) + " does not exist (" +
                 std::to_string(meshes_.size()) + " meshes)");
     validate_instances(matrices, count);
+    if (colors) require_finite(colors, count * 4, "colors");
+    if (randoms) require_finite(randoms, count, "randoms");
     for (std::uint32_t s : slots)
         if (s >= materials_.size())
             invalid("material_slots: material id " + std::to_string(s) + " does not exist (" +
@@ -255,6 +327,8 @@ void SceneStore::add_instances(std::uint32_t mesh_id, const double* matrices, st
     b.matrices.assign(matrices, matrices + count * 16);
     b.object_indices = object_indices ? std::vector<std::uint32_t>(object_indices, object_indices + count)
                                       : std::vector<std::uint32_t>(count, 0u);
+    b.colors = colors ? std::vector<float>(colors, colors + count * 4) : std::vector<float>(count * 4, 1.0f);
+    b.randoms = randoms ? std::vector<float>(randoms, randoms + count) : std::vector<float>(count, 0.0f);
     if (slots.empty()) {
         if (materials_.empty()) invalid("add_instances: no materials exist; add one first");
         for (std::uint32_t i = 0; i < materials_.size(); ++i) b.material_slots.push_back(i);

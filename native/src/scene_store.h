@@ -9,12 +9,29 @@
 #include <deferred/scene.h>
 
 #include <cstdint>
+#include <string>
+#include <utility>
 #include <vector>
 
 namespace deferred {
 
+// Where a named per-corner attribute lives in GpuMesh::attributes.
+struct MeshAttributeLayout {
+    std::string name;
+    std::uint32_t offset = 0;  // first float
+    int components = 0;
+    bool direction = false;
+};
+
 struct GpuMesh {
     Buffer positions, indices, normals, uvs, material_indices;
+    Buffer attributes;                                  // every CornerAttribute, one after the other
+    std::vector<MeshAttributeLayout> attribute_layout;
+    float texspace_location[3] = {0.0f, 0.0f, 0.0f};
+    float texspace_size[3] = {1.0f, 1.0f, 1.0f};
+    // Triangles are stored sorted by material slot: slot s covers triangles
+    // [slot_ranges[s].first, + .second), so one slot draws as one range.
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> slot_ranges;
     std::uint32_t triangle_count = 0;
     std::uint32_t flags = 0;          // 1 normals, 2 uvs, 4 material indices (geometry_vert.glsl)
     std::int32_t max_material_index = 0;
@@ -61,6 +78,8 @@ struct InstanceBatch {
     std::vector<std::uint32_t> object_indices; // one per instance
     std::vector<std::uint32_t> material_slots; // slot -> material id
     bool cast_shadow = true;                   // drawn into shadow and world occlusion maps
+    std::vector<float> colors;                 // RGBA per instance (Object Info)
+    std::vector<float> randoms;                // one per instance (Object Info Random)
 };
 
 class SceneStore {
@@ -70,7 +89,7 @@ public:
     std::uint32_t add_material(const Material& m);
     void add_instances(std::uint32_t mesh_id, const double* matrices, std::size_t count,
                        const std::uint32_t* object_indices, const std::vector<std::uint32_t>& slots,
-                       bool cast_shadow = true);
+                       bool cast_shadow = true, const float* colors = nullptr, const float* randoms = nullptr);
     void add_light(const Light& light);
     void set_world(const World& world);
 

@@ -27,12 +27,23 @@ void ShaderLibrary::expand_into(const std::string& file, std::string& out,
                                 std::vector<std::string>& included) const {
     if (std::find(included.begin(), included.end(), file) != included.end()) return;
     included.push_back(file);
-    auto it = sources_.find(file);
-    if (it == sources_.end()) throw Error("shader file '" + file + "' is not embedded in the library");
-    const int file_id = static_cast<int>(
-        std::find(file_ids_.begin(), file_ids_.end(), file) - file_ids_.begin());
+    const std::string* text = nullptr;
+    int file_id = static_cast<int>(file_ids_.size());  // generated files: "source N" in logs
+    if (auto it = sources_.find(file); it != sources_.end()) {
+        text = &it->second;
+        file_id = static_cast<int>(std::find(file_ids_.begin(), file_ids_.end(), file) - file_ids_.begin());
+    } else if (generated_) {
+        if (auto g = generated_->find(file); g != generated_->end()) text = &g->second;
+    }
+    if (!text && file == kMaterialGraphFile) {
+        // Included under #ifdef MATERIAL_GRAPH, which this (preprocessor-
+        // unaware) expansion does not see: nothing to add without a graph.
+        out += "/* no material graph */\n";
+        return;
+    }
+    if (!text) throw Error("shader file '" + file + "' is not embedded in the library");
 
-    std::istringstream in(it->second);
+    std::istringstream in(*text);
     std::string line;
     int line_no = 0;
     out += "#line 1 " + std::to_string(file_id) + "\n";
@@ -122,16 +133,27 @@ GLuint ShaderLibrary::compute_program(const std::string& comp_file, const Shader
     const std::string key = comp_file + "|" + variant.key();
     auto it = programs_.find(key);
     if (it != programs_.end()) return it->second.get();
+    StageTimer timer;
     GLuint p = link({compile_stage(GL_COMPUTE_SHADER, comp_file, variant)}, key);
     programs_.emplace(key, Program(p));
+    ++compile_count_;
+    compile_ms_ += timer.lap_ms();
     return p;
 }
 
 GLuint ShaderLibrary::graphics_program(const std::string& vert_file, const std::string& frag_file,
-                                       const ShaderVariant& variant) {
-    const std::string key = vert_file + "+" + frag_file + "|" + variant.key();
+                                       const ShaderVariant& variant,
+                                       const std::map<std::string, std::string>& generated) {
+    std::string key = vert_file + "+" + frag_file + "|" + variant.key();
+    for (const auto& [name, text] : generated) key += "|" + name + ":" + text;
     auto it = programs_.find(key);
     if (it != programs_.end()) return it->second.get();
+    struct Scope {
+        const std::map<std::string, std::string>*& slot;
+        ~Scope() { slot = nullptr; }
+    } scope{generated_};
+    generated_ = &generated;
+    StageTimer timer;
     GLuint vs = compile_stage(GL_VERTEX_SHADER, vert_file, variant);
     GLuint fs = 0;
     try {
@@ -140,8 +162,10 @@ GLuint ShaderLibrary::graphics_program(const std::string& vert_file, const std::
         glDeleteShader(vs);
         throw;
     }
-    GLuint p = link({vs, fs}, key);
+    GLuint p = link({vs, fs}, vert_file + "+" + frag_file + "|" + variant.key());
     programs_.emplace(key, Program(p));
+    ++compile_count_;
+    compile_ms_ += timer.lap_ms();
     return p;
 }
 

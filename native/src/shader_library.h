@@ -17,6 +17,9 @@
 
 namespace deferred {
 
+// The generated file a node material's program includes (material_codegen.cpp).
+constexpr const char* kMaterialGraphFile = "material_graph.glsl";
+
 struct ShaderVariant {
     std::vector<std::string> defines;  // "NAME" or "NAME VALUE"
     std::string key() const;
@@ -30,10 +33,16 @@ public:
     std::string expand(const std::string& file, const ShaderVariant& variant) const;
 
     GLuint compute_program(const std::string& comp_file, const ShaderVariant& variant);
+    // `generated`: extra files (name -> source) the expansion may include,
+    // e.g. a node material's "material_graph.glsl"; part of the cache key.
     GLuint graphics_program(const std::string& vert_file, const std::string& frag_file,
-                            const ShaderVariant& variant);
+                            const ShaderVariant& variant,
+                            const std::map<std::string, std::string>& generated = {});
 
     std::size_t compiled_program_count() const { return programs_.size(); }
+    // Programs compiled and linked (not found in the cache) and the time it took.
+    std::size_t compile_count() const { return compile_count_; }
+    double compile_ms() const { return compile_ms_; }
 
 private:
     GLuint compile_stage(GLenum stage, const std::string& file, const ShaderVariant& variant) const;
@@ -44,6 +53,9 @@ private:
     std::map<std::string, std::string> sources_;
     std::vector<std::string> file_ids_;  // #line source-string number -> file name
     std::map<std::string, Program> programs_;
+    const std::map<std::string, std::string>* generated_ = nullptr;  // during one graphics_program()
+    std::size_t compile_count_ = 0;
+    double compile_ms_ = 0.0;
 };
 
 }  // namespace deferred

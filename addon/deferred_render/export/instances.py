@@ -8,7 +8,11 @@ already applied in the evaluated data). What is exported:
   is the evaluated data (two objects sharing a mesh without modifiers share
   it; an object with modifiers has evaluated data of its own); non-mesh
   objects (curves, text, metaballs) are keyed by object;
-- one native material per material data-block (``material.py``);
+- one native material per material data-block: a constant Principled
+  parameter set when the node tree reduces to one exactly (``material.py``),
+  else a node graph compiled to GLSL (``materials/``), whose images are
+  uploaded once per render and whose mesh attributes are exported with the
+  meshes that use it;
 - instances grouped by (mesh, material-slot map): one ``add_instances`` call
   per group with an (N, 4, 4) float64 matrix array, so object- and
   data-linked materials both work;
@@ -30,6 +34,7 @@ import numpy as np
 from . import light as light_export
 from . import material as material_export
 from . import mesh as mesh_export
+from ..materials import builder as graph_builder
 
 UNSUPPORTED_GEOMETRY = {"CURVES", "POINTCLOUD", "VOLUME", "GPENCIL"}
 # The native input contract (native/src/scene_store.h, InputLimits): positions
@@ -56,8 +61,50 @@ class ExportStats:
                 f"{self.materials} materials, {self.lights} lights")
 
 
+def _hash_string(text):
+    """Cycles' hash_string (util/hash.h): i = i * 37 + c over the bytes, as C's
+    (signed) char on x86."""
+    i = 0
+    for byte in text.encode("utf-8"):
+        c = byte - 256 if byte > 127 else byte
+        i = (i * 37 + c) & 0xFFFFFFFF
+    return i
+
+
+def _rot(x, k):
+    return ((x << k) | (x >> (32 - k))) & 0xFFFFFFFF
+
+
+def _hash_uint2(kx, ky):
+    """Jenkins lookup3 hash of two uints (Cycles util/hash.h hash_uint2)."""
+    m = 0xFFFFFFFF
+    a = b = c = (0xDEADBEEF + (2 << 2) + 13) & m
+    b = (b + ky) & m
+    a = (a + kx) & m
+    c ^= b; c = (c - _rot(b, 14)) & m
+    a ^= c; a = (a - _rot(c, 11)) & m
+    b ^= a; b = (b - _rot(a, 25)) & m
+    c ^= b; c = (c - _rot(b, 16)) & m
+    a ^= c; a = (a - _rot(c, 4)) & m
+    b ^= a; b = (b - _rot(a, 14)) & m
+    c ^= b; c = (c - _rot(b, 24)) & m
+    return c
+
+
+def object_random(inst, ob):
+    """Object Info > Random as Cycles computes it (blender/object.cpp: the
+    instance's random_id, or hash_uint2(hash_string(name), 0) for an object
+    itself; scene/object.cpp: random_id / 0xFFFFFFFF)."""
+    if inst is not None and inst.is_instance:
+        random_id = int(inst.random_id) & 0xFFFFFFFF
+    else:
+        random_id = _hash_uint2(_hash_string(ob.name), 0)
+    return random_id * (1.0 / 0xFFFFFFFF)
+
+
 class _Group:
-    __slots__ = ("mesh_id", "material_ids", "cast_shadow", "matrices", "object_indices", "names")
+    __slots__ = ("mesh_id", "material_ids", "cast_shadow", "matrices", "object_indices", "names", "colors",
+                 "randoms")
 
     def __init__(self, mesh_id, material_ids, cast_shadow):
         self.mesh_id = mesh_id
@@ -66,6 +113,8 @@ class _Group:
         self.matrices = []
         self.object_indices = []
         self.names = []
+        self.colors = []
+        self.randoms = []
 
 
 class SceneExporter:
@@ -81,6 +130,9 @@ class SceneExporter:
         self._mesh_ids = {}         # mesh key -> (native id, triangle count) or None if skipped
         self._material_ids = {}     # material key -> native id
         self._groups = {}           # (mesh id, material ids) -> _Group
+        self._material_attributes = {}  # native material id -> attribute keys its graph reads
+        self._images = None         # materials.builder.ImageRegistry, made on first use
+        self.graph_materials = 0
         self._warned = set()
         self.cancelled = False
 
@@ -98,6 +150,11 @@ class SceneExporter:
         else:
             key = None
         mat_id = self._material_ids.get(key)
+        if mat_id is None and material is not None:
+            mat_id = self._graph_material_id(material, key)
+            if mat_id is not None:
+                self._material_ids[key] = mat_id
+                self.stats.materials += 1
         if mat_id is None:
             params, notes = material_export.material_params(material)
             if notes:
@@ -110,6 +167,36 @@ class SceneExporter:
                 mat_id = self.renderer.add_material(**material_export.DEFAULT_PARAMS)
             self._material_ids[key] = mat_id
             self.stats.materials += 1
+        return mat_id
+
+    def _graph_material_id(self, material, key):
+        """A node material when the tree does not reduce to one constant
+        parameter set (material.py); None to take the constant path."""
+        if not material.use_nodes or material.node_tree is None:
+            return None
+        if not hasattr(self.renderer, "add_graph_material"):
+            return None
+        _, notes = material_export.material_params(material)
+        if not notes:
+            return None  # exact as constants: no program needed
+        if self._images is None:
+            self._images = graph_builder.ImageRegistry(self.renderer.add_image, self.warn)
+        try:
+            graph = graph_builder.build_material_graph(material, self._images)
+        except (graph_builder.GraphCycle, graph_builder.SpecError, RecursionError) as ex:
+            self._warn_once(("material-graph", key), f"Material '{material.name}': {ex} "
+                                                     "(rendered with its viewport display colour)")
+            return None
+        if graph.notes:
+            self._warn_once(("material", key), f"Material '{material.name}': " + "; ".join(graph.notes))
+        try:
+            mat_id = self.renderer.add_graph_material(graph.ir, pass_index=int(material.pass_index))
+        except ValueError as ex:  # refused by the native validation
+            self._warn_once(("material-graph", key), f"Material '{material.name}': {ex} "
+                                                     "(rendered with its viewport display colour)")
+            return None
+        self._material_attributes[mat_id] = graph.attributes
+        self.graph_materials += 1
         return mat_id
 
     def _slot_material_ids(self, ob):
@@ -125,13 +212,15 @@ class SceneExporter:
             return ("data", ob.data.as_pointer())
         return ("object", ob.as_pointer())
 
-    def _mesh_id(self, ob):
-        key = self._mesh_key(ob)
+    def _mesh_id(self, ob, attribute_keys=frozenset()):
+        # Objects sharing a mesh but reading other attributes get their own copy.
+        key = (self._mesh_key(ob), attribute_keys)
         if key in self._mesh_ids:
             return self._mesh_ids[key]
         entry = None
         try:
-            arrays = mesh_export.object_mesh_arrays(ob)
+            arrays = mesh_export.object_mesh_arrays(
+                ob, attribute_keys, warn=lambda message: self._warn_once(("attribute", message), message))
         except mesh_export.MeshSkipped as ex:
             self.stats.skipped_objects += 1
             # Silent, as in Cycles: curves without bevel (paths) and meshes
@@ -148,7 +237,8 @@ class SceneExporter:
                     arrays.positions, arrays.indices,
                     corner_normals=arrays.corner_normals,
                     corner_uvs=arrays.corner_uvs,
-                    material_indices=arrays.material_indices)
+                    material_indices=arrays.material_indices,
+                    **self._mesh_extras(arrays))
             except ValueError as ex:  # refused by the native validation
                 self.stats.skipped_objects += 1
                 self._warn_once(("mesh", key), f"Object '{ob.name}' skipped: {ex}")
@@ -159,6 +249,13 @@ class SceneExporter:
                 self.stats.mesh_bytes += arrays.nbytes()
         self._mesh_ids[key] = entry
         return entry
+
+    def _mesh_extras(self, arrays):
+        """Keyword arguments only node materials need (recorders without them work)."""
+        if not arrays.attributes and not self._material_attributes:
+            return {}
+        return {"attributes": [(k, a, d) for k, a, d in arrays.attributes],
+                "texspace_location": arrays.texspace_location, "texspace_size": arrays.texspace_size}
 
     # -- the walk ---------------------------------------------------------
     def sync(self, depsgraph):
@@ -193,11 +290,12 @@ class SceneExporter:
                                                  f"{MAX_MATRIX_VALUE:g} (float32 rendering limit)")
             self.stats.skipped_objects += 1
             return
-        entry = self._mesh_id(ob)
+        material_ids = self._slot_material_ids(ob)
+        keys = frozenset(k for m in material_ids for k in self._material_attributes.get(m, ()))
+        entry = self._mesh_id(ob, keys)
         if entry is None:
             return
         mesh_id, triangles = entry
-        material_ids = self._slot_material_ids(ob)
         # Object > Visibility > Ray Visibility > Shadow: off, the object
         # blocks no light (Cycles' shadow rays pass it) and no world light.
         cast_shadow = bool(getattr(ob, "visible_shadow", True))
@@ -208,6 +306,8 @@ class SceneExporter:
         group.matrices.append(matrix)
         group.object_indices.append(ob.pass_index)
         group.names.append(ob.name)
+        group.colors.append(tuple(ob.color))
+        group.randoms.append(object_random(inst, ob))
         self.stats.instances += 1
         self.stats.instanced_triangles += triangles
 
@@ -230,11 +330,15 @@ class SceneExporter:
         for group in self._groups.values():
             matrices = np.ascontiguousarray(np.stack(group.matrices), dtype=np.float64)
             object_indices = np.asarray(group.object_indices, dtype=np.uint32)
+            extras = {}
+            if self._material_attributes:  # Object Info for node materials
+                extras = {"colors": np.ascontiguousarray(group.colors, dtype=np.float32).reshape(-1, 4),
+                          "randoms": np.ascontiguousarray(group.randoms, dtype=np.float32)}
             try:
                 self.renderer.add_instances(group.mesh_id, matrices,
                                             object_indices=object_indices,
                                             material_slots=list(group.material_ids),
-                                            cast_shadow=group.cast_shadow)
+                                            cast_shadow=group.cast_shadow, **extras)
             except ValueError as ex:  # refused by the native validation
                 names = ", ".join(f"'{n}'" for n in group.names[:3]) + (" ..." if len(group.names) > 3 else "")
                 self.warn(f"{len(group.names)} object(s) skipped ({names}): {ex}")

@@ -19,6 +19,8 @@ Normals, as Cycles 3.4 computes them (intern/cycles/blender/mesh.cpp):
 
 import numpy as np
 
+from . import attributes as attribute_export
+
 # Object types whose geometry becomes a mesh through Object.to_mesh().
 MESHABLE_TYPES = {"MESH", "CURVE", "SURFACE", "FONT", "META"}
 
@@ -30,15 +32,20 @@ MAX_COORDINATE = 1e15
 class MeshArrays:
     """The arrays handed to ``Renderer.add_mesh`` (shapes and dtypes fixed)."""
 
-    __slots__ = ("name", "positions", "indices", "corner_normals", "corner_uvs", "material_indices")
+    __slots__ = ("name", "positions", "indices", "corner_normals", "corner_uvs", "material_indices",
+                 "attributes", "texspace_location", "texspace_size")
 
-    def __init__(self, name, positions, indices, corner_normals, corner_uvs, material_indices):
+    def __init__(self, name, positions, indices, corner_normals, corner_uvs, material_indices,
+                 attributes=(), texspace_location=(0.0, 0.0, 0.0), texspace_size=(1.0, 1.0, 1.0)):
         self.name = name
         self.positions = positions            # (V, 3) float32
         self.indices = indices                # (T, 3) uint32
         self.corner_normals = corner_normals  # (T*3, 3) float32
         self.corner_uvs = corner_uvs          # (T*3, 2) float32 or None
         self.material_indices = material_indices  # (T,) int32
+        self.attributes = list(attributes)    # [(key, (T*3, C) float32, is_direction)] node materials read
+        self.texspace_location = texspace_location
+        self.texspace_size = texspace_size
 
     @property
     def triangle_count(self):
@@ -53,7 +60,7 @@ class MeshArrays:
         for arr in (self.positions, self.indices, self.corner_normals, self.corner_uvs, self.material_indices):
             if arr is not None:
                 total += arr.nbytes
-        return total
+        return total + sum(a.nbytes for _, a, _ in self.attributes)
 
 
 class MeshSkipped(Exception):
@@ -97,12 +104,14 @@ def _normalized(vectors):
     return vectors
 
 
-def mesh_arrays(mesh, name=None, split_normals=None):
+def mesh_arrays(mesh, name=None, split_normals=None, attribute_keys=(), warn=None):
     """Arrays of a bpy.types.Mesh (triangulated through its loop triangles).
 
     ``split_normals``: use the loop split normals (the mesh must have had
     ``calc_normals_split()``); None decides like Cycles (auto smooth or custom
-    normals). Raises MeshSkipped for meshes that cannot be rendered.
+    normals). ``attribute_keys``: the per-corner attributes node materials
+    read (export/attributes.py). Raises MeshSkipped for meshes that cannot be
+    rendered.
     """
     name = name or mesh.name
     mesh.calc_loop_triangles()
@@ -152,6 +161,15 @@ def mesh_arrays(mesh, name=None, split_normals=None):
         if not np.isfinite(corner_uvs).all():
             corner_uvs = np.nan_to_num(corner_uvs, nan=0.0, posinf=0.0, neginf=0.0)
 
+    corner_attributes = []
+    if attribute_keys:
+        poly_index = _get(tris, "polygon_index", nt, np.uint32)
+        gather = attribute_export.CornerGather(tri_verts, tri_loops, poly_index)
+        corner_attributes = attribute_export.corner_attributes(mesh, attribute_keys, gather,
+                                                               warn or (lambda message: None))
+    texspace_location = tuple(getattr(mesh, "texspace_location", (0.0, 0.0, 0.0)))
+    texspace_size = tuple(getattr(mesh, "texspace_size", (1.0, 1.0, 1.0)))
+
     return MeshArrays(
         name,
         np.ascontiguousarray(positions),
@@ -159,10 +177,13 @@ def mesh_arrays(mesh, name=None, split_normals=None):
         np.ascontiguousarray(corner_normals, dtype=np.float32),
         corner_uvs,
         material_indices,
+        corner_attributes,
+        texspace_location,
+        texspace_size,
     )
 
 
-def object_mesh_arrays(ob):
+def object_mesh_arrays(ob, attribute_keys=(), warn=None):
     """Arrays of an evaluated object's final geometry (modifiers applied).
 
     Meshes without auto smooth are read directly from the evaluated data;
@@ -171,8 +192,10 @@ def object_mesh_arrays(ob):
     """
     data = ob.data
     is_mesh = ob.type == "MESH" and data is not None and hasattr(data, "loop_triangles")
-    if is_mesh and not (data.use_auto_smooth or data.has_custom_normals):
-        return mesh_arrays(data, name=data.name, split_normals=False)
+    # Tangents are computed on the mesh (calc_tangents): only on a temporary copy.
+    needs_copy = any(k.startswith("tangent:") for k in attribute_keys)
+    if is_mesh and not needs_copy and not (data.use_auto_smooth or data.has_custom_normals):
+        return mesh_arrays(data, name=data.name, split_normals=False, attribute_keys=attribute_keys, warn=warn)
 
     try:
         temp = ob.to_mesh()
@@ -183,13 +206,14 @@ def object_mesh_arrays(ob):
             # Geometry-nodes instance data that to_mesh() cannot copy: use
             # the evaluated mesh as is (smooth/flat normals, like Cycles'
             # "non-real object data" path).
-            return mesh_arrays(data, name=data.name, split_normals=False)
+            return mesh_arrays(data, name=data.name, split_normals=False, attribute_keys=attribute_keys, warn=warn)
         raise MeshSkipped(f"object '{ob.name}' has no mesh geometry", empty=True)
     try:
         split = bool(temp.use_auto_smooth or temp.has_custom_normals)
         if split:
             temp.calc_normals_split()
-        return mesh_arrays(temp, name=(data.name if data is not None else ob.name), split_normals=split)
+        return mesh_arrays(temp, name=(data.name if data is not None else ob.name), split_normals=split,
+                           attribute_keys=attribute_keys, warn=warn)
     finally:
         ob.to_mesh_clear()
 

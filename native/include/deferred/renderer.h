@@ -105,6 +105,9 @@ struct FrameTimings {
     std::uint64_t camera_instances_drawn = 0;  // instances in the view frustum, over all samples
     std::size_t shadow_lights_dropped = 0;  // would cast shadows, over the layer/memory limits
     std::size_t gbuffer_bytes = 0;  // G-buffer + pass targets allocated for the frame
+    std::size_t programs_compiled = 0;  // GL programs compiled by this render (0: all cached)
+    double compile_ms = 0;              // time spent compiling them
+    std::size_t material_programs = 0;  // distinct node-material programs the frame drew with
 };
 
 struct FrameResult {
@@ -131,9 +134,17 @@ public:
     // (slot -> material id; empty: slot i -> material i). `cast_shadow`
     // false: the instances are seen but block no light and no world light
     // (Blender's Object > Visibility > Ray Visibility > Shadow).
+    // Node materials read per instance `colors` (RGBA, Object Info Color and
+    // Alpha; null: white) and `randoms` (Object Info Random; null: 0).
     void add_instances(std::uint32_t mesh_id, const double* matrices, std::size_t count,
                        const std::uint32_t* object_indices,
-                       const std::vector<std::uint32_t>& material_slots, bool cast_shadow = true);
+                       const std::vector<std::uint32_t>& material_slots, bool cast_shadow = true,
+                       const float* colors = nullptr, const float* randoms = nullptr);
+    // Node materials: an image texture nodes sample (returns its id), and a
+    // material evaluated from a graph (material_graph.h). `base` gives what
+    // the graph does not: the pass index. Returns the material id.
+    std::uint32_t add_image(const ImageData& image);
+    std::uint32_t add_graph_material(const Material& base, const MaterialGraph& graph);
     void add_light(const Light& light);
     void set_world(const World& world);
 

@@ -5,6 +5,8 @@
 // Watts (sun: W/m^2), radians, millimetres for the lens and sensor.
 #pragma once
 
+#include <deferred/material_graph.h>
+
 #include <array>
 #include <cstdint>
 #include <string>
@@ -32,6 +34,13 @@ struct MeshData {
     const float* corner_normals = nullptr;   // [triangle_count*3][3], optional (flat if null)
     const float* corner_uvs = nullptr;       // [triangle_count*3][2], optional
     const std::int32_t* material_indices = nullptr;  // [triangle_count], optional (slot 0)
+    // Named per-corner attributes node materials read (UV maps, tangents,
+    // colour attributes); only those some material uses are exported.
+    std::vector<CornerAttribute> attributes;
+    // Texture space (Blender's texspace_location / texspace_size): generated
+    // coordinates are (P - (location - size)) / (2 size).
+    Vec3 texspace_location{0.0f, 0.0f, 0.0f};
+    Vec3 texspace_size{1.0f, 1.0f, 1.0f};
 };
 
 // Principled BSDF parameter set of Blender 3.4 (constants per material).
@@ -57,6 +66,9 @@ struct Material {
     // weighted sum of the two, as Cycles' closure weights make it.
     std::int32_t mix_with = -1;
     float mix_probability = 0.0f;
+    // A node material: index of its graph (Renderer::add_graph_material sets
+    // it); -1 for a constant parameter set.
+    std::int32_t graph = -1;
 };
 constexpr int kMaxMixChain = 16;
 

@@ -1,0 +1,136 @@
+"""Per-corner attributes node materials read, by key (materials/builder.py):
+
+- ``uv:NAME``      UV map (2 floats); empty NAME: the active render UV map
+- ``tangent:NAME`` MikkTSpace tangent of that UV map (xyz, bitangent sign),
+                   as Blender's ``calc_tangents`` gives it (Cycles' normal map)
+- ``color:NAME``   colour attribute (RGBA, scene linear); empty NAME: the
+                   active render one
+- ``attr:NAME``    any of the above by name, or a generic attribute (float,
+                   int, bool, vector, 2D vector, colour) on points, corners or faces
+
+Only keys some material of the object reads are exported, with numpy
+``foreach_get`` (no Python loop over elements). A key the mesh cannot
+provide is left out (the material reads 0, as Cycles does for a missing
+attribute) and reported.
+"""
+
+import numpy as np
+
+
+def _get(collection, attr, count, width):
+    buf = np.empty(count * width, dtype=np.float32)
+    if count:
+        collection.foreach_get(attr, buf)
+    return buf.reshape(count, width)
+
+
+def _render_uv(mesh):
+    for layer in mesh.uv_layers:
+        if layer.active_render:
+            return layer
+    return mesh.uv_layers.active if len(mesh.uv_layers) else None
+
+
+def _render_color(mesh):
+    attrs = mesh.color_attributes
+    if len(attrs) == 0:
+        return None
+    index = getattr(attrs, "render_color_index", -1)
+    if 0 <= index < len(attrs):
+        return attrs[index]
+    return attrs.active_color or attrs[0]
+
+
+class CornerGather:
+    """Maps per-point / per-corner / per-face data to triangle corners."""
+
+    def __init__(self, tri_verts, tri_loops, poly_index):
+        self.verts = tri_verts.reshape(-1)
+        self.loops = tri_loops.reshape(-1)
+        self.faces = np.repeat(poly_index, 3)
+
+    def __call__(self, data, domain):
+        if domain == "POINT":
+            return data[self.verts]
+        if domain == "CORNER":
+            return data[self.loops]
+        if domain == "FACE":
+            return data[self.faces]
+        return None
+
+
+def _uv(mesh, name, gather):
+    layer = _render_uv(mesh) if name == "" else mesh.uv_layers.get(name)
+    if layer is None:
+        return None
+    return gather(_get(layer.data, "uv", len(mesh.loops), 2), "CORNER")
+
+
+def _color(mesh, attr, gather):
+    n = len(attr.data)
+    return gather(_get(attr.data, "color", n, 4), attr.domain)
+
+
+_GENERIC = {  # data_type -> (foreach_get property, components)
+    "FLOAT": ("value", 1), "INT": ("value", 1), "BOOLEAN": ("value", 1), "INT8": ("value", 1),
+    "FLOAT_VECTOR": ("vector", 3), "FLOAT2": ("vector", 2),
+    "FLOAT_COLOR": ("color", 4), "BYTE_COLOR": ("color", 4),
+}
+
+
+def _generic(mesh, name, gather):
+    if mesh.uv_layers.get(name) is not None:
+        return _uv(mesh, name, gather)
+    attr = mesh.attributes.get(name)
+    if attr is None or attr.data_type not in _GENERIC or attr.domain not in {"POINT", "CORNER", "FACE"}:
+        return None
+    prop, width = _GENERIC[attr.data_type]
+    n = len(attr.data)
+    if attr.data_type in {"INT", "BOOLEAN", "INT8"}:
+        raw = np.empty(n, dtype=np.int32 if attr.data_type != "BOOLEAN" else bool)
+        if n:
+            attr.data.foreach_get("value", raw)
+        data = raw.astype(np.float32).reshape(n, 1)
+    else:
+        data = _get(attr.data, prop, n, width)
+    return gather(data, attr.domain)
+
+
+def _tangents(mesh, name, gather):
+    layer = _render_uv(mesh) if name == "" else mesh.uv_layers.get(name)
+    if layer is None:
+        return None
+    mesh.calc_tangents(uvmap=layer.name)  # RuntimeError on n-gons
+    n = len(mesh.loops)
+    t = _get(mesh.loops, "tangent", n, 3)
+    sign = _get(mesh.loops, "bitangent_sign", n, 1)
+    return gather(np.concatenate([t, sign], axis=1), "CORNER")
+
+
+def corner_attributes(mesh, keys, gather, warn):
+    """[(key, (3T, C) float32, is_direction)] for the keys the mesh has."""
+    out = []
+    for key in sorted(keys):
+        kind, _, name = key.partition(":")
+        data = None
+        try:
+            if kind == "uv":
+                data = _uv(mesh, name, gather)
+            elif kind == "color":
+                attr = _render_color(mesh) if name == "" else mesh.color_attributes.get(name)
+                data = _color(mesh, attr, gather) if attr is not None else None
+            elif kind == "tangent":
+                data = _tangents(mesh, name, gather)
+            elif kind == "attr":
+                attr = mesh.color_attributes.get(name)
+                data = _color(mesh, attr, gather) if attr is not None else _generic(mesh, name, gather)
+        except RuntimeError as ex:
+            warn(f"mesh '{mesh.name}': {kind} '{name}' unavailable ({ex}); the material reads 0")
+            continue
+        if data is None:
+            warn(f"mesh '{mesh.name}' has no {kind.replace('attr', 'attribute')} '{name or '(active)'}'; "
+                 "the material reads 0")
+            continue
+        data = np.nan_to_num(np.ascontiguousarray(data, dtype=np.float32), nan=0.0, posinf=0.0, neginf=0.0)
+        out.append((key, data, kind == "tangent"))
+    return out

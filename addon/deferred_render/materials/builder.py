@@ -1,0 +1,325 @@
+"""Blender node tree -> the typed graph (IR) the native renderer compiles.
+
+``build_material_graph`` walks back from the Material Output's Surface
+input, emitting each node a spec exists for (``nodes/``) once per group
+context, dependencies first (so the IR is in topological order), and
+collecting the per-material constants, the images and the mesh attributes
+the graph reads. The contract a spec programs against is the
+``NodeBuilder`` API below (CONTRACT.md has the long form).
+
+The IR (what ``Renderer.add_graph_material`` takes)::
+
+    {"nodes": [{"func": "node_math", "args": [...], "outputs": ["float"]}, ...],
+     "surface": (node index, output index) or None,
+     "constants": [float, ...], "images": [native image id, ...],
+     "attributes": ["uv:UVMap", "color:Col", ...]}
+
+with args ``("int", v)``, ``("const", type, offset)``, ``("block", offset)``,
+``("link", type, node, output, from_type)``, ``("shading", name)``,
+``("image", slot)``. Values never enter the GLSL, so materials that differ
+only in values share one program.
+"""
+
+import math
+
+from . import graph as graph_walk
+from .nodes import SPECS
+
+# Blender's scene-linear luminance (default OCIO config, Rec.709), as the
+# GLSL conversions (material_lib.glsl) and Cycles' ConvertNode use it.
+LUMINANCE = (0.2126, 0.7152, 0.0722)
+
+MAX_NODES = 4096
+MAX_ATTRIBUTES = 8
+MAX_IMAGES = 16
+
+
+class SpecError(Exception):
+    """A node spec asked for something the node does not have."""
+
+
+class GraphCycle(Exception):
+    pass
+
+
+def _floats(value):
+    try:
+        return [float(v) for v in value]
+    except TypeError:
+        return [float(value)]
+
+
+def _finite(x):
+    return x if math.isfinite(x) else 0.0
+
+
+def convert_value(value, from_kind, to_kind):
+    """A constant converted as Blender converts a link (ConvertNode)."""
+    v = _floats(value)
+    if to_kind == "float":
+        if len(v) == 1:
+            return [_finite(v[0])]
+        if from_kind == "color":
+            return [_finite(sum(c * w for c, w in zip(v[:3], LUMINANCE)))]
+        return [_finite(sum(v[:3]) / 3.0)]
+    if len(v) == 1:
+        return [_finite(v[0])] * 3
+    return [_finite(c) for c in (v + [0.0, 0.0, 0.0])[:3]]
+
+
+class NodeBuilder:
+    """What a node spec sees: one Blender node in one group context."""
+
+    def __init__(self, graph, node, ctx):
+        self._graph = graph
+        self.node = node
+        self.ctx = ctx
+        self.emitted = False
+        self.outputs = None
+
+    # -- arguments --------------------------------------------------------
+    def _socket(self, identifier):
+        for s in self.node.inputs:
+            if s.identifier == identifier:
+                return s
+        raise SpecError(f"{self.node.bl_idname} has no input '{identifier}'")
+
+    def input(self, identifier, type, implicit=None):
+        socket = self._socket(identifier)
+        source = graph_walk.resolve_input(socket, self.ctx)
+        if isinstance(source, graph_walk.Output):
+            arg = self._graph.output_arg(source, type)
+            if arg is not None:
+                return arg
+            final = None
+        else:
+            final = source.socket
+        target = final if final is not None else socket
+        if type == "closure":
+            return self._graph.closure_none()
+        if implicit is not None and (final is None or getattr(target, "hide_value", False)):
+            return ("shading", implicit)
+        value = getattr(target, "default_value", None)
+        if value is None:
+            value = getattr(socket, "default_value", 0.0)
+        return self.const(convert_value(value, graph_walk.socket_kind(target), type), type)
+
+    def is_linked(self, identifier):
+        """True if a real node output drives the input (after groups, reroutes, mutes)."""
+        source = graph_walk.resolve_input(self._socket(identifier), self.ctx)
+        return isinstance(source, graph_walk.Output)
+
+    def const(self, value, type):
+        v = _floats(value)
+        v = v[:1] if type == "float" else (v + [0.0, 0.0, 0.0])[:3] if len(v) > 1 else v * 3
+        offset = len(self._graph.constants)
+        self._graph.constants.extend(_finite(x) for x in v)
+        return ("const", type, offset)
+
+    def block(self, floats):
+        offset = len(self._graph.constants)
+        self._graph.constants.extend(_finite(float(x)) for x in floats)
+        return ("block", offset)
+
+    def int(self, value):
+        return ("int", int(value))
+
+    def shading(self, name):
+        return ("shading", name)
+
+    def attribute(self, key):
+        """An attribute slot (mesh data by key: 'uv:NAME', 'tangent:NAME',
+        'color:NAME', 'attr:NAME'; an empty NAME is the active render one)."""
+        return ("shading", f"attr{self._graph.attribute_slot(key)}")
+
+    def image(self, image):
+        return ("image", self._graph.image_slot(image))
+
+    # -- the call ---------------------------------------------------------
+    def call(self, func, args, outputs):
+        if self.emitted:
+            raise SpecError(f"{self.node.bl_idname}: one call per node")
+        self.emitted = True
+        self.outputs = list(outputs)
+        self._graph.append_node(func, args, [t for _, t in outputs])
+
+    def unsupported(self, reason):
+        self._graph.note(f"{_label(self.node)}: {reason} (default output used)")
+
+
+def _label(node):
+    return f"'{node.name}' ({node.bl_label or node.bl_idname})"
+
+
+class ImageRegistry:
+    """Blender image -> native image id, once per export (missing: magenta)."""
+
+    def __init__(self, add_image, warn):
+        self._add_image = add_image
+        self._warn = warn
+        self._ids = {}
+        self._magenta = None
+
+    def image_id(self, image):
+        key = image.as_pointer() if image is not None else None
+        if key in self._ids:
+            return self._ids[key]
+        from . import images
+        try:
+            result = images.image_pixels(image)
+            for w in result.warnings:
+                self._warn(f"Image '{image.name}': {w}")
+            native_id = self._add_image(result.pixels)
+            self._ids[key] = (native_id, result)
+        except (images.ImageUnavailable, ValueError) as ex:
+            self._warn(f"Image '{getattr(image, 'name', '?')}': {ex} (rendered magenta, as Cycles does)")
+            self._ids[key] = (self.magenta(), None)
+        return self._ids[key]
+
+    def magenta(self):
+        if self._magenta is None:
+            import numpy as np
+            self._magenta = self._add_image(np.array([[[255, 0, 255, 255]]], dtype=np.uint8))
+        return self._magenta
+
+
+class GraphBuilder:
+    def __init__(self, images=None):
+        self.nodes = []          # IR node dicts
+        self.constants = []
+        self.images = []         # native image ids, by slot
+        self.image_info = []     # ImagePixels (or None) by slot
+        self.attributes = []     # attribute keys, by slot
+        self.notes = []
+        self._registry = images
+        self._emitted = {}       # (ctx key, node pointer) -> (IR index, outputs) or None
+        self._in_progress = set()
+        self._none = None
+
+    def note(self, text):
+        if text not in self.notes:
+            self.notes.append(text)
+
+    def append_node(self, func, args, output_types):
+        if len(self.nodes) >= MAX_NODES:
+            raise GraphCycle(f"more than {MAX_NODES} nodes")
+        self.nodes.append({"func": func, "args": list(args), "outputs": list(output_types)})
+        return len(self.nodes) - 1
+
+    def closure_none(self):
+        if self._none is None:
+            self._none = self.append_node("node_closure_none", [], ["closure"])
+        return ("link", "closure", self._none, 0, "closure")
+
+    def attribute_slot(self, key):
+        if key not in self.attributes:
+            if len(self.attributes) >= MAX_ATTRIBUTES:
+                self.note(f"more than {MAX_ATTRIBUTES} attributes read (attribute '{key}' is 0)")
+                return MAX_ATTRIBUTES - 1
+            self.attributes.append(key)
+        return self.attributes.index(key)
+
+    def image_slot(self, image):
+        if self._registry is None:
+            raise SpecError("no image registry")
+        native_id, info = self._registry.image_id(image)
+        if native_id in self.images:
+            return self.images.index(native_id)
+        if len(self.images) >= MAX_IMAGES:
+            self.note(f"more than {MAX_IMAGES} images (the last one reused)")
+            return MAX_IMAGES - 1
+        self.images.append(native_id)
+        self.image_info.append(info)
+        return len(self.images) - 1
+
+    def emit(self, node, ctx):
+        """IR index and outputs of a node (emitting it first), or None."""
+        key = (tuple(g.as_pointer() for g in ctx), node.as_pointer())
+        if key in self._emitted:
+            return self._emitted[key]
+        if key in self._in_progress:
+            raise GraphCycle(f"the node tree has a cycle through {_label(node)}")
+        self._in_progress.add(key)
+        try:
+            spec = SPECS.get(node.bl_idname)
+            entry = None
+            if spec is None:
+                fallback = SPECS.get("#unsupported_shader") if any(o.type == "SHADER" for o in node.outputs) else None
+                if fallback is not None:
+                    self.note(f"{_label(node)} is not supported (rendered as a Diffuse BSDF of its colour)")
+                    spec = fallback
+                else:
+                    self.note(f"{_label(node)} is not supported (its outputs take their default values)")
+            if spec is not None:
+                b = NodeBuilder(self, node, ctx)
+                spec(b)
+                if b.emitted:
+                    entry = (len(self.nodes) - 1, b.outputs)
+        finally:
+            self._in_progress.discard(key)
+        self._emitted[key] = entry
+        return entry
+
+    def output_arg(self, source, type):
+        entry = self.emit(source.node, source.ctx)
+        if entry is None:
+            return None
+        index, outputs = entry
+        for pos, (identifier, kind) in enumerate(outputs):
+            if identifier == source.socket.identifier:
+                if (kind == "closure") != (type == "closure"):
+                    self.note(f"{_label(source.node)}: a shader linked to a value input (ignored)")
+                    return None
+                return ("link", type, index, pos, kind)
+        self.note(f"{_label(source.node)}: output '{source.socket.name}' is not supported (default used)")
+        return None
+
+
+def material_output(tree):
+    """The output Cycles renders: get_output_node('CYCLES'), else any Material Output."""
+    output = None
+    try:
+        output = tree.get_output_node("CYCLES")
+    except (AttributeError, TypeError):
+        pass
+    if output is None:
+        output = next((n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial"), None)
+    return output
+
+
+class MaterialGraph:
+    """The IR of one material and what it needs from meshes."""
+
+    def __init__(self, ir, notes, attributes):
+        self.ir = ir
+        self.notes = notes
+        self.attributes = attributes
+
+
+def build_material_graph(material, images=None):
+    """MaterialGraph for a node material, or raise GraphCycle/SpecError.
+
+    ``images``: an ImageRegistry (texture nodes upload through it)."""
+    tree = material.node_tree
+    g = GraphBuilder(images)
+    output = material_output(tree)
+    surface = None
+    if output is None:
+        g.note("no Material Output node (rendered black, as Cycles does)")
+    else:
+        socket = output.inputs.get("Surface")
+        try:
+            source = graph_walk.resolve_input(socket, ()) if socket is not None else None
+        except graph_walk.GraphError as ex:
+            raise GraphCycle(str(ex))
+        if isinstance(source, graph_walk.Output):
+            arg = g.output_arg(source, "closure")
+            if arg is not None:
+                surface = (arg[2], arg[3])
+        for name in ("Volume", "Displacement"):
+            s = output.inputs.get(name)
+            if s is not None and s.is_linked:
+                g.note(f"{name} (not rendered)")
+    ir = {"nodes": g.nodes, "surface": surface, "constants": g.constants,
+          "images": g.images, "attributes": g.attributes}
+    return MaterialGraph(ir, g.notes, list(g.attributes))

@@ -1,0 +1,105 @@
+"""Shader nodes -> closures (shaders/nodes/node_shader_lib.glsl).
+
+What the G-buffer cannot hold is named in the material's warning: Principled
+subsurface, transmission, anisotropy and a clearcoat normal; alpha below 1
+(transparency is not rendered yet: surfaces are drawn opaque); Add Shader of
+two reflecting BSDFs (drawn one at a time at twice the weight, exact for the
+diffuse and metallic parts only). Shader nodes without a spec fall back to a
+Diffuse BSDF of their Color input (builder.py, '#unsupported_shader').
+"""
+
+from . import register
+
+
+def _value(b, identifier):
+    """The socket's constant value when unlinked (None if linked)."""
+    if b.is_linked(identifier):
+        return None
+    for s in b.node.inputs:
+        if s.identifier == identifier:
+            v = s.default_value
+            try:
+                return float(v)
+            except TypeError:
+                return tuple(v)
+    return None
+
+
+@register("ShaderNodeBsdfPrincipled")
+def principled(b):
+    for identifier, neutral in (("Subsurface", 0.0), ("Transmission", 0.0), ("Anisotropic", 0.0)):
+        v = _value(b, identifier)
+        if v is None:
+            b._graph.note(f"'{b.node.name}': '{identifier}' is linked (not rendered)")
+        elif abs(v - neutral) > 1e-6:
+            b._graph.note(f"'{b.node.name}': '{identifier}' = {v:.3g} (not rendered)")
+    if b.is_linked("Clearcoat Normal"):
+        b._graph.note(f"'{b.node.name}': 'Clearcoat Normal' (the base normal is used)")
+    alpha = _value(b, "Alpha")
+    if alpha is None or alpha < 1.0:
+        b._graph.note(f"'{b.node.name}': Alpha below 1 is drawn opaque (transparency is not rendered yet)")
+    b.call("node_bsdf_principled",
+           [b.input("Base Color", "color"), b.input("Metallic", "float"), b.input("Specular", "float"),
+            b.input("Specular Tint", "float"), b.input("Roughness", "float"), b.input("Sheen", "float"),
+            b.input("Sheen Tint", "float"), b.input("Clearcoat", "float"), b.input("Clearcoat Roughness", "float"),
+            b.input("Emission", "color"), b.input("Emission Strength", "float"), b.input("Alpha", "float"),
+            b.input("Normal", "vector", implicit="N")],
+           [("BSDF", "closure")])
+
+
+@register("ShaderNodeBsdfDiffuse")
+def diffuse(b):
+    b.call("node_bsdf_diffuse",
+           [b.input("Color", "color"), b.input("Roughness", "float"), b.input("Normal", "vector", implicit="N")],
+           [("BSDF", "closure")])
+
+
+@register("ShaderNodeBsdfGlossy", "ShaderNodeBsdfAnisotropic")
+def glossy(b):
+    b.call("node_bsdf_glossy",
+           [b.input("Color", "color"), b.input("Roughness", "float"), b.input("Normal", "vector", implicit="N")],
+           [("BSDF", "closure")])
+
+
+@register("ShaderNodeEmission")
+def emission(b):
+    b.call("node_emission", [b.input("Color", "color"), b.input("Strength", "float")], [("Emission", "closure")])
+
+
+@register("ShaderNodeBsdfTransparent")
+def transparent(b):
+    b._graph.note(f"'{b.node.name}': Transparent BSDF is drawn opaque (transparency is not rendered yet)")
+    b.call("node_bsdf_transparent", [b.input("Color", "color")], [("BSDF", "closure")])
+
+
+@register("ShaderNodeMixShader")
+def mix_shader(b):
+    b.call("node_mix_shader",
+           [b.input("Fac", "float"), b.input("Shader", "closure"), b.input("Shader_001", "closure")],
+           [("Shader", "closure")])
+
+
+@register("ShaderNodeAddShader")
+def add_shader(b):
+    reflecting = 0
+    for identifier in ("Shader", "Shader_001"):
+        socket = next(s for s in b.node.inputs if s.identifier == identifier)
+        link = socket.links[0] if socket.is_linked else None
+        if link is not None and link.from_node.bl_idname not in {"ShaderNodeEmission", "ShaderNodeBackground"}:
+            reflecting += 1
+    if reflecting == 2:
+        b._graph.note(f"'{b.node.name}': Add Shader of two BSDFs is drawn one at a time at twice the weight "
+                      "(exact for diffuse and metallic lobes only)")
+    b.call("node_add_shader", [b.input("Shader", "closure"), b.input("Shader_001", "closure")],
+           [("Shader", "closure")])
+
+
+@register("#unsupported_shader")
+def unsupported_shader(b):
+    """Fallback for shader nodes without a spec: a Diffuse BSDF of the node's colour."""
+    has_color = any(s.identifier == "Color" for s in b.node.inputs)
+    color = b.input("Color", "color") if has_color else b.const((0.8, 0.8, 0.8), "color")
+    has_normal = any(s.identifier == "Normal" for s in b.node.inputs)
+    normal = b.input("Normal", "vector", implicit="N") if has_normal else b.shading("N")
+    out = next(o for o in b.node.outputs if o.type == "SHADER")
+    b.call("node_bsdf_diffuse", [color, b.const(1.0, "float"), normal], [(out.identifier, "closure")])

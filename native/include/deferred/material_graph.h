@@ -1,0 +1,73 @@
+// Node materials: the typed dataflow graph (IR) the add-on builds from a
+// Blender node tree, and the images its texture nodes read.
+//
+// The graph is generic: each node names a GLSL function of the node library
+// (shaders/nodes/) and lists its arguments; node semantics live in the
+// add-on's node specs and in that GLSL, not here (see
+// addon/deferred_render/materials/CONTRACT.md). The renderer turns a graph
+// into a geometry-pass fragment shader (native/src/material_codegen.cpp).
+// Two materials whose graphs differ only in `constants` share one program:
+// the constants live in a buffer, so editing a value never recompiles.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace deferred {
+
+enum class SocketType : std::uint8_t { Float = 0, Color = 1, Vector = 2, Closure = 3 };
+
+struct GraphArg {
+    enum class Kind : std::uint8_t {
+        Int,      // literal `value` compiled into the shader (enums): structural
+        Const,    // `type` read from the constants at `value` (float: 1, colour/vector: 3 floats)
+        Block,    // the int offset `value` of a block in the constants (read with mat_const)
+        Link,     // output `output` of the earlier node `node`, of type `from`, converted to `type`
+        Shading,  // a value of the shading point named `name` (N, P, uv, attr0, ...)
+        Image,    // the sampler2D of the graph's image slot `value`
+    };
+    Kind kind = Kind::Int;
+    SocketType type = SocketType::Float;
+    std::int32_t value = 0;
+    std::int32_t node = -1;
+    std::int32_t output = 0;
+    SocketType from = SocketType::Float;
+    std::string name;
+};
+
+struct GraphNode {
+    std::string func;                  // GLSL identifier in shaders/nodes/
+    std::vector<GraphArg> args;        // in call order; outputs follow as `out` parameters
+    std::vector<SocketType> outputs;
+};
+
+struct MaterialGraph {
+    std::vector<GraphNode> nodes;      // topological order: links point to earlier nodes
+    std::int32_t surface_node = -1;    // the closure reaching the Material Output's Surface
+    std::int32_t surface_output = 0;
+    std::vector<float> constants;      // per material: values, not structure
+    std::vector<std::uint32_t> images;       // image slot -> image id (Renderer::add_image)
+    std::vector<std::string> attributes;     // attribute slot k (Shading "attrK") -> mesh attribute name
+};
+
+// An image for texture nodes: RGBA, row 0 at the bottom (Blender's order).
+// 8-bit data is kept 8-bit on the GPU (RGBA8, read as value/255), float data
+// as RGBA32F; the node library does every conversion Cycles does.
+struct ImageData {
+    int width = 0, height = 0;
+    const std::uint8_t* bytes = nullptr;  // width*height*4, or
+    const float* floats = nullptr;        // width*height*4
+};
+
+// Per-corner data of a mesh that node materials read by name ("uv:UVMap",
+// "tangent:UVMap", "color:Col", ...): `components` floats per triangle
+// corner, in the order of MeshData::indices.
+struct CornerAttribute {
+    std::string name;
+    int components = 0;  // 1..4
+    const float* data = nullptr;
+    bool direction = false;  // xyz is an object-space direction (tangents): transformed by the model matrix
+};
+
+}  // namespace deferred

@@ -1,0 +1,113 @@
+#include "material_module.h"
+
+#include "material_codegen.h"
+#include "scene_store.h"
+
+#include "../../shaders/shader_defines.h"
+
+#include <deferred/renderer.h>
+
+#include <cmath>
+
+namespace deferred {
+
+void MaterialModule::clear() { *this = MaterialModule(); }
+
+std::uint32_t MaterialModule::add_image(const ImageData& image) {
+    GLint max_size = 0;
+    glGetIntegerv(GL_MAX_TEXTURE_SIZE, &max_size);
+    if (image.width <= 0 || image.height <= 0)
+        throw InvalidInput("image: size " + std::to_string(image.width) + "x" + std::to_string(image.height) +
+                           " must be positive");
+    if (image.width > max_size || image.height > max_size)
+        throw InvalidInput("image: " + std::to_string(image.width) + "x" + std::to_string(image.height) +
+                           " exceeds the GPU's texture limit of " + std::to_string(max_size));
+    if ((image.bytes == nullptr) == (image.floats == nullptr))
+        throw InvalidInput("image: exactly one of bytes and floats must be given");
+    const std::size_t texels = std::size_t(image.width) * std::size_t(image.height);
+    if (image.floats) {
+        // Non-finite texels would reach the G-buffer through any node.
+        for (std::size_t i = 0; i < texels * 4; ++i)
+            if (!std::isfinite(image.floats[i]))
+                throw InvalidInput("image: texel " + std::to_string(i / 4) + " is NaN or infinite");
+    }
+    const GLenum format = image.bytes ? GL_RGBA8 : GL_RGBA32F;
+    StoredImage stored;
+    stored.texture = make_texture_2d(format, image.width, image.height, "material image");
+    stored.width = image.width;
+    stored.height = image.height;
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    if (image.bytes)
+        glTextureSubImage2D(stored.texture.get(), 0, 0, 0, image.width, image.height, GL_RGBA, GL_UNSIGNED_BYTE,
+                            image.bytes);
+    else
+        glTextureSubImage2D(stored.texture.get(), 0, 0, 0, image.width, image.height, GL_RGBA, GL_FLOAT, image.floats);
+    check_gl("uploading a material image");
+    image_bytes_ += texels * (image.bytes ? 4 : 16);
+    images_.push_back(std::move(stored));
+    return std::uint32_t(images_.size() - 1);
+}
+
+std::uint32_t MaterialModule::add_graph(const MaterialGraph& graph) {
+    validate_material_graph(graph);
+    for (std::uint32_t id : graph.images)
+        if (id >= images_.size())
+            throw InvalidInput("material graph: image id " + std::to_string(id) + " does not exist (" +
+                               std::to_string(images_.size()) + " images)");
+    StoredGraph g;
+    g.graph = graph;
+    g.graph.constants.clear();
+    g.glsl = material_graph_glsl(graph);
+    g.constants_offset = std::uint32_t(constants_.size());
+    constants_.insert(constants_.end(), graph.constants.begin(), graph.constants.end());
+    for (const GraphNode& n : graph.nodes)
+        if (n.func == "node_bsdf_principled") g.principled = true;
+    graphs_.push_back(std::move(g));
+    return std::uint32_t(graphs_.size() - 1);
+}
+
+bool MaterialModule::uses_params1() const {
+    for (const StoredGraph& g : graphs_)
+        if (g.principled) return true;
+    return false;
+}
+
+void MaterialModule::upload_constants() {
+    constants_buffer_ = make_storage_buffer(constants_.data(), constants_.size() * sizeof(float), "material constants");
+}
+
+void MaterialModule::bind_constants() const {
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_MATERIAL_CONSTANTS, constants_buffer_.get());
+}
+
+GLuint MaterialModule::program(ShaderLibrary& shaders, std::uint32_t graph, const ShaderVariant& base) {
+    const StoredGraph& g = graphs_.at(graph);
+    ShaderVariant v = base;
+    v.defines.push_back("MATERIAL_GRAPH");
+    v.defines.push_back("MATERIAL_ATTRIBUTE_COUNT " + std::to_string(g.graph.attributes.size()));
+    v.defines.push_back("MATERIAL_IMAGE_COUNT " + std::to_string(g.graph.images.size()));
+    return shaders.graphics_program("geometry_vert.glsl", "geometry_frag.glsl", v, {{"material_graph.glsl", g.glsl}});
+}
+
+void MaterialModule::bind_for_draw(std::uint32_t graph, const GpuMesh& mesh) const {
+    const StoredGraph& g = graphs_.at(graph);
+    for (std::size_t k = 0; k < g.graph.images.size(); ++k)
+        glBindTextureUnit(GLuint(TEX_MATERIAL_IMAGE0 + k), images_[g.graph.images[k]].texture.get());
+    GLint layout[4 * kMaxGraphAttributes];
+    for (int k = 0; k < kMaxGraphAttributes; ++k) {
+        layout[4 * k] = -1;
+        layout[4 * k + 1] = layout[4 * k + 2] = layout[4 * k + 3] = 0;
+        if (std::size_t(k) >= g.graph.attributes.size()) continue;
+        for (const MeshAttributeLayout& a : mesh.attribute_layout)
+            if (a.name == g.graph.attributes[std::size_t(k)]) {
+                layout[4 * k] = GLint(a.offset);
+                layout[4 * k + 1] = a.components;
+                layout[4 * k + 2] = a.direction ? 1 : 0;
+            }
+    }
+    glUniform4iv(3, kMaxGraphAttributes, layout);
+    glUniform3f(11, mesh.texspace_location[0], mesh.texspace_location[1], mesh.texspace_location[2]);
+    glUniform3f(12, mesh.texspace_size[0], mesh.texspace_size[1], mesh.texspace_size[2]);
+}
+
+}  // namespace deferred

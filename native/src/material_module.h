@@ -1,0 +1,65 @@
+// Node materials on the GPU: their graphs (validated, turned into GLSL),
+// the constants buffer every graph material reads, the images texture nodes
+// sample, and the per-draw state a graph needs (program, images, attribute
+// layout of the mesh drawn). The constant Principled materials stay in the
+// SceneStore; a material with `graph >= 0` is drawn with its graph's program.
+#pragma once
+
+#include "gl_util.h"
+#include "shader_library.h"
+
+#include <deferred/material_graph.h>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace deferred {
+
+struct GpuMesh;
+
+class MaterialModule {
+public:
+    void clear();
+
+    // Validates and uploads an image (RGBA8 or RGBA32F); returns its id.
+    std::uint32_t add_image(const ImageData& image);
+    // Validates a graph (images must exist) and keeps it; returns its index.
+    std::uint32_t add_graph(const MaterialGraph& graph);
+
+    std::size_t graph_count() const { return graphs_.size(); }
+    std::size_t image_count() const { return images_.size(); }
+    std::size_t image_bytes() const { return image_bytes_; }
+    std::uint32_t constants_offset(std::uint32_t graph) const { return graphs_[graph].constants_offset; }
+    // True if some graph can produce sheen or clearcoat (the G-buffer's params1).
+    bool uses_params1() const;
+
+    // Per frame: the constants buffer (bound while the geometry pass runs).
+    void upload_constants();
+    void bind_constants() const;
+
+    // The geometry-pass program of a graph, compiled on first use (cached by
+    // its GLSL in the ShaderLibrary, so graphs of one structure share it).
+    GLuint program(ShaderLibrary& shaders, std::uint32_t graph, const ShaderVariant& base);
+    // Per draw: the graph's images and the mesh's attribute slots and texture space.
+    void bind_for_draw(std::uint32_t graph, const GpuMesh& mesh) const;
+
+private:
+    struct StoredGraph {
+        MaterialGraph graph;   // constants moved to the shared buffer
+        std::string glsl;
+        std::uint32_t constants_offset = 0;
+        bool principled = false;
+    };
+    struct StoredImage {
+        Texture texture;
+        int width = 0, height = 0;
+    };
+    std::vector<StoredGraph> graphs_;
+    std::vector<StoredImage> images_;
+    std::vector<float> constants_;
+    std::size_t image_bytes_ = 0;
+    Buffer constants_buffer_;
+};
+
+}  // namespace deferred

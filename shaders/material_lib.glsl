@@ -1,0 +1,90 @@
+/* Node materials in the geometry pass: the closure a graph produces, the
+ * shading point the node library reads, the material's constants.
+ * The generated graph (material_codegen.cpp) is a list of calls into
+ * shaders/nodes/; this file is what those calls see. */
+#ifndef MATERIAL_LIB
+#define MATERIAL_LIB
+
+/* What one pixel and film sample shades with: one Principled parameter set
+ * (the G-buffer's), the emitted radiance and the shading normal. Mix and Add
+ * Shader resolve to one set per sample (nodes/node_shader_lib.glsl), so the
+ * accumulated image converges to Cycles' weighted sum of closures. */
+struct Closure {
+    vec3 base_color;
+    float alpha;
+    float metallic, roughness, specular, specular_tint;
+    float sheen, sheen_tint, clearcoat, clearcoat_roughness;
+    vec3 emission; /* radiance (colour x strength) */
+    vec3 N;        /* world shading normal */
+    float reflects; /* 0 for a closure that reflects nothing (Emission, none) */
+};
+
+/* The shading point (Cycles' ShaderData) as the geometry pass sees it. World
+ * positions are absolute here: textures need them (camera-relative ones
+ * would move the pattern with the camera). */
+struct ShadingPoint {
+    vec3 P;          /* world position */
+    vec3 N;          /* world shading normal, flipped to the viewer's side on back faces */
+    vec3 Ng;         /* world true normal, facing the viewer */
+    vec3 I;          /* unit vector from P towards the viewer */
+    vec3 generated;  /* texture-space coordinates */
+    vec3 uv;         /* active render UV map, z = 0 */
+    vec3 N_object;   /* object-space shading normal (Texture Coordinate > Normal) */
+    vec3 P_object;   /* object-space position */
+    vec3 N_object_smooth; /* interpolated object-space normal, not normalised (Normal Map) */
+    vec3 object_location;
+    vec4 object_color;
+    float object_index, material_index, object_random;
+    float backfacing;   /* 1 on back faces */
+    float view_distance, view_depth;
+    vec3 dPdx, dPdy;    /* one-pixel differentials of P (camera-relative, Bump) */
+    vec3 P_view;        /* Cycles' camera space: +z forward */
+    vec2 window;        /* position in the unjittered frame, [0, 1] */
+    mat3 normal_to_world; /* object -> world for normals (inverse transpose) */
+    mat3 object_to_world; /* object -> world for directions */
+    vec4 attr[8];       /* attribute slots of the material (CornerAttribute by name) */
+};
+
+ShadingPoint g_sd;
+/* The uniform number Mix/Add Shader draw their choice from, rescaled after
+ * each choice so nested mixes stay stratified over the film's samples. */
+float g_mix_u;
+int g_const_base;
+
+layout(std430, binding = SSBO_MATERIAL_CONSTANTS) readonly buffer MaterialConstants { float material_constants[]; };
+
+float mat_const(int i) { return material_constants[g_const_base + i]; }
+vec3 mat_const3(int i) { return vec3(mat_const(i), mat_const(i + 1), mat_const(i + 2)); }
+
+/* Implicit socket conversions (Cycles ConvertNode, svm/convert.h): colour ->
+ * float is the scene-linear luminance (Blender's default OCIO config: Rec.709
+ * weights), vector -> float the average of the components. */
+float node_color_to_float(vec3 c) { return dot(c, vec3(0.2126, 0.7152, 0.0722)); }
+float node_vector_to_float(vec3 v) { return (v.x + v.y + v.z) * (1.0 / 3.0); }
+
+/* No closure (an unlinked shader socket, a Holdout we do not model): black. */
+Closure closure_none() {
+    Closure c;
+    c.base_color = vec3(0.0);
+    c.alpha = 1.0;
+    c.metallic = 0.0;
+    c.roughness = 0.5;
+    c.specular = 0.0;
+    c.specular_tint = 0.0;
+    c.sheen = 0.0;
+    c.sheen_tint = 0.5;
+    c.clearcoat = 0.0;
+    c.clearcoat_roughness = 0.03;
+    c.emission = vec3(0.0);
+    c.N = g_sd.N;
+    c.reflects = 0.0;
+    return c;
+}
+
+/* Cycles' safe_normalize: zero stays zero. */
+vec3 safe_normalize(vec3 v) {
+    float len = length(v);
+    return len != 0.0 ? v / len : vec3(0.0);
+}
+
+#endif

@@ -1,0 +1,129 @@
+/* Shader nodes -> Closure (the G-buffer's Principled parameter set).
+ * Cycles: intern/cycles/kernel/svm/closure.h (svm_node_closure_bsdf,
+ * svm_node_emission, mix/add via closure weights in scene/shader_nodes.cpp). */
+
+float clamp01(float x) { return clamp(x, 0.0, 1.0); }
+
+/* A normal input: unit length, or the shading normal where it degenerates. */
+vec3 closure_normal(vec3 n) {
+    vec3 m = safe_normalize(n);
+    return (dot(m, m) > 0.0 && !any(isnan(m))) ? m : g_sd.N;
+}
+
+/* Principled BSDF (3.4 inputs). The ranges are those of the G-buffer and of
+ * Cycles' own clamps: metallic/transmission weights saturate, GGX alpha is
+ * clamped to [0, 1], base colour is not negative. Subsurface, transmission
+ * and anisotropy are not modelled (the add-on warns when they are used). */
+void node_bsdf_principled(vec3 base_color, float metallic, float specular, float specular_tint,
+                          float roughness, float sheen, float sheen_tint, float clearcoat,
+                          float clearcoat_roughness, vec3 emission, float emission_strength,
+                          float alpha, vec3 normal, out Closure c) {
+    c = closure_none();
+    c.base_color = max(base_color, vec3(0.0));
+    c.metallic = clamp01(metallic);
+    c.specular = clamp(specular, 0.0, 12.0);
+    c.specular_tint = clamp01(specular_tint);
+    c.roughness = clamp01(roughness);
+    c.sheen = clamp01(sheen);
+    c.sheen_tint = clamp01(sheen_tint);
+    c.clearcoat = clamp01(clearcoat);
+    c.clearcoat_roughness = clamp01(clearcoat_roughness);
+    c.emission = max(emission, vec3(0.0)) * max(emission_strength, 0.0);
+    c.alpha = clamp01(alpha);
+    c.N = closure_normal(normal);
+    c.reflects = 1.0;
+}
+
+/* Diffuse BSDF: the Principled diffuse lobe at roughness 1 stands in for
+ * Lambert/Oren-Nayar, as the constant-material path does (export/material.py). */
+void node_bsdf_diffuse(vec3 color, float roughness, vec3 normal, out Closure c) {
+    c = closure_none();
+    c.base_color = max(color, vec3(0.0));
+    c.roughness = 1.0;
+    c.N = closure_normal(normal);
+    c.reflects = 1.0;
+}
+
+/* Glossy BSDF: a metal with the node's colour and roughness (Cycles' Glossy
+ * has no Fresnel; a metal's tends to white only at grazing angles). */
+void node_bsdf_glossy(vec3 color, float roughness, vec3 normal, out Closure c) {
+    c = closure_none();
+    c.base_color = max(color, vec3(0.0));
+    c.metallic = 1.0;
+    c.specular = 0.5;
+    c.roughness = clamp01(roughness);
+    c.N = closure_normal(normal);
+    c.reflects = 1.0;
+}
+
+/* An unlinked shader socket: no closure (black). */
+void node_closure_none(out Closure c) { c = closure_none(); }
+
+/* Emission: radiance colour x strength (svm_node_emission_weight). */
+void node_emission(vec3 color, float strength, out Closure c) {
+    c = closure_none();
+    c.emission = max(color, vec3(0.0)) * max(strength, 0.0);
+}
+
+/* Transparent BSDF: coverage 0 with the node's colour as transmission; the
+ * add-on warns that alpha is not rendered yet. */
+void node_bsdf_transparent(vec3 color, out Closure c) {
+    c = closure_none();
+    c.alpha = 0.0;
+}
+
+/* Mix Shader: closure weights (1 - fac) and fac. Emission and alpha are
+ * linear in the weights and mix exactly; the BSDF is one side, picked with
+ * its weight's probability from g_mix_u, which is then rescaled so nested
+ * mixes stay uniform and stratified. A side that reflects nothing keeps the
+ * other side's lobes with the reflecting weight folded into the colours. */
+void node_mix_shader(float fac, Closure a, Closure b, out Closure c) {
+    fac = clamp01(fac);
+    vec3 emission = mix(a.emission, b.emission, fac);
+    float alpha = mix(a.alpha, b.alpha, fac);
+    if (a.reflects == 0.0 || b.reflects == 0.0) {
+        /* Only one side has lobes: they scale by its weight (radiance is
+         * linear in base colour; the specular weight scales F0 and the
+         * sheen/clearcoat weights scale their lobes). */
+        float w = a.reflects != 0.0 ? 1.0 - fac : fac;
+        c = a.reflects != 0.0 ? a : b;
+        c.base_color *= w;
+        c.specular *= w;
+        c.sheen *= w;
+        c.clearcoat *= w;
+        c.reflects = (a.reflects != 0.0 || b.reflects != 0.0) ? 1.0 : 0.0;
+    } else if (g_mix_u < fac) {
+        c = b;
+        g_mix_u = g_mix_u / fac;
+    } else {
+        c = a;
+        g_mix_u = (g_mix_u - fac) / max(1.0 - fac, 1e-30);
+    }
+    c.emission = emission;
+    c.alpha = alpha;
+}
+
+/* Add Shader: emission and alpha add; when both sides reflect, one is drawn
+ * with probability 1/2 at twice its colour weight (exact for the diffuse and
+ * metallic parts, which are linear in the base colour; the add-on warns). */
+void node_add_shader(Closure a, Closure b, out Closure c) {
+    vec3 emission = a.emission + b.emission;
+    float alpha = clamp01(a.alpha + b.alpha);
+    if (a.reflects == 0.0) {
+        c = b;
+    } else if (b.reflects == 0.0) {
+        c = a;
+    } else {
+        if (g_mix_u < 0.5) {
+            c = b;
+            g_mix_u = g_mix_u * 2.0;
+        } else {
+            c = a;
+            g_mix_u = g_mix_u * 2.0 - 1.0;
+        }
+        c.base_color *= 2.0;
+        c.specular = min(c.specular * 2.0, 12.0);
+    }
+    c.emission = emission;
+    c.alpha = alpha;
+}

@@ -5,7 +5,9 @@
  *  depth         D32F          reversed Z (near 1, far 0, cleared to 0), with    always
  *                              glClipControl(LOWER_LEFT, ZERO_TO_ONE); the
  *                              position is rebuilt from it, never stored
- *  emission      RGBA16F       rgb: emission x strength, a: coverage (1)          always
+ *  emission      RGBA32F       rgb: emission x strength, a: coverage (1)          always
+ *                              (float: textured emission reaches Combined and the
+ *                              Emission pass at the node library's precision)
  *  base          RGBA16F       rgb: base colour, a: material alpha                always
  *  params0       RGBA16F       metallic, roughness, specular, specular tint       always
  *  normal        RG16 unorm    world shading normal, octahedral (32 bits,        always
@@ -15,8 +17,9 @@
  *  uv            RG32F         active UV map                                      UV pass (GBUF_UV)
  *
  * Half floats keep 11 significant bits (2.4e-4 relative), well inside the
- * lighting's accuracy budget; emission above 65504 saturates (a 6.5e4 W/m^2
- * emitter already clips any display transform). The accumulated film and the
+ * lighting's accuracy budget; emission is float so node outputs reach the
+ * film exactly, clamped at 65504 like the rest (a 6.5e4 W/m^2 emitter
+ * already clips any display transform). The accumulated film and the
  * passes live in the Film, not here: the G-buffer is per sample. */
 
 #include "octahedral_lib.glsl"

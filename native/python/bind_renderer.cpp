@@ -165,6 +165,7 @@ py::array_t<float> to_numpy(PassImage&& img) {
 struct PyRenderer {
     std::unique_ptr<Renderer> renderer;
     FrameTimings last;
+    std::vector<std::string> last_warnings;
     Renderer& get() {
         if (!renderer) throw Error("the renderer was closed");
         return *renderer;
@@ -184,7 +185,7 @@ void declare_renderer(py::module_& m) {
                      py::gil_scoped_release release;
                      r = std::make_unique<Renderer>(o);
                  }
-                 return PyRenderer{std::move(r), {}};
+                 return PyRenderer{std::move(r), {}, {}};
              }),
              py::arg("device_index") = -1)
         .def("close", [](PyRenderer& self) {
@@ -218,9 +219,13 @@ void declare_renderer(py::module_& m) {
             d["gbuffer_bytes"] = self.last.gbuffer_bytes;
             d["programs_compiled"] = self.last.programs_compiled;
             d["compile_ms"] = self.last.compile_ms;
+            d["programs_loaded"] = self.last.programs_loaded;
+            d["load_ms"] = self.last.load_ms;
             d["material_programs"] = self.last.material_programs;
             return d;
         })
+        .def_property_readonly("last_warnings", [](PyRenderer& self) { return self.last_warnings; },
+                               "What the last render() could not do as asked (list of str).")
         .def("clear_scene", [](PyRenderer& self) { self.get().clear_scene(); })
         .def("cancel", [](PyRenderer& self) { self.get().cancel(); },
              "Stop a render() running on another thread at its next sample (it raises Cancelled).")
@@ -440,6 +445,7 @@ void declare_renderer(py::module_& m) {
                      frame = self.get().render(camera, s);
                  }
                  self.last = frame.timings;
+                 self.last_warnings = frame.warnings;
                  py::dict out;
                  for (PassImage& img : frame.passes) {
                      const char* name = pass_info(img.pass).name;

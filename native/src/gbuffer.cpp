@@ -19,7 +19,7 @@ void GBuffer::ensure(int width, int height, const GBufferFeatures& f) {
         bytes_ += texel_bytes(format) * std::size_t(width) * std::size_t(height);
     };
     make(depth_, GL_DEPTH_COMPONENT32F, "gbuffer depth");
-    make(emission_, GL_RGBA16F, "gbuffer emission");
+    make(emission_, GL_RGBA32F, "gbuffer emission");
     make(base_, GL_RGBA16F, "gbuffer base");
     make(params0_, GL_RGBA16F, "gbuffer params0");
     make(normal_, GL_RG16, "gbuffer normal");

@@ -213,13 +213,13 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     if (!std::isfinite(settings.mist.start) || !std::isfinite(settings.mist.depth))
         throw InvalidInput("mist start/depth must be finite");
 
-    // Memory check before any allocation: G-buffer (depth 4, emission 8,
+    // Memory check before any allocation: G-buffer (depth 4, emission 16,
     // base 8, params0 8, normal 4, optional params1 8, ids 8, uv 8), the
     // Combined accumulation (16), light split (32), one RGBA32F image per
     // other pass (16) and the CPU copies of the passes.
     const std::size_t pixels = std::size_t(settings.width > 0 ? settings.width : 0) *
                                std::size_t(settings.height > 0 ? settings.height : 0);
-    std::size_t per_pixel = 4 + 8 + 8 + 8 + 4 + (features.params1 ? 8 : 0) + (features.ids ? 8 : 0) +
+    std::size_t per_pixel = 4 + 16 + 8 + 8 + 4 + (features.params1 ? 8 : 0) + (features.ids ? 8 : 0) +
                             (features.uv ? 8 : 0) + 16 + (light_split ? 32 : 0) + (shadow_pass ? 16 : 0);
     for (Pass p : wanted.list()) per_pixel += (p == Pass::Combined ? 0 : 16) + 4 * std::size_t(pass_info(p).channels);
     check_settings(settings, pixels * per_pixel);
@@ -228,6 +228,8 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     StageTimer timer;
     const std::size_t compiles_before = shaders->compile_count();
     const double compile_ms_before = shaders->compile_ms();
+    const std::size_t loads_before = shaders->disk_loads();
+    const double load_ms_before = shaders->load_ms();
     const CameraMatrices cam = build_camera(camera_in, settings.width, settings.height);
 
     // --- Sync: pack per-frame buffers, camera-relative in double. ---
@@ -428,17 +430,30 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         return n;
     };
     // The material drawing slot s of a batch.
-    auto slot_material = [&](const Draw& d, std::size_t s) -> const Material& {
+    auto slot_material_id = [&](const Draw& d, std::size_t s) -> std::uint32_t {
         const std::uint32_t slot = std::uint32_t(std::min<std::size_t>(s, std::max(d.slot_count, 1u) - 1));
-        return scene.materials()[slots[d.slot_offset + slot]];
+        return slots[d.slot_offset + slot];
+    };
+    auto slot_material = [&](const Draw& d, std::size_t s) -> const Material& {
+        return scene.materials()[slot_material_id(d, s)];
     };
     // Node-material programs, compiled before the first sample (a graph
     // used by no visible slot still compiles: the set is the scene's).
     std::vector<std::pair<std::uint32_t, GLuint>> graph_programs;  // material id -> program
-    for (std::uint32_t id = 0; id < scene.materials().size(); ++id)
-        if (scene.materials()[id].graph >= 0)
-            graph_programs.emplace_back(id, this->materials.program(*shaders, std::uint32_t(scene.materials()[id].graph),
-                                                                    base_variant));
+    std::vector<bool> graph_failed(scene.materials().size(), false);
+    for (std::uint32_t id = 0; id < scene.materials().size(); ++id) {
+        if (scene.materials()[id].graph < 0) continue;
+        try {
+            graph_programs.emplace_back(
+                id, this->materials.program(*shaders, std::uint32_t(scene.materials()[id].graph), base_variant));
+        } catch (const Error& e) {
+            // Never a failed frame for one material: it takes the default
+            // surface (its GpuMaterial holds Material's defaults).
+            graph_failed[id] = true;
+            result.warnings.push_back("material " + std::to_string(id) +
+                                      ": its node graph did not compile (default surface used): " + e.what());
+        }
+    }
     {
         std::vector<GLuint> distinct;
         for (auto& [id, p] : graph_programs)
@@ -457,7 +472,8 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
                 continue;
             }
             for (std::size_t s = 0; s < mesh.slot_ranges.size(); ++s)
-                if (slot_material(*c.draw, s).graph < 0) draw_range(c, mesh.slot_ranges[s].first, mesh.slot_ranges[s].second);
+                if (slot_material(*c.draw, s).graph < 0 || graph_failed[slot_material_id(*c.draw, s)])
+                    draw_range(c, mesh.slot_ranges[s].first, mesh.slot_ranges[s].second);
         }
         if (graph_programs.empty()) return n;
         this->materials.bind_constants();
@@ -636,6 +652,8 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     result.timings.passes_ms = passes_ms;
     result.timings.programs_compiled = shaders->compile_count() - compiles_before;
     result.timings.compile_ms = shaders->compile_ms() - compile_ms_before;
+    result.timings.programs_loaded = shaders->disk_loads() - loads_before;
+    result.timings.load_ms = shaders->load_ms() - load_ms_before;
     result.timings.total_ms = result.timings.upload_ms + shadow_ms + geometry_ms + culling_ms + lighting_ms + passes_ms +
                               result.timings.readback_ms;
     return result;

@@ -5,6 +5,10 @@
 #include <deferred/renderer.h>
 
 #include <algorithm>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
 #include <regex>
 #include <sstream>
 
@@ -88,9 +92,7 @@ std::string ShaderLibrary::map_log(const std::string& log) const {
     return out;
 }
 
-GLuint ShaderLibrary::compile_stage(GLenum stage, const std::string& file,
-                                    const ShaderVariant& variant) const {
-    const std::string src = expand(file, variant);
+GLuint ShaderLibrary::compile_source(GLenum stage, const std::string& src, const std::string& label) const {
     GLuint shader = glCreateShader(stage);
     const char* ptr = src.c_str();
     glShaderSource(shader, 1, &ptr, nullptr);
@@ -103,13 +105,15 @@ GLuint ShaderLibrary::compile_stage(GLenum stage, const std::string& file,
         std::string log(static_cast<std::size_t>(std::max(len, 1)), '\0');
         glGetShaderInfoLog(shader, len, nullptr, log.data());
         glDeleteShader(shader);
-        throw Error("compiling shader " + file + " [" + variant.key() + "] failed:\n" + map_log(log.c_str()));
+        const char* kind = stage == GL_VERTEX_SHADER ? "vertex" : stage == GL_FRAGMENT_SHADER ? "fragment" : "compute";
+        throw Error(std::string("compiling the ") + kind + " shader of " + label + " failed:\n" + map_log(log.c_str()));
     }
     return shader;
 }
 
-GLuint ShaderLibrary::link(const std::vector<GLuint>& stages, const std::string& label) const {
+GLuint ShaderLibrary::link(const std::vector<GLuint>& stages, const std::string& label, bool retrievable) const {
     GLuint program = glCreateProgram();
+    if (retrievable) glProgramParameteri(program, GL_PROGRAM_BINARY_RETRIEVABLE_HINT, GL_TRUE);
     for (GLuint s : stages) glAttachShader(program, s);
     glLinkProgram(program);
     for (GLuint s : stages) {
@@ -129,16 +133,129 @@ GLuint ShaderLibrary::link(const std::vector<GLuint>& stages, const std::string&
     return program;
 }
 
-GLuint ShaderLibrary::compute_program(const std::string& comp_file, const ShaderVariant& variant) {
-    const std::string key = comp_file + "|" + variant.key();
+namespace {
+
+// FNV-1a, 64 bit: the disk cache's file name (collisions are caught by
+// storing and comparing the full key hash of a second seed).
+std::uint64_t fnv1a(const std::string& s, std::uint64_t h = 1469598103934665603ull) {
+    for (unsigned char c : s) {
+        h ^= c;
+        h *= 1099511628211ull;
+    }
+    return h;
+}
+
+// Where program binaries are kept: DEFERRED_SHADER_CACHE (a folder, or "off"),
+// else $XDG_CACHE_HOME/deferred_render/programs, else ~/.cache/...
+std::string cache_folder() {
+    if (const char* env = std::getenv("DEFERRED_SHADER_CACHE")) {
+        const std::string v = env;
+        if (v == "off" || v == "0" || v.empty()) return "";
+        return v;
+    }
+    if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && *xdg) return std::string(xdg) + "/deferred_render/programs";
+    if (const char* home = std::getenv("HOME"); home && *home) return std::string(home) + "/.cache/deferred_render/programs";
+    return "";
+}
+
+}  // namespace
+
+// A program from its stage sources: from the in-memory map, else the disk
+// cache (glProgramBinary, keyed by the sources and the driver's strings: a
+// driver update misses and recompiles), else compiled, linked and stored.
+GLuint ShaderLibrary::build(const std::string& key, const std::vector<std::pair<GLenum, std::string>>& stages,
+                            const std::string& label) {
     auto it = programs_.find(key);
     if (it != programs_.end()) return it->second.get();
     StageTimer timer;
-    GLuint p = link({compile_stage(GL_COMPUTE_SHADER, comp_file, variant)}, key);
+    if (driver_.empty()) {
+        for (GLenum e : {GL_VENDOR, GL_RENDERER, GL_VERSION}) {
+            const GLubyte* v = glGetString(e);
+            driver_ += v ? reinterpret_cast<const char*>(v) : "";
+            driver_ += '\n';
+        }
+        GLint formats = 0;
+        glGetIntegerv(GL_NUM_PROGRAM_BINARY_FORMATS, &formats);
+        cache_dir_ = formats > 0 ? cache_folder() : "";
+    }
+    std::string all = driver_;
+    for (const auto& [stage, src] : stages) all += std::to_string(stage) + ":" + src;
+    const std::uint64_t h1 = fnv1a(all), h2 = fnv1a(all, 0x9e3779b97f4a7c15ull);
+    char name[40];
+    std::snprintf(name, sizeof name, "%016llx.bin", static_cast<unsigned long long>(h1));
+    const std::string path = cache_dir_.empty() ? "" : cache_dir_ + "/" + name;
+
+    if (!path.empty()) {
+        if (std::FILE* f = std::fopen(path.c_str(), "rb")) {
+            std::uint64_t stored = 0;
+            GLenum format = 0;
+            std::vector<char> binary;
+            if (std::fread(&stored, sizeof stored, 1, f) == 1 && stored == h2 &&
+                std::fread(&format, sizeof format, 1, f) == 1) {
+                char buf[65536];
+                std::size_t n;
+                while ((n = std::fread(buf, 1, sizeof buf, f)) > 0) binary.insert(binary.end(), buf, buf + n);
+            }
+            std::fclose(f);
+            if (!binary.empty()) {
+                GLuint p = glCreateProgram();
+                glProgramBinary(p, format, binary.data(), GLsizei(binary.size()));
+                GLint ok = GL_FALSE;
+                glGetProgramiv(p, GL_LINK_STATUS, &ok);
+                while (glGetError() != GL_NO_ERROR) {
+                }
+                if (ok) {
+                    programs_.emplace(key, Program(p));
+                    ++disk_loads_;
+                    load_ms_ += timer.lap_ms();
+                    return p;
+                }
+                glDeleteProgram(p);  // stale or refused: compile below
+            }
+        }
+    }
+
+    std::vector<GLuint> compiled;
+    try {
+        for (const auto& [stage, src] : stages) compiled.push_back(compile_source(stage, src, label));
+    } catch (...) {
+        for (GLuint sh : compiled) glDeleteShader(sh);
+        throw;
+    }
+    GLuint p = link(compiled, label, !path.empty());
     programs_.emplace(key, Program(p));
     ++compile_count_;
     compile_ms_ += timer.lap_ms();
+
+    if (!path.empty()) {
+        GLint length = 0;
+        glGetProgramiv(p, GL_PROGRAM_BINARY_LENGTH, &length);
+        if (length > 0) {
+            std::vector<char> binary(std::size_t(length), 0);
+            GLenum format = 0;
+            glGetProgramBinary(p, length, nullptr, &format, binary.data());
+            std::error_code ec;
+            std::filesystem::create_directories(cache_dir_, ec);
+            const std::string tmp = path + ".tmp" + std::to_string(reinterpret_cast<std::uintptr_t>(this));
+            if (std::FILE* f = std::fopen(tmp.c_str(), "wb")) {
+                const bool written = std::fwrite(&h2, sizeof h2, 1, f) == 1 && std::fwrite(&format, sizeof format, 1, f) == 1 &&
+                                     std::fwrite(binary.data(), 1, binary.size(), f) == binary.size();
+                std::fclose(f);
+                // Renamed into place only when whole: a reader never sees half a file.
+                if (written) std::filesystem::rename(tmp, path, ec);
+                if (!written || ec) std::filesystem::remove(tmp, ec);
+            }
+        }
+        while (glGetError() != GL_NO_ERROR) {
+        }
+    }
     return p;
+}
+
+GLuint ShaderLibrary::compute_program(const std::string& comp_file, const ShaderVariant& variant) {
+    const std::string key = comp_file + "|" + variant.key();
+    if (auto it = programs_.find(key); it != programs_.end()) return it->second.get();
+    return build(key, {{GL_COMPUTE_SHADER, expand(comp_file, variant)}}, key);
 }
 
 GLuint ShaderLibrary::graphics_program(const std::string& vert_file, const std::string& frag_file,
@@ -146,27 +263,15 @@ GLuint ShaderLibrary::graphics_program(const std::string& vert_file, const std::
                                        const std::map<std::string, std::string>& generated) {
     std::string key = vert_file + "+" + frag_file + "|" + variant.key();
     for (const auto& [name, text] : generated) key += "|" + name + ":" + text;
-    auto it = programs_.find(key);
-    if (it != programs_.end()) return it->second.get();
+    if (auto it = programs_.find(key); it != programs_.end()) return it->second.get();
     struct Scope {
         const std::map<std::string, std::string>*& slot;
         ~Scope() { slot = nullptr; }
     } scope{generated_};
     generated_ = &generated;
-    StageTimer timer;
-    GLuint vs = compile_stage(GL_VERTEX_SHADER, vert_file, variant);
-    GLuint fs = 0;
-    try {
-        fs = compile_stage(GL_FRAGMENT_SHADER, frag_file, variant);
-    } catch (...) {
-        glDeleteShader(vs);
-        throw;
-    }
-    GLuint p = link({vs, fs}, vert_file + "+" + frag_file + "|" + variant.key());
-    programs_.emplace(key, Program(p));
-    ++compile_count_;
-    compile_ms_ += timer.lap_ms();
-    return p;
+    const std::string label = vert_file + "+" + frag_file + "|" + variant.key();
+    return build(key, {{GL_VERTEX_SHADER, expand(vert_file, variant)}, {GL_FRAGMENT_SHADER, expand(frag_file, variant)}},
+                 label);
 }
 
 }  // namespace deferred

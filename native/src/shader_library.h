@@ -6,13 +6,17 @@
 // `#line <line> <file id>` before every chunk so that a compile error is
 // reported as "bsdf_lib.glsl:42: ..." instead of a source-string number.
 // Programs are cached per (files, defines): only variants a scene needs are
-// ever compiled.
+// ever compiled. Linked programs are also kept on disk through
+// glProgramBinary (DEFERRED_SHADER_CACHE, default ~/.cache/deferred_render/
+// programs), keyed by their full sources and the driver's strings, so a new
+// renderer (every final render makes one) loads instead of compiling.
 #pragma once
 
 #include "gl_util.h"
 
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace deferred {
@@ -40,13 +44,18 @@ public:
                             const std::map<std::string, std::string>& generated = {});
 
     std::size_t compiled_program_count() const { return programs_.size(); }
-    // Programs compiled and linked (not found in the cache) and the time it took.
+    // Programs compiled and linked (in neither cache) and the time it took;
+    // programs loaded from the disk cache (glProgramBinary) and that time.
     std::size_t compile_count() const { return compile_count_; }
     double compile_ms() const { return compile_ms_; }
+    std::size_t disk_loads() const { return disk_loads_; }
+    double load_ms() const { return load_ms_; }
 
 private:
-    GLuint compile_stage(GLenum stage, const std::string& file, const ShaderVariant& variant) const;
-    GLuint link(const std::vector<GLuint>& stages, const std::string& label) const;
+    GLuint compile_source(GLenum stage, const std::string& src, const std::string& label) const;
+    GLuint link(const std::vector<GLuint>& stages, const std::string& label, bool retrievable) const;
+    GLuint build(const std::string& key, const std::vector<std::pair<GLenum, std::string>>& stages,
+                 const std::string& label);
     void expand_into(const std::string& file, std::string& out, std::vector<std::string>& included) const;
     std::string map_log(const std::string& log) const;
 
@@ -54,8 +63,10 @@ private:
     std::vector<std::string> file_ids_;  // #line source-string number -> file name
     std::map<std::string, Program> programs_;
     const std::map<std::string, std::string>* generated_ = nullptr;  // during one graphics_program()
-    std::size_t compile_count_ = 0;
-    double compile_ms_ = 0.0;
+    std::size_t compile_count_ = 0, disk_loads_ = 0;
+    double compile_ms_ = 0.0, load_ms_ = 0.0;
+    std::string driver_;     // GL vendor/renderer/version: part of every disk-cache key
+    std::string cache_dir_;  // empty: no disk cache (disabled, or the driver has no binary formats)
 };
 
 }  // namespace deferred

@@ -157,8 +157,9 @@ def test_fallbacks(checks, out):
     error, ch, messages, _ = render(out, "fallbacks")
     t = text(messages)
     checks.check(error is None, "fallback scene renders", error or "")
-    checks.check("'MissingImage'" in t and "not understood" in t, "missing image file: warning names the material")
-    checks.check("'GroupNode'" in t, "node group material: warning names the material")
+    checks.check("missing_texture.png" in t and "magenta" in t,
+                 "missing image file: one warning names the file, rendered magenta as in Cycles")
+    checks.check("'GroupNode'" not in t, "node group material: rendered through the group, no warning")
     checks.check("'VolumeOnly'" in t, "volume-only material: warning names the material")
     checks.check("Specular 20 clamped to 12" in t and "Base Color above 65504 clamped" in t,
                  "out-of-range node values: clamped to the renderer's limits, noted")

@@ -31,6 +31,9 @@ LOG_PREFIX = "Deferred"
 # (level, message) of recent reports, newest last: lets tests and scripts see
 # warnings that Blender only prints. Bounded, so long sessions do not grow.
 last_messages = collections.deque(maxlen=256)
+# The native timings of the last render (stage times, programs compiled or
+# loaded from the disk cache): what the status line shows, for scripts.
+last_timings = {}
 
 
 class RenderCancelled(Exception):
@@ -250,6 +253,8 @@ class FinalRender:
         except ValueError as ex:  # size/settings validation: the message says it all
             raise RenderSettingsError(str(ex)) from ex
         t_render = time.perf_counter() - t_render
+        for message in getattr(renderer, "last_warnings", ()):
+            self.warn(message)
         self.check_break()
 
         self.status("writing passes", 0.9)
@@ -260,6 +265,8 @@ class FinalRender:
         engine.update_result(result)
 
         try:
+            last_timings.clear()
+            last_timings.update(dict(renderer.last_timings))
             timings = _format_timings(dict(renderer.last_timings))
         except Exception:
             timings = ""

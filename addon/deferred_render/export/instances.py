@@ -177,8 +177,8 @@ class SceneExporter:
         if not hasattr(self.renderer, "add_graph_material"):
             return None
         _, notes = material_export.material_params(material)
-        if not notes:
-            return None  # exact as constants: no program needed
+        if all(material_export.is_clamp_note(n) for n in notes):
+            return None  # the constant parameter set represents it: no program needed
         if self._images is None:
             self._images = graph_builder.ImageRegistry(self.renderer.add_image, self.warn)
         try:

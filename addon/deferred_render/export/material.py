@@ -453,6 +453,12 @@ def material_params(material):
     return params, notes
 
 
+def is_clamp_note(note):
+    """A note of _sanitize (a value clamped to the renderer's limits): the
+    parameter set still represents the material, only clamped."""
+    return "clamped" in note
+
+
 def warning_text(material, notes):
     name = material.name if material is not None else "<default>"
     return f"Material '{name}': not understood: " + "; ".join(notes)

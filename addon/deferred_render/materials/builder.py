@@ -91,7 +91,12 @@ class NodeBuilder:
             arg = self._graph.output_arg(source, type)
             if arg is not None:
                 return arg
-            final = None
+            if type == "closure":
+                return self._graph.closure_none()
+            # An output we do not compute: its own default value (Blender's
+            # output sockets carry one; 0 for those that do not).
+            value = getattr(source.socket, "default_value", 0.0)
+            return self.const(convert_value(value, graph_walk.socket_kind(source.socket), type), type)
         else:
             final = source.socket
         target = final if final is not None else socket

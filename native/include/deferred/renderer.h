@@ -107,12 +107,17 @@ struct FrameTimings {
     std::size_t gbuffer_bytes = 0;  // G-buffer + pass targets allocated for the frame
     std::size_t programs_compiled = 0;  // GL programs compiled by this render (0: all cached)
     double compile_ms = 0;              // time spent compiling them
+    std::size_t programs_loaded = 0;    // GL programs loaded from the disk cache instead
+    double load_ms = 0;
     std::size_t material_programs = 0;  // distinct node-material programs the frame drew with
 };
 
 struct FrameResult {
     std::vector<PassImage> passes;
     FrameTimings timings;
+    // What the frame could not render as asked, e.g. a node material whose
+    // program failed to compile (drawn with the default surface instead).
+    std::vector<std::string> warnings;
     const PassImage* find(Pass p) const;
 };
 

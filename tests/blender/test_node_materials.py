@@ -1,0 +1,217 @@
+"""Node materials through real Blender: what the tree walk follows (groups,
+reroutes, mutes), what it names in warnings, bad trees, the Emission pass,
+and the program cache across renders. Per-node accuracy against Cycles is
+test_node_probes.py's job."""
+
+import math
+import os
+import sys
+import tempfile
+
+import bpy
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import blender_test_utils as U  # noqa: E402
+
+OUT = U.out_dir("node_materials")
+
+
+def setup_scene():
+    scene = bpy.context.scene
+    for ob in list(bpy.data.objects):
+        bpy.data.objects.remove(ob)
+    bpy.ops.mesh.primitive_plane_add(size=2)
+    plane = bpy.context.object
+    cam = bpy.data.objects.new("cam", bpy.data.cameras.new("cam"))
+    scene.collection.objects.link(cam)
+    scene.camera = cam
+    cam.data.type = 'ORTHO'
+    cam.data.ortho_scale = 2.0
+    cam.location = (0, 0, 5)
+    scene.world.use_nodes = False
+    scene.world.color = (0, 0, 0)
+    scene.render.resolution_x = scene.render.resolution_y = 16
+    scene.render.resolution_percentage = 100
+    scene.deferred_render.samples = 1
+    return scene, plane
+
+
+def emission_material(name):
+    """A material whose Surface is an Emission shader; returns (material, emission node)."""
+    mat = bpy.data.materials.new(name)
+    mat.use_nodes = True
+    nt = mat.node_tree
+    nt.nodes.clear()
+    out = nt.nodes.new("ShaderNodeOutputMaterial")
+    em = nt.nodes.new("ShaderNodeEmission")
+    nt.links.new(em.outputs[0], out.inputs["Surface"])
+    return mat, em
+
+
+def render_combined(scene, plane, mat, tag, passes=("Combined",)):
+    plane.data.materials.clear()
+    plane.data.materials.append(mat)
+    from deferred_render.engine import final
+    final.last_messages.clear()
+    path = U.render_exr(os.path.join(OUT, tag), scene)
+    channels = U.read_exr(path)
+    return {p: U.exr_pass(channels, "ViewLayer", p, "RGB") for p in passes}, U.last_messages()
+
+
+def warnings_of(messages):
+    return [m for level, m in messages if level == "WARNING"]
+
+
+def centre(img):
+    return img[img.shape[0] // 2, img.shape[1] // 2]
+
+
+def test_groups_reroutes_mutes(checks, scene, plane):
+    # inner group: Value * 2; outer group: inner(group input) with the group
+    # input left unlinked at 0.3 -> 0.6, through a reroute and a muted Add.
+    inner = bpy.data.node_groups.new("Inner", "ShaderNodeTree")
+    inner.inputs.new("NodeSocketFloat", "x")
+    inner.outputs.new("NodeSocketFloat", "y")
+    gi, go = inner.nodes.new("NodeGroupInput"), inner.nodes.new("NodeGroupOutput")
+    mul = inner.nodes.new("ShaderNodeMath")
+    mul.operation = 'MULTIPLY'
+    mul.inputs[1].default_value = 2.0
+    inner.links.new(gi.outputs[0], mul.inputs[0])
+    inner.links.new(mul.outputs[0], go.inputs[0])
+    outer = bpy.data.node_groups.new("Outer", "ShaderNodeTree")
+    outer.inputs.new("NodeSocketFloat", "a")
+    outer.outputs.new("NodeSocketFloat", "b")
+    ogi, ogo = outer.nodes.new("NodeGroupInput"), outer.nodes.new("NodeGroupOutput")
+    nested = outer.nodes.new("ShaderNodeGroup")
+    nested.node_tree = inner
+    outer.links.new(ogi.outputs[0], nested.inputs[0])
+    outer.links.new(nested.outputs[0], ogo.inputs[0])
+
+    mat, em = emission_material("groups")
+    nt = mat.node_tree
+    group = nt.nodes.new("ShaderNodeGroup")
+    group.node_tree = outer
+    group.inputs[0].default_value = 0.3
+    reroute = nt.nodes.new("NodeReroute")
+    add = nt.nodes.new("ShaderNodeMath")
+    add.operation = 'ADD'
+    add.inputs[1].default_value = 100.0
+    add.mute = True
+    nt.links.new(group.outputs[0], reroute.inputs[0])
+    nt.links.new(reroute.outputs[0], add.inputs[0])
+    nt.links.new(add.outputs[0], em.inputs["Color"])
+    images, messages = render_combined(scene, plane, mat, "groups")
+    value = centre(images["Combined"])
+    checks.check(np.allclose(value, 0.6, atol=1e-6), "nested groups, reroute and muted Add give 0.3 x 2",
+                 f"{value}")
+    checks.check(not warnings_of(messages), "no warning", str(warnings_of(messages)))
+
+
+def test_unsupported_node_named(checks, scene, plane):
+    mat, em = emission_material("unsupported")
+    node = mat.node_tree.nodes.new("ShaderNodeTexPointDensity")
+    mat.node_tree.links.new(node.outputs["Color"], em.inputs["Color"])
+    images, messages = render_combined(scene, plane, mat, "unsupported")
+    w = warnings_of(messages)
+    named = [m for m in w if "Point Density" in m and "'unsupported'" in m]
+    checks.check(len(named) == 1, "an unsupported node is named in one warning of its material", str(w))
+    checks.check(np.allclose(centre(images["Combined"]), 0.0), "its output takes the default (black)")
+
+
+def test_alpha_warned(checks, scene, plane):
+    mat = bpy.data.materials.new("glass pane")
+    mat.use_nodes = True
+    bsdf = mat.node_tree.nodes["Principled BSDF"]
+    bsdf.inputs["Alpha"].default_value = 0.4
+    tex = mat.node_tree.nodes.new("ShaderNodeTexCoord")
+    mat.node_tree.links.new(tex.outputs["Generated"], bsdf.inputs["Base Color"])
+    _, messages = render_combined(scene, plane, mat, "alpha")
+    w = warnings_of(messages)
+    checks.check(any("Alpha below 1" in m and "glass pane" in m for m in w), "constant alpha 0.4 is warned about",
+                 str(w))
+
+
+def test_bad_trees(checks, scene, plane):
+    # A link cycle (Blender marks one link invalid), a group without an
+    # output, NaN in a Value node: a sane image and no crash.
+    mat, em = emission_material("bad trees")
+    nt = mat.node_tree
+    a, b = nt.nodes.new("ShaderNodeMath"), nt.nodes.new("ShaderNodeMath")
+    nt.links.new(a.outputs[0], b.inputs[0])
+    nt.links.new(b.outputs[0], a.inputs[0])
+    empty = bpy.data.node_groups.new("NoOutput", "ShaderNodeTree")
+    empty.outputs.new("NodeSocketFloat", "v")
+    group = nt.nodes.new("ShaderNodeGroup")
+    group.node_tree = empty
+    value = nt.nodes.new("ShaderNodeValue")
+    value.outputs[0].default_value = float("nan")
+    add = nt.nodes.new("ShaderNodeMath")
+    nt.links.new(b.outputs[0], add.inputs[0])
+    nt.links.new(group.outputs[0], add.inputs[1])
+    add2 = nt.nodes.new("ShaderNodeMath")
+    nt.links.new(add.outputs[0], add2.inputs[0])
+    nt.links.new(value.outputs[0], add2.inputs[1])
+    nt.links.new(add2.outputs[0], em.inputs["Strength"])
+    images, messages = render_combined(scene, plane, mat, "bad_trees")
+    img = images["Combined"]
+    checks.check(np.isfinite(img).all(), "the image is finite")
+    errors = [m for level, m in messages if level == "ERROR"]
+    checks.check(not errors, "no error", str(errors))
+
+
+def test_emission_pass(checks, scene, plane):
+    scene.view_layers[0].use_pass_emit = True
+    mat, em = emission_material("textured emission")
+    tex = mat.node_tree.nodes.new("ShaderNodeTexCoord")
+    mat.node_tree.links.new(tex.outputs["Generated"], em.inputs["Color"])
+    images, _ = render_combined(scene, plane, mat, "emit", passes=("Combined", "Emit"))
+    combined, emit = images["Combined"], images["Emit"]
+    checks.check(np.abs(combined - emit).max() < 1e-6 and emit.max() > 0.9,
+                 "textured emission fills the Emission pass as it does Combined",
+                 f"max |diff| {np.abs(combined - emit).max():.2e}")
+    # Generated = (P + 1) / 2 on the 2 m plane: the pixel centres' values.
+    n = emit.shape[1]
+    want = (np.arange(n) + 0.5) / n
+    checks.check(np.abs(emit[n // 2, :, 0] - want).max() < 1e-5, "generated x across the image",
+                 f"{np.abs(emit[n // 2, :, 0] - want).max():.2e}")
+    scene.view_layers[0].use_pass_emit = False
+
+
+def test_program_cache(checks, scene, plane):
+    from deferred_render.engine import final
+    os.environ["DEFERRED_SHADER_CACHE"] = tempfile.mkdtemp(prefix="deferred_programs_")
+    mat, em = emission_material("cached")
+    math_node = mat.node_tree.nodes.new("ShaderNodeMath")
+    mat.node_tree.links.new(math_node.outputs[0], em.inputs["Strength"])
+    render_combined(scene, plane, mat, "cache_cold")
+    cold = dict(final.last_timings)
+    math_node.inputs[0].default_value = 0.75  # a value edit: same program
+    images, _ = render_combined(scene, plane, mat, "cache_warm")
+    warm = dict(final.last_timings)
+    del os.environ["DEFERRED_SHADER_CACHE"]
+    print(f"  cold: {cold.get('programs_compiled')} compiled ({cold.get('compile_ms', 0):.0f} ms); "
+          f"warm: {warm.get('programs_compiled')} compiled, {warm.get('programs_loaded')} loaded "
+          f"({warm.get('load_ms', 0):.0f} ms)")
+    checks.check(cold.get("programs_compiled", 0) > 0, "the first render compiles its programs")
+    if warm.get("programs_loaded", 0) == 0 and warm.get("programs_compiled", 0) > 0:
+        print("  skip: the driver keeps no program binaries (no disk cache here)")
+        return
+    checks.check(warm.get("programs_compiled", -1) == 0, "the second render of the file compiles nothing",
+                 str(warm))
+    checks.check(np.allclose(centre(images["Combined"]), 0.75 + 0.5, atol=1e-5),
+                 "the edited value is rendered (Math Add 0.75 + 0.5)", f"{centre(images['Combined'])}")
+
+
+def main():
+    checks = U.Checks("node materials")
+    if not U.require_engine(checks):
+        checks.finish()
+    scene, plane = setup_scene()
+    for test in (test_groups_reroutes_mutes, test_unsupported_node_named, test_alpha_warned, test_bad_trees,
+                 test_emission_pass, test_program_cache):
+        checks.run(test.__name__, test, checks, scene, plane)
+    checks.finish()
+
+
+main()

@@ -1,0 +1,351 @@
+// Node materials through the native API: graph validation, code generation
+// and the geometry pass (program per structure, slots, attributes, images),
+// on the real GL. The per-node formulas are measured against Cycles by the
+// Blender probe test (tests/blender/test_node_probes.py).
+#include "material_codegen.h"
+#include "test_helpers.h"
+
+#include <deferred/renderer.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+
+namespace deferred::testing {
+namespace {
+
+GraphArg const_arg(SocketType t, int offset) {
+    GraphArg a;
+    a.kind = GraphArg::Kind::Const;
+    a.type = t;
+    a.value = offset;
+    return a;
+}
+GraphArg shading_arg(const std::string& name) {
+    GraphArg a;
+    a.kind = GraphArg::Kind::Shading;
+    a.name = name;
+    return a;
+}
+GraphArg link_arg(SocketType type, int node, int output, SocketType from) {
+    GraphArg a;
+    a.kind = GraphArg::Kind::Link;
+    a.type = type;
+    a.node = node;
+    a.output = output;
+    a.from = from;
+    return a;
+}
+
+// Emission shader of `color` (an argument) and strength 1 (constant 0).
+MaterialGraph emission_graph(const GraphArg& color) {
+    MaterialGraph g;
+    g.constants = {1.0f};
+    g.nodes.push_back({"node_emission", {color, const_arg(SocketType::Float, 0)}, {SocketType::Closure}});
+    g.surface_node = 0;
+    return g;
+}
+
+MaterialGraph constant_emission_graph(float r, float gr, float b) {
+    MaterialGraph g = emission_graph(const_arg(SocketType::Color, 1));
+    g.constants = {1.0f, r, gr, b};
+    return g;
+}
+
+RenderSettings small(int w = 16, int h = 16) {
+    RenderSettings s;
+    s.width = w;
+    s.height = h;
+    s.samples = 1;
+    return s;
+}
+
+void expect_invalid(const MaterialGraph& g, const std::string& fragment) {
+    try {
+        validate_material_graph(g);
+        ADD_FAILURE() << "accepted a graph that should fail with '" << fragment << "'";
+    } catch (const InvalidInput& e) {
+        EXPECT_NE(std::string(e.what()).find(fragment), std::string::npos) << e.what();
+    }
+}
+
+TEST(MaterialGraphValidation, NamesTheProblem) {
+    MaterialGraph ok = constant_emission_graph(1, 0, 0);
+    EXPECT_NO_THROW(validate_material_graph(ok));
+
+    MaterialGraph later = ok;
+    later.nodes[0].args[0] = link_arg(SocketType::Color, 0, 0, SocketType::Closure);
+    expect_invalid(later, "not an earlier node");
+
+    MaterialGraph name = ok;
+    name.nodes[0].func = "node_x(); discard; //";
+    expect_invalid(name, "identifier");
+
+    MaterialGraph offset = ok;
+    offset.nodes[0].args[0] = const_arg(SocketType::Color, 2);  // needs 3 floats from 2, only 4 exist
+    expect_invalid(offset, "outside the constants");
+
+    MaterialGraph nan = ok;
+    nan.constants[1] = std::nanf("");
+    expect_invalid(nan, "NaN");
+
+    MaterialGraph shading = emission_graph(shading_arg("gl_FragCoord"));
+    expect_invalid(shading, "unknown shading value");
+
+    MaterialGraph closure_to_value = ok;
+    closure_to_value.nodes.push_back({"node_emission", {link_arg(SocketType::Color, 0, 0, SocketType::Closure),
+                                                        const_arg(SocketType::Float, 0)},
+                                      {SocketType::Closure}});
+    expect_invalid(closure_to_value, "closures connect only to closures");
+
+    MaterialGraph surface = ok;
+    surface.surface_node = 3;
+    expect_invalid(surface, "surface node");
+}
+
+TEST(MaterialGraphCodegen, DependsOnStructureNotValues) {
+    const std::string a = material_graph_glsl(constant_emission_graph(1, 0, 0));
+    const std::string b = material_graph_glsl(constant_emission_graph(0, 0.5f, 1));
+    EXPECT_EQ(a, b);  // values live in the constants buffer
+    EXPECT_NE(a.find("node_emission(mat_const3(1), mat_const(0), n0_0)"), std::string::npos) << a;
+    EXPECT_NE(a, material_graph_glsl(emission_graph(shading_arg("generated"))));
+}
+
+class MaterialGraphRender : public ::testing::Test {
+protected:
+    Renderer r;
+    const Camera cam = top_down_ortho(5.0, 2.0f);  // the plane of half size 1 fills the frame
+
+    std::uint32_t plane_with(std::uint32_t material) {
+        tools::MeshArrays plane = tools::make_plane(1.0f, 1);
+        const std::uint32_t mesh = r.add_mesh(plane.view());
+        r.add_instances(mesh, identity_matrix().data(), 1, nullptr, {material});
+        return mesh;
+    }
+};
+
+TEST_F(MaterialGraphRender, GeneratedCoordinatesReachEmission) {
+    set_world_color(r, 0, 0, 0);
+    plane_with(r.add_graph_material(Material{}, emission_graph(shading_arg("generated"))));
+    FrameResult f = r.render(cam, small());
+    const PassImage& img = *f.find(Pass::Combined);
+    double worst = 0;
+    for (int y = 0; y < img.height; ++y)
+        for (int x = 0; x < img.width; ++x) {
+            // Pixel centre at P = (-1 + (x + 0.5) / 8, ...); texture space of the plane:
+            // location 0, size 1, so generated = (P + 1) / 2 (z = 0.5).
+            const glm::dvec3 want((x + 0.5) / img.width, (y + 0.5) / img.height, 0.5);
+            worst = std::max(worst, glm::length(pixel3(img, x, y) - want));
+        }
+    EXPECT_LT(worst, 1e-5);
+}
+
+TEST_F(MaterialGraphRender, ConstantPrincipledGraphEqualsTheConstantMaterial) {
+    Material m;
+    m.base_color = {0.3f, 0.5f, 0.7f};
+    m.metallic = 0.2f;
+    m.roughness = 0.4f;
+    m.sheen = 0.3f;
+    Light sun;
+    sun.type = LightType::Sun;
+    sun.matrix = tools::look_at(std::array<double, 3>{1, 2, 3}.data(), std::array<double, 3>{0, 0, 0}.data());
+    sun.energy = 3.0f;
+    r.add_light(sun);
+    set_world_color(r, 0.1f, 0.1f, 0.1f);
+    const std::uint32_t constant = r.add_material(m);
+
+    // Principled with every input a constant, in node_bsdf_principled's order.
+    MaterialGraph g;
+    g.constants = {0.3f, 0.5f, 0.7f, m.metallic, m.specular, m.specular_tint, m.roughness, m.sheen, m.sheen_tint,
+                   m.clearcoat, m.clearcoat_roughness, 0, 0, 0, 1.0f, 1.0f};
+    std::vector<GraphArg> args = {const_arg(SocketType::Color, 0)};
+    for (int k = 3; k <= 10; ++k) args.push_back(const_arg(SocketType::Float, k));
+    args.push_back(const_arg(SocketType::Color, 11));
+    args.push_back(const_arg(SocketType::Float, 14));
+    args.push_back(const_arg(SocketType::Float, 15));
+    args.push_back(shading_arg("N"));
+    g.nodes.push_back({"node_bsdf_principled", args, {SocketType::Closure}});
+    g.surface_node = 0;
+    tools::MeshArrays plane = tools::make_plane(1.0f, 1);
+    const std::uint32_t mesh = r.add_mesh(plane.view());
+    r.add_instances(mesh, identity_matrix().data(), 1, nullptr, {constant});
+    FrameResult a = r.render(cam, small());
+    r.clear_scene();
+    r.add_light(sun);
+    set_world_color(r, 0.1f, 0.1f, 0.1f);
+    plane_with(r.add_graph_material(Material{}, g));
+    FrameResult b = r.render(cam, small());
+    const PassImage& ia = *a.find(Pass::Combined);
+    const PassImage& ib = *b.find(Pass::Combined);
+    double worst = 0, level = 0;
+    for (std::size_t i = 0; i < ia.pixels.size(); ++i) {
+        worst = std::max(worst, double(std::abs(ia.pixels[i] - ib.pixels[i])));
+        level = std::max(level, double(ia.pixels[i]));
+    }
+    EXPECT_GT(level, 0.05);
+    EXPECT_LT(worst, 1e-5 * std::max(1.0, level));
+}
+
+TEST_F(MaterialGraphRender, MaterialsOfOneStructureShareOneProgramAndValuesNeverRecompile) {
+    set_world_color(r, 0, 0, 0);
+    const std::uint32_t red = r.add_graph_material(Material{}, constant_emission_graph(1, 0, 0));
+    const std::uint32_t blue = r.add_graph_material(Material{}, constant_emission_graph(0, 0, 1));
+    tools::MeshArrays plane = tools::make_plane(0.5f, 1);
+    const std::uint32_t mesh = r.add_mesh(plane.view());
+    const Mat4d left = tools::translation(-0.5, 0, 0), right = tools::translation(0.5, 0, 0);
+    r.add_instances(mesh, left.data(), 1, nullptr, {red});
+    r.add_instances(mesh, right.data(), 1, nullptr, {blue});
+    FrameResult first = r.render(cam, small());
+    EXPECT_EQ(first.timings.material_programs, 1u);
+    const PassImage& img = *first.find(Pass::Combined);
+    EXPECT_NEAR(pixel3(img, 2, 8).x, 1.0, 1e-6);
+    EXPECT_NEAR(pixel3(img, 13, 8).z, 1.0, 1e-6);
+    EXPECT_NEAR(pixel3(img, 13, 8).x, 0.0, 1e-6);
+
+    // New values, same structure: the program is reused.
+    r.clear_scene();
+    set_world_color(r, 0, 0, 0);
+    plane_with(r.add_graph_material(Material{}, constant_emission_graph(0.25f, 0.5f, 0.75f)));
+    FrameResult second = r.render(cam, small());
+    EXPECT_EQ(second.timings.programs_compiled, 0u);
+    EXPECT_NEAR(pixel3(*second.find(Pass::Combined), 8, 8).y, 0.5, 1e-6);
+}
+
+TEST_F(MaterialGraphRender, SlotsOfOneMeshDrawWithTheirOwnMaterials) {
+    // A 4x4-quad plane whose triangles alternate between two slots, in an
+    // order that is not sorted: slot 0 a constant material, slot 1 a graph.
+    set_world_color(r, 0, 0, 0);
+    tools::MeshArrays plane = tools::make_plane(1.0f, 4);
+    std::vector<std::int32_t> slots_of(plane.indices.size() / 3);
+    for (std::size_t t = 0; t < slots_of.size(); ++t) slots_of[t] = std::int32_t((t / 2 + t / 8) % 2);
+    MeshData data = plane.view();
+    data.material_indices = slots_of.data();
+    Material red;
+    red.base_color = {0, 0, 0};
+    red.specular = 0;
+    red.emission = {1, 0, 0};
+    const std::uint32_t constant = r.add_material(red);
+    const std::uint32_t graph = r.add_graph_material(Material{}, constant_emission_graph(0, 1, 0));
+    const std::uint32_t mesh = r.add_mesh(data);
+    r.add_instances(mesh, identity_matrix().data(), 1, nullptr, {constant, graph});
+    const PassImage img = *r.render(cam, small()).find(Pass::Combined);
+    // Quad (i, j) of the 4x4 grid covers 4x4 pixels; its slot is (i + j) % 2.
+    int wrong = 0;
+    for (int y = 0; y < 16; ++y)
+        for (int x = 0; x < 16; ++x) {
+            const int slot = (x / 4 + y / 4) % 2;
+            const glm::dvec3 want = slot == 0 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0);
+            if (glm::length(pixel3(img, x, y) - want) > 1e-6) ++wrong;
+        }
+    EXPECT_EQ(wrong, 0);
+}
+
+TEST_F(MaterialGraphRender, AttributesAreReadByNameAndMissingOnesAreZero) {
+    set_world_color(r, 0, 0, 0);
+    tools::MeshArrays plane = tools::make_plane(1.0f, 1);
+    const std::size_t corners = plane.indices.size();
+    std::vector<float> colors(corners * 4);
+    for (std::size_t c = 0; c < corners; ++c) {
+        colors[c * 4] = 0.25f;
+        colors[c * 4 + 1] = 0.5f;
+        colors[c * 4 + 2] = 0.75f;
+        colors[c * 4 + 3] = 1.0f;
+    }
+    MeshData data = plane.view();
+    data.attributes.push_back({"color:Col", 4, colors.data(), false});
+    const std::uint32_t mesh = r.add_mesh(data);
+
+    // node_vertex_color(attr0) -> Emission colour.
+    auto graph_reading = [](const std::string& name) {
+        MaterialGraph g;
+        g.constants = {1.0f};
+        g.attributes = {name};
+        g.nodes.push_back({"node_vertex_color", {shading_arg("attr0")}, {SocketType::Color, SocketType::Float}});
+        g.nodes.push_back({"node_emission", {link_arg(SocketType::Color, 0, 0, SocketType::Color),
+                                             const_arg(SocketType::Float, 0)},
+                           {SocketType::Closure}});
+        g.surface_node = 1;
+        return g;
+    };
+    const std::uint32_t present = r.add_graph_material(Material{}, graph_reading("color:Col"));
+    const std::uint32_t missing = r.add_graph_material(Material{}, graph_reading("color:Other"));
+    const Mat4d left = tools::scale_translation(0.5, -0.5, 0, 0), right = tools::scale_translation(0.5, 0.5, 0, 0);
+    r.add_instances(mesh, left.data(), 1, nullptr, {present});
+    r.add_instances(mesh, right.data(), 1, nullptr, {missing});
+    const PassImage img = *r.render(cam, small()).find(Pass::Combined);
+    EXPECT_LT(glm::length(pixel3(img, 3, 8) - glm::dvec3(0.25, 0.5, 0.75)), 1e-6);
+    EXPECT_LT(glm::length(pixel3(img, 12, 8)), 1e-6);
+
+    std::vector<float> nan_colors = colors;
+    nan_colors[5] = std::nanf("");
+    MeshData bad = plane.view();
+    bad.attributes.push_back({"color:Col", 4, nan_colors.data(), false});
+    EXPECT_THROW(r.add_mesh(bad), InvalidInput);
+}
+
+TEST_F(MaterialGraphRender, AGraphThatDoesNotCompileFallsBackWithAWarning) {
+    set_world_color(r, 0, 0, 0);
+    MaterialGraph g = constant_emission_graph(1, 1, 1);
+    g.nodes[0].func = "node_not_in_the_library";
+    plane_with(r.add_graph_material(Material{}, g));
+    FrameResult f;
+    ASSERT_NO_THROW(f = r.render(cam, small()));
+    ASSERT_EQ(f.warnings.size(), 1u);
+    EXPECT_NE(f.warnings[0].find("did not compile"), std::string::npos);
+    // The default surface emits nothing: black under a black world.
+    EXPECT_LT(glm::length(pixel3(*f.find(Pass::Combined), 8, 8)), 1e-6);
+}
+
+TEST_F(MaterialGraphRender, ImagesAreUploadedAsGivenAndRefusedWhenBroken) {
+    const std::uint8_t bytes[2 * 2 * 4] = {255, 0, 0, 255, 0, 255, 0, 255, 0, 0, 255, 255, 255, 255, 255, 255};
+    ImageData image;
+    image.width = 2;
+    image.height = 2;
+    image.bytes = bytes;
+    EXPECT_EQ(r.add_image(image), 0u);
+    const float nan_texels[4] = {std::nanf(""), 0, 0, 1};
+    ImageData bad;
+    bad.width = 1;
+    bad.height = 1;
+    bad.floats = nan_texels;
+    EXPECT_THROW(r.add_image(bad), InvalidInput);
+    ImageData empty;
+    EXPECT_THROW(r.add_image(empty), InvalidInput);
+    MaterialGraph g = constant_emission_graph(1, 1, 1);
+    g.images = {7};
+    EXPECT_THROW(r.add_graph_material(Material{}, g), InvalidInput);
+}
+
+TEST(MaterialGraphDiskCache, ASecondRendererLoadsInsteadOfCompiling) {
+    const std::filesystem::path dir = std::filesystem::temp_directory_path() /
+                                      ("deferred_cache_test_" + std::to_string(::getpid()));
+    std::filesystem::remove_all(dir);
+    setenv("DEFERRED_SHADER_CACHE", dir.c_str(), 1);
+    auto render_once = [](FrameTimings& t) {
+        Renderer r;
+        set_world_color(r, 0, 0, 0);
+        tools::MeshArrays plane = tools::make_plane(1.0f, 1);
+        const std::uint32_t mesh = r.add_mesh(plane.view());
+        r.add_instances(mesh, identity_matrix().data(), 1, nullptr,
+                        {r.add_graph_material(Material{}, constant_emission_graph(1, 0.5f, 0))});
+        t = r.render(top_down_ortho(5.0, 2.0f), small()).timings;
+    };
+    FrameTimings cold, warm;
+    render_once(cold);
+    render_once(warm);
+    unsetenv("DEFERRED_SHADER_CACHE");
+    const bool stored = std::filesystem::exists(dir) && !std::filesystem::is_empty(dir);
+    std::filesystem::remove_all(dir);
+    if (!stored) GTEST_SKIP() << "this driver offers no program binary formats";
+    EXPECT_GT(cold.programs_compiled, 0u);
+    EXPECT_EQ(warm.programs_compiled, 0u);
+    EXPECT_EQ(warm.programs_loaded, cold.programs_compiled);
+    std::printf("programs: cold %zu compiled in %.0f ms; warm %zu loaded in %.0f ms\n", cold.programs_compiled,
+                cold.compile_ms, warm.programs_loaded, warm.load_ms);
+}
+
+}  // namespace
+}  // namespace deferred::testing

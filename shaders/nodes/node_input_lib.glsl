@@ -60,13 +60,13 @@ void node_object_info(out vec3 location, out vec3 color, out float alpha, out fl
 }
 
 /* svm_node_geometry. Tangent: radial around Z through the generated
- * coordinates (primitive_tangent), made orthogonal to N. */
+ * coordinates (geom/primitive.h primitive_tangent), made orthogonal to N. */
 void node_geometry(out vec3 position, out vec3 normal, out vec3 tangent, out vec3 true_normal,
                    out vec3 incoming, out float backfacing) {
     position = g_sd.P;
     normal = g_sd.N;
     vec3 t = vec3(-(g_sd.generated.y - 0.5), g_sd.generated.x - 0.5, 0.0);
-    t = g_sd.object_to_world * t;
+    t = g_sd.normal_to_world * t; /* object_normal_transform, as primitive_tangent */
     tangent = cross(g_sd.N, safe_normalize(cross(t, g_sd.N)));
     true_normal = g_sd.Ng;
     incoming = g_sd.I;
@@ -135,4 +135,93 @@ void node_camera_data(out vec3 view_vector, out float view_z_depth, out float vi
     view_vector = normalize(g_sd.P_view);
     view_z_depth = g_sd.view_depth;
     view_distance = g_sd.view_distance;
+}
+
+/* svm_node_tangent (tex_coord.h): a UV map's tangent (attribute slot, xyz)
+ * or radial around an axis through the generated coordinates, transformed
+ * as a normal and made orthogonal to N. A missing UV map gives 0. */
+#define NODE_TANGENT_RADIAL 0
+#define NODE_TANGENT_UVMAP 1
+#define NODE_TANGENT_AXIS_X 0
+#define NODE_TANGENT_AXIS_Y 1
+#define NODE_TANGENT_AXIS_Z 2
+void node_tangent(int direction_type, int axis, vec4 uv_tangent, out vec3 tangent) {
+    vec3 t;
+    if (direction_type == NODE_TANGENT_UVMAP) {
+        if (uv_tangent == vec4(0.0)) {
+            tangent = vec3(0.0);
+            return;
+        }
+        t = uv_tangent.xyz;
+    } else {
+        vec3 g = g_sd.generated;
+        if (axis == NODE_TANGENT_AXIS_X)
+            t = vec3(0.0, -(g.z - 0.5), g.y - 0.5);
+        else if (axis == NODE_TANGENT_AXIS_Y)
+            t = vec3(-(g.z - 0.5), 0.0, g.x - 0.5);
+        else
+            t = vec3(-(g.y - 0.5), g.x - 0.5, 0.0);
+    }
+    t = g_sd.normal_to_world * t;
+    tangent = cross(g_sd.N, normalize(cross(t, g_sd.N)));
+}
+
+/* svm_node_light_falloff (light_path.h) on a surface: the camera ray's
+ * length stands for the distance. */
+void node_light_falloff(float strength, float smooth_width, out float quadratic, out float linear_falloff,
+                        out float constant_falloff) {
+    float r = g_sd.view_distance;
+    float squared = r * r;
+    float s = 1.0;
+    if (smooth_width > 0.0 && !isinf(squared)) s = squared / (smooth_width + squared);
+    quadratic = strength * s;
+    linear_falloff = strength * r * s;
+    constant_falloff = strength * squared * s;
+}
+
+/* svm_node_vector_transform (vector_transform.h). Spaces: 0 world, 1 object,
+ * 2 camera (Cycles' camera space, +z forward); types: 0 vector, 1 point,
+ * 2 normal (a direction, normalised after). */
+#define NODE_VECTOR_TRANSFORM_TYPE_VECTOR 0
+#define NODE_VECTOR_TRANSFORM_TYPE_POINT 1
+#define NODE_VECTOR_TRANSFORM_TYPE_NORMAL 2
+#define NODE_VECTOR_TRANSFORM_SPACE_WORLD 0
+#define NODE_VECTOR_TRANSFORM_SPACE_OBJECT 1
+#define NODE_VECTOR_TRANSFORM_SPACE_CAMERA 2
+vec3 node_world_to_camera(vec3 v, bool direction) {
+    vec3 w = direction ? mat3(frame.view) * v : mat3(frame.view) * (v - frame.camera_position.xyz);
+    return vec3(w.xy, -w.z);
+}
+vec3 node_camera_to_world(vec3 v, bool direction) {
+    vec3 w = mat3(frame.inv_view) * vec3(v.xy, -v.z);
+    return direction ? w : w + frame.camera_position.xyz;
+}
+vec3 node_world_to_object(vec3 v, bool direction) {
+    mat3 inv = inverse(g_sd.object_to_world);
+    return direction ? inv * v : inv * (v - g_sd.object_location);
+}
+vec3 node_object_to_world(vec3 v, bool direction) {
+    return direction ? g_sd.object_to_world * v : g_sd.object_to_world * v + g_sd.object_location;
+}
+void node_vector_transform(int type, int from_space, int to_space, vec3 v, out vec3 result) {
+    bool direction = type != NODE_VECTOR_TRANSFORM_TYPE_POINT;
+    if (from_space == NODE_VECTOR_TRANSFORM_SPACE_WORLD) {
+        if (to_space == NODE_VECTOR_TRANSFORM_SPACE_CAMERA) v = node_world_to_camera(v, direction);
+        else if (to_space == NODE_VECTOR_TRANSFORM_SPACE_OBJECT) v = node_world_to_object(v, direction);
+    } else if (from_space == NODE_VECTOR_TRANSFORM_SPACE_CAMERA) {
+        if (to_space != NODE_VECTOR_TRANSFORM_SPACE_CAMERA) v = node_camera_to_world(v, direction);
+        if (to_space == NODE_VECTOR_TRANSFORM_SPACE_OBJECT) v = node_world_to_object(v, direction);
+    } else {
+        if (to_space != NODE_VECTOR_TRANSFORM_SPACE_OBJECT) v = node_object_to_world(v, direction);
+        if (to_space == NODE_VECTOR_TRANSFORM_SPACE_CAMERA) v = node_world_to_camera(v, direction);
+    }
+    if (type == NODE_VECTOR_TRANSFORM_TYPE_NORMAL) v = normalize(v);
+    result = v;
+}
+
+/* Displacement node (displace.h svm_node_displacement, object space off):
+ * (height - midlevel) * scale along the normal. Its only consumer is the
+ * Material Output's Displacement, which is not rendered (the add-on says so). */
+void node_displacement(float height, float midlevel, float scale, vec3 normal, out vec3 displacement) {
+    displacement = (height - midlevel) * scale * normalize(normal);
 }

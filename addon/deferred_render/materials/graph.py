@@ -4,7 +4,8 @@ A shader node tree is not a plain graph: links pass through reroutes, node
 groups (``ShaderNodeGroup`` -> its tree's Group Output; ``NodeGroupInput``
 -> the group node's own input socket, one level out), muted nodes (their
 ``internal_links``: each output takes the input Blender routes to it, else
-nothing) and muted or invalid links (as if absent). ``resolve_input``
+nothing) and muted or invalid links, or links of disabled sockets (as if
+absent). ``resolve_input``
 follows all of them and answers with the real node output that drives the
 input, or with the unlinked socket whose value it takes.
 
@@ -45,7 +46,9 @@ def _active_link(socket):
     if not socket.is_linked:
         return None
     for link in socket.links:
-        if link.is_valid and not link.is_muted:
+        # Links from or to a disabled socket (e.g. Voronoi's W output in 3D)
+        # are ignored by Blender and Cycles: the input keeps its own value.
+        if link.is_valid and not link.is_muted and link.from_socket.enabled and link.to_socket.enabled:
             return link
     return None
 

@@ -95,3 +95,44 @@ def light_path(b):
 @register("ShaderNodeCameraData")
 def camera_data(b):
     b.call("node_camera_data", [], [("View Vector", "vector"), ("View Z Depth", "float"), ("View Distance", "float")])
+
+
+TANGENT_DIRECTIONS = {"RADIAL": 0, "UV_MAP": 1}
+TANGENT_AXES = {"X": 0, "Y": 1, "Z": 2}
+
+
+@register("ShaderNodeTangent")
+def tangent(b):
+    uv = b.node.direction_type == "UV_MAP"
+    b.call("node_tangent",
+           [b.int(TANGENT_DIRECTIONS[b.node.direction_type]), b.int(TANGENT_AXES[b.node.axis]),
+            b.attribute("tangent:" + b.node.uv_map) if uv else b.shading("attr_none")],
+           [("Tangent", "vector")])
+
+
+@register("ShaderNodeLightFalloff")
+def light_falloff(b):
+    b.call("node_light_falloff", [b.input("Strength", "float"), b.input("Smooth", "float")],
+           [("Quadratic", "float"), ("Linear", "float"), ("Constant", "float")])
+
+
+VECTOR_TRANSFORM_TYPES = {"VECTOR": 0, "POINT": 1, "NORMAL": 2}
+VECTOR_TRANSFORM_SPACES = {"WORLD": 0, "OBJECT": 1, "CAMERA": 2}
+
+
+@register("ShaderNodeVectorTransform")
+def vector_transform(b):
+    b.call("node_vector_transform",
+           [b.int(VECTOR_TRANSFORM_TYPES[b.node.vector_type]), b.int(VECTOR_TRANSFORM_SPACES[b.node.convert_from]),
+            b.int(VECTOR_TRANSFORM_SPACES[b.node.convert_to]), b.input("Vector", "vector")],
+           [("Vector", "vector")])
+
+
+@register("ShaderNodeDisplacement")
+def displacement(b):
+    if b.node.space != "OBJECT":
+        b._graph.note(f"'{b.node.name}': Displacement in {b.node.space.lower()} space is computed in object space")
+    b.call("node_displacement",
+           [b.input("Height", "float"), b.input("Midlevel", "float"), b.input("Scale", "float"),
+            b.input("Normal", "vector", implicit="N")],
+           [("Displacement", "vector")])

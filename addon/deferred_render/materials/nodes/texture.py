@@ -1,0 +1,389 @@
+"""Node specs of the procedural texture nodes: Noise, Voronoi, Musgrave, Wave, Checker,
+Brick, Gradient, Magic, White Noise.
+
+GLSL: shaders/nodes/node_texture_lib.glsl (node_tex_*), with Blender's hashes in
+shaders/nodes/hash_lib.glsl. Semantics are Cycles 3.4.1's: the kernel sources Blender
+3.4.1 ships in scripts/addons/cycles/source/kernel/svm/ (noisetex.h, voronoi.h, ...) and,
+for how a Blender node reaches the kernel, intern/cycles/blender/shader.cpp and
+intern/cycles/scene/shader_nodes.cpp of the 3.x series:
+
+- Enum properties are cast straight across (``(NodeVoronoiFeature)b_node.feature()``...),
+  so the tables below are Blender's RNA enum values, which are Cycles' enum values.
+- An unlinked texture Vector is the Generated coordinates (SocketType::
+  LINK_TEXTURE_GENERATED), except White Noise (a plain ShaderNode: its hidden Vector is
+  its (0, 0, 0) default).
+- Cycles ignores links into unavailable (disabled) sockets and reads the socket's own
+  value (blender/shader.cpp add_nodes), so a disabled input here is its default value.
+- Every texture node but White Noise carries a TextureMapping (``node.texture_mapping``:
+  translation, rotation, scale, vector type, axis mapping; min/max is not passed on by
+  Cycles). Blender 3.x has no UI for it, but files from 2.7x and scripts can set it; when
+  it is not the identity (TextureMapping::skip()) Cycles puts NODE_TEXTURE_MAPPING in
+  front of the texture, and so do we: its 3x4 transform (compute_transform() below) goes
+  in a constant block, mode 2 (vector type NORMAL) normalises after.
+- Noise computes its Color only when the output is used (stack_valid()); Fac is the
+  same either way.
+"""
+
+import math
+
+from . import register
+
+# Blender RNA enum identifier -> Cycles / Blender enum value (kernel/svm/types.h).
+# Keep in step with the table at the top of node_texture_lib.glsl.
+DIMENSIONS = {"1D": 1, "2D": 2, "3D": 3, "4D": 4}
+VORONOI_FEATURE = {"F1": 0, "F2": 1, "SMOOTH_F1": 2, "DISTANCE_TO_EDGE": 3, "N_SPHERE_RADIUS": 4}
+VORONOI_METRIC = {"EUCLIDEAN": 0, "MANHATTAN": 1, "CHEBYCHEV": 2, "MINKOWSKI": 3}
+MUSGRAVE_TYPE = {"MULTIFRACTAL": 0, "FBM": 1, "HYBRID_MULTIFRACTAL": 2,
+                 "RIDGED_MULTIFRACTAL": 3, "HETERO_TERRAIN": 4}
+WAVE_TYPE = {"BANDS": 0, "RINGS": 1}
+WAVE_BANDS_DIRECTION = {"X": 0, "Y": 1, "Z": 2, "DIAGONAL": 3}
+WAVE_RINGS_DIRECTION = {"X": 0, "Y": 1, "Z": 2, "SPHERICAL": 3}
+WAVE_PROFILE = {"SIN": 0, "SAW": 1, "TRI": 2}
+GRADIENT_TYPE = {"LINEAR": 0, "QUADRATIC": 1, "EASING": 2, "DIAGONAL": 3, "RADIAL": 4,
+                 "QUADRATIC_SPHERE": 5, "SPHERICAL": 6}
+
+# Texture mapping modes of node_texture_lib.glsl tex_mapping_apply().
+MAP_NONE, MAP_AFFINE, MAP_AFFINE_NORMALIZE = 0, 1, 2
+
+# Voronoi features that use neither the metric nor the exponent.
+_VORONOI_NO_METRIC = (VORONOI_FEATURE["DISTANCE_TO_EDGE"], VORONOI_FEATURE["N_SPHERE_RADIUS"])
+
+
+# --------------------------------------------------------------------------------------
+# Texture mapping: scene/shader_nodes.cpp TextureMapping::skip() / compute_transform(),
+# with util/transform.h's transform_scale/rotate/euler/translate (Transform = 3x4 rows).
+# --------------------------------------------------------------------------------------
+
+_AXIS = {"NONE": 0, "X": 1, "Y": 2, "Z": 3}   # TextureMapping::Mapping (= Blender's)
+
+
+def _mul(a, b):
+    """Product of two affine 3x4 transforms (rows), as Transform * Transform."""
+    out = []
+    for i in range(3):
+        row = []
+        for j in range(4):
+            v = sum(a[i][k] * b[k][j] for k in range(3))
+            if j == 3:
+                v += a[i][3]
+            row.append(v)
+        out.append(row)
+    return out
+
+
+def _scale(s):
+    return [[s[0], 0.0, 0.0, 0.0], [0.0, s[1], 0.0, 0.0], [0.0, 0.0, s[2], 0.0]]
+
+
+def _translate(t):
+    return [[1.0, 0.0, 0.0, t[0]], [0.0, 1.0, 0.0, t[1]], [0.0, 0.0, 1.0, t[2]]]
+
+
+def _rotate(angle, axis):
+    """util/transform.h transform_rotate() (axis is a unit axis here)."""
+    s, c = math.sin(angle), math.cos(angle)
+    t = 1.0 - c
+    x, y, z = axis
+    return [[x * x * t + c, x * y * t - s * z, x * z * t + s * y, 0.0],
+            [y * x * t + s * z, y * y * t + c, y * z * t - s * x, 0.0],
+            [z * x * t - s * y, z * y * t + s * x, z * z * t + c, 0.0]]
+
+
+def _euler(r):
+    """util/transform.h transform_euler(): Rz * Ry * Rx."""
+    return _mul(_mul(_rotate(r[2], (0.0, 0.0, 1.0)), _rotate(r[1], (0.0, 1.0, 0.0))),
+                _rotate(r[0], (1.0, 0.0, 0.0)))
+
+
+def _inverse(m):
+    """Inverse of an affine 3x4 transform (the 3x3 part by cofactors, then -A^-1 t).
+    A singular matrix (Cycles nudges the diagonal, then gives up with the identity)
+    gives the identity."""
+    a = [row[:3] for row in m]
+    t = [row[3] for row in m]
+    c00 = a[1][1] * a[2][2] - a[1][2] * a[2][1]
+    c01 = a[1][2] * a[2][0] - a[1][0] * a[2][2]
+    c02 = a[1][0] * a[2][1] - a[1][1] * a[2][0]
+    det = a[0][0] * c00 + a[0][1] * c01 + a[0][2] * c02
+    if det == 0.0 or not math.isfinite(det):
+        return _scale((1.0, 1.0, 1.0))
+    inv = [[c00 / det,
+            (a[0][2] * a[2][1] - a[0][1] * a[2][2]) / det,
+            (a[0][1] * a[1][2] - a[0][2] * a[1][1]) / det],
+           [c01 / det,
+            (a[0][0] * a[2][2] - a[0][2] * a[2][0]) / det,
+            (a[0][2] * a[1][0] - a[0][0] * a[1][2]) / det],
+           [c02 / det,
+            (a[0][1] * a[2][0] - a[0][0] * a[2][1]) / det,
+            (a[0][0] * a[1][1] - a[0][1] * a[1][0]) / det]]
+    return [inv[i] + [-sum(inv[i][k] * t[k] for k in range(3))] for i in range(3)]
+
+
+def _signf(f):
+    """util/math.h signf(): -1 for negative, else +1 (so +1 for -0.0 and 0.0)."""
+    return -1.0 if f < 0.0 else 1.0
+
+
+def compute_transform(translation, rotation, scale, vector_type, axes):
+    """TextureMapping::compute_transform(): the 3x4 rows applied to the texture vector."""
+    mmat = [[0.0] * 4 for _ in range(3)]
+    for row, axis in enumerate(axes):
+        index = _AXIS.get(axis, 0)
+        if index != 0:
+            mmat[row][index - 1] = 1.0
+
+    scale_clamped = list(scale)
+    if vector_type in ("TEXTURE", "NORMAL"):
+        # keep matrix invertible
+        scale_clamped = [_signf(v) * 1e-5 if abs(v) < 1e-5 else v for v in scale]
+
+    smat = _scale(scale_clamped)
+    rmat = _euler(rotation)
+    tmat = _translate(translation)
+
+    if vector_type == "TEXTURE":
+        # inverse transform on texture coordinate gives forward transform on texture
+        mat = _inverse(_mul(_mul(tmat, rmat), smat))
+    elif vector_type == "POINT":
+        mat = _mul(_mul(tmat, rmat), smat)
+    elif vector_type == "VECTOR":
+        mat = _mul(rmat, smat)
+    else:  # NORMAL: no translation, inverse transpose (transform_transposed_inverse)
+        inv = _inverse(_mul(rmat, smat))
+        mat = [[inv[j][i] for j in range(3)] + [0.0] for i in range(3)]
+
+    # projection last
+    return _mul(mat, mmat)
+
+
+def texture_mapping(mapping):
+    """(mode, 12 floats or None) for a bpy TexMapping; MAP_NONE where Cycles skips it."""
+    if mapping is None:
+        return MAP_NONE, None
+    t = tuple(float(v) for v in mapping.translation)
+    r = tuple(float(v) for v in mapping.rotation)
+    s = tuple(float(v) for v in mapping.scale)
+    axes = (mapping.mapping_x, mapping.mapping_y, mapping.mapping_z)
+    # TextureMapping::skip() (use_minmax is never set from Blender).
+    if t == (0.0, 0.0, 0.0) and r == (0.0, 0.0, 0.0) and s == (1.0, 1.0, 1.0) and \
+            axes == ("X", "Y", "Z"):
+        return MAP_NONE, None
+    vector_type = mapping.vector_type
+    mat = compute_transform(t, r, s, vector_type, axes)
+    block = [float(mat[i][j]) for i in range(3) for j in range(4)]
+    return (MAP_AFFINE_NORMALIZE if vector_type == "NORMAL" else MAP_AFFINE), block
+
+
+def _mapping_args(b):
+    """[mode, block offset] ints of tex_mapping_apply()."""
+    mode, block = texture_mapping(getattr(b.node, "texture_mapping", None))
+    if mode == MAP_NONE:
+        return [b.int(MAP_NONE), b.int(0)]
+    return [b.int(mode), b.block(block)]
+
+
+# --------------------------------------------------------------------------------------
+# Inputs
+# --------------------------------------------------------------------------------------
+
+def _socket(sockets, identifier):
+    for s in sockets:
+        if s.identifier == identifier:
+            return s
+    return None
+
+
+def _in(b, identifier, type, implicit=None):
+    """An input as Cycles reads it: a disabled socket's links are ignored (its value is
+    the socket's own default); otherwise b.input()."""
+    socket = _socket(b.node.inputs, identifier)
+    if socket is not None and not socket.enabled:
+        value = getattr(socket, "default_value", 0.0)
+        try:
+            value = tuple(value)
+        except TypeError:
+            pass
+        return b.const(value, type)
+    return b.input(identifier, type, implicit=implicit)
+
+
+def _vector(b):
+    return _in(b, "Vector", "vector", implicit="generated")
+
+
+def _output_used(b, identifier):
+    socket = _socket(b.node.outputs, identifier)
+    return bool(socket is not None and socket.is_linked)
+
+
+def _enum(b, table, prop):
+    value = getattr(b.node, prop)
+    if value not in table:
+        b.unsupported(f"{prop} {value}")
+        return None
+    return table[value]
+
+
+# --------------------------------------------------------------------------------------
+# Specs
+# --------------------------------------------------------------------------------------
+
+@register("ShaderNodeTexNoise")
+def tex_noise(b):
+    """noisetex.h svm_node_tex_noise()."""
+    dims = _enum(b, DIMENSIONS, "noise_dimensions")
+    if dims is None:
+        return
+    color_needed = 1 if _output_used(b, "Color") else 0
+    b.call("node_tex_noise",
+           [b.int(dims), b.int(color_needed)] + _mapping_args(b) +
+           [_vector(b),
+            _in(b, "W", "float"),
+            _in(b, "Scale", "float"),
+            _in(b, "Detail", "float"),
+            _in(b, "Roughness", "float"),
+            _in(b, "Distortion", "float")],
+           [("Fac", "float"), ("Color", "color")])
+
+
+@register("ShaderNodeTexVoronoi")
+def tex_voronoi(b):
+    """voronoi.h svm_node_tex_voronoi()."""
+    dims = _enum(b, DIMENSIONS, "voronoi_dimensions")
+    feature = _enum(b, VORONOI_FEATURE, "feature")
+    metric = _enum(b, VORONOI_METRIC, "distance")
+    if dims is None or feature is None or metric is None:
+        return
+    if dims == 1 or feature in _VORONOI_NO_METRIC:
+        metric = 0  # unused by the kernel: one program for all metrics
+    b.call("node_tex_voronoi",
+           [b.int(dims), b.int(feature), b.int(metric)] + _mapping_args(b) +
+           [_vector(b),
+            _in(b, "W", "float"),
+            _in(b, "Scale", "float"),
+            _in(b, "Smoothness", "float"),
+            _in(b, "Exponent", "float"),
+            _in(b, "Randomness", "float")],
+           [("Distance", "float"), ("Color", "color"), ("Position", "vector"),
+            ("W", "float"), ("Radius", "float")])
+
+
+@register("ShaderNodeTexMusgrave")
+def tex_musgrave(b):
+    """musgrave.h svm_node_tex_musgrave()."""
+    dims = _enum(b, DIMENSIONS, "musgrave_dimensions")
+    mtype = _enum(b, MUSGRAVE_TYPE, "musgrave_type")
+    if dims is None or mtype is None:
+        return
+    b.call("node_tex_musgrave",
+           [b.int(dims), b.int(mtype)] + _mapping_args(b) +
+           [_vector(b),
+            _in(b, "W", "float"),
+            _in(b, "Scale", "float"),
+            _in(b, "Detail", "float"),
+            _in(b, "Dimension", "float"),
+            _in(b, "Lacunarity", "float"),
+            _in(b, "Offset", "float"),
+            _in(b, "Gain", "float")],
+           [("Fac", "float")])
+
+
+@register("ShaderNodeTexWave")
+def tex_wave(b):
+    """wave.h svm_node_tex_wave()."""
+    wtype = _enum(b, WAVE_TYPE, "wave_type")
+    bands = _enum(b, WAVE_BANDS_DIRECTION, "bands_direction")
+    rings = _enum(b, WAVE_RINGS_DIRECTION, "rings_direction")
+    profile = _enum(b, WAVE_PROFILE, "wave_profile")
+    if None in (wtype, bands, rings, profile):
+        return
+    # The direction of the other wave type is unused: one program for all of them.
+    if wtype == WAVE_TYPE["BANDS"]:
+        rings = 0
+    else:
+        bands = 0
+    b.call("node_tex_wave",
+           [b.int(wtype), b.int(bands), b.int(rings), b.int(profile)] + _mapping_args(b) +
+           [_vector(b),
+            _in(b, "Scale", "float"),
+            _in(b, "Distortion", "float"),
+            _in(b, "Detail", "float"),
+            _in(b, "Detail Scale", "float"),
+            _in(b, "Detail Roughness", "float"),
+            _in(b, "Phase Offset", "float")],
+           [("Color", "color"), ("Fac", "float")])
+
+
+@register("ShaderNodeTexChecker")
+def tex_checker(b):
+    """checker.h svm_node_tex_checker()."""
+    b.call("node_tex_checker",
+           _mapping_args(b) +
+           [_vector(b),
+            _in(b, "Color1", "color"),
+            _in(b, "Color2", "color"),
+            _in(b, "Scale", "float")],
+           [("Color", "color"), ("Fac", "float")])
+
+
+@register("ShaderNodeTexBrick")
+def tex_brick(b):
+    """brick.h svm_node_tex_brick(). The node's offset / squash (floats) and
+    offset_frequency / squash_frequency (ints 1..99, Cycles packs them as uchar) are
+    per-material constants, so editing them does not recompile."""
+    node = b.node
+    b.call("node_tex_brick",
+           _mapping_args(b) +
+           [_vector(b),
+            _in(b, "Color1", "color"),
+            _in(b, "Color2", "color"),
+            _in(b, "Mortar", "color"),
+            _in(b, "Scale", "float"),
+            _in(b, "Mortar Size", "float"),
+            _in(b, "Mortar Smooth", "float"),
+            _in(b, "Bias", "float"),
+            _in(b, "Brick Width", "float"),
+            _in(b, "Row Height", "float"),
+            b.const(float(node.offset), "float"),
+            b.const(float(int(node.offset_frequency) & 0xFF), "float"),
+            b.const(float(node.squash), "float"),
+            b.const(float(int(node.squash_frequency) & 0xFF), "float")],
+           [("Color", "color"), ("Fac", "float")])
+
+
+@register("ShaderNodeTexGradient")
+def tex_gradient(b):
+    """gradient.h svm_node_tex_gradient()."""
+    gtype = _enum(b, GRADIENT_TYPE, "gradient_type")
+    if gtype is None:
+        return
+    b.call("node_tex_gradient",
+           [b.int(gtype)] + _mapping_args(b) + [_vector(b)],
+           [("Color", "color"), ("Fac", "float")])
+
+
+@register("ShaderNodeTexMagic")
+def tex_magic(b):
+    """magic.h svm_node_tex_magic(); turbulence_depth (0..10) is the kernel's depth."""
+    depth = int(b.node.turbulence_depth)
+    b.call("node_tex_magic",
+           [b.int(depth)] + _mapping_args(b) +
+           [_vector(b),
+            _in(b, "Scale", "float"),
+            _in(b, "Distortion", "float")],
+           [("Color", "color"), ("Fac", "float")])
+
+
+@register("ShaderNodeTexWhiteNoise")
+def tex_white_noise(b):
+    """white_noise.h svm_node_tex_white_noise(): no texture mapping, and an unlinked
+    Vector is its (0, 0, 0) default (WhiteNoiseTextureNode's Vector has no
+    LINK_TEXTURE_GENERATED)."""
+    dims = _enum(b, DIMENSIONS, "noise_dimensions")
+    if dims is None:
+        return
+    b.call("node_tex_white_noise",
+           [b.int(dims),
+            _in(b, "Vector", "vector"),
+            _in(b, "W", "float")],
+           [("Value", "float"), ("Color", "color")])

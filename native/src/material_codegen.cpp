@@ -2,6 +2,7 @@
 
 #include <deferred/renderer.h>
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <map>
@@ -67,6 +68,13 @@ std::string convert(const std::string& value, SocketType from, SocketType to) {
 }
 
 }  // namespace
+
+std::vector<std::string> material_graph_functions(const MaterialGraph& g) {
+    std::vector<std::string> out;
+    for (const GraphNode& n : g.nodes)
+        if (std::find(out.begin(), out.end(), n.func) == out.end()) out.push_back(n.func);
+    return out;
+}
 
 const char* glsl_type(SocketType t) {
     switch (t) {
@@ -146,7 +154,6 @@ void validate_material_graph(const MaterialGraph& g) {
 std::string material_graph_glsl(const MaterialGraph& g) {
     std::ostringstream out;
     out << "/* Generated from a node material graph (material_codegen.cpp). */\n";
-    out << "#include \"material_lib.glsl\"\n#include \"nodes/node_lib.glsl\"\n";
     out << "void material_graph_eval(out Closure surface) {\n";
     for (std::size_t i = 0; i < g.nodes.size(); ++i) {
         const GraphNode& node = g.nodes[i];

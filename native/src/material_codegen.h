@@ -5,6 +5,7 @@
 #include <deferred/material_graph.h>
 
 #include <string>
+#include <vector>
 
 namespace deferred {
 
@@ -15,10 +16,15 @@ namespace deferred {
 // slot without an image, an unknown shading value. No GL.
 void validate_material_graph(const MaterialGraph& graph);
 
-// GLSL of `void material_graph_eval(out Closure surface)` for a valid graph.
+// GLSL of `void material_graph_eval(out Closure surface)` for a valid graph
+// (without the includes of the node library files it calls: see
+// MaterialModule::program).
 // Depends on the graph's structure only (never on constant values), so it
 // doubles as the program's cache key.
 std::string material_graph_glsl(const MaterialGraph& graph);
+
+// The GLSL functions a graph calls.
+std::vector<std::string> material_graph_functions(const MaterialGraph& graph);
 
 // GLSL type of a socket type.
 const char* glsl_type(SocketType t);

@@ -86,7 +86,13 @@ GLuint MaterialModule::program(ShaderLibrary& shaders, std::uint32_t graph, cons
     v.defines.push_back("MATERIAL_GRAPH");
     v.defines.push_back("MATERIAL_ATTRIBUTE_COUNT " + std::to_string(g.graph.attributes.size()));
     v.defines.push_back("MATERIAL_IMAGE_COUNT " + std::to_string(g.graph.images.size()));
-    return shaders.graphics_program("geometry_vert.glsl", "geometry_frag.glsl", v, {{"material_graph.glsl", g.glsl}});
+    // The node library files the graph calls into (and theirs), then the graph.
+    std::vector<std::string> functions = material_graph_functions(g.graph);
+    functions.push_back("node_closure_none");
+    std::string source = "#include \"material_lib.glsl\"\n";
+    for (const std::string& file : shaders.node_files_for(functions)) source += "#include \"" + file + "\"\n";
+    source += g.glsl;
+    return shaders.graphics_program("geometry_vert.glsl", "geometry_frag.glsl", v, {{kMaterialGraphFile, source}});
 }
 
 void MaterialModule::bind_for_draw(std::uint32_t graph, const GpuMesh& mesh) const {

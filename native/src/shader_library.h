@@ -44,6 +44,12 @@ public:
                             const std::map<std::string, std::string>& generated = {});
 
     std::size_t compiled_program_count() const { return programs_.size(); }
+
+    // The node-library files (shaders/nodes/) that define `functions`, each
+    // after the files it calls into: a node material's program includes only
+    // these (parsing the whole library costs llvmpipe ~1.2 s per program).
+    // Throws Error naming a function no file defines.
+    std::vector<std::string> node_files_for(const std::vector<std::string>& functions);
     // Programs compiled and linked (in neither cache) and the time it took;
     // programs loaded from the disk cache (glProgramBinary) and that time.
     std::size_t compile_count() const { return compile_count_; }
@@ -62,6 +68,9 @@ private:
     std::map<std::string, std::string> sources_;
     std::vector<std::string> file_ids_;  // #line source-string number -> file name
     std::map<std::string, Program> programs_;
+    // nodes/ file -> functions it defines, and the node files it calls into.
+    std::map<std::string, std::vector<std::string>> node_definitions_, node_dependencies_;
+    void index_node_files();
     const std::map<std::string, std::string>* generated_ = nullptr;  // during one graphics_program()
     std::size_t compile_count_ = 0, disk_loads_ = 0;
     double compile_ms_ = 0.0, load_ms_ = 0.0;

@@ -82,6 +82,9 @@ def _format_timings(timings):
     text = ", ".join(parts)
     if total is not None:
         text = f"{total:.1f} ms ({text})" if text else f"{total:.1f} ms"
+    compiled, loaded = timings.get("programs_compiled", 0), timings.get("programs_loaded", 0)
+    if compiled or loaded:
+        text += f"; programs {compiled} compiled, {loaded} from the cache"
     return text
 
 

@@ -262,18 +262,22 @@ std::uint32_t SceneStore::add_mesh(const MeshData& m) {
         g.slot_ranges[0] = {0u, std::uint32_t(nt)};
     }
     if (!m.attributes.empty()) {
-        std::vector<float> all;
+        // One buffer, each attribute uploaded straight from the caller's array.
+        std::size_t total = 0;
         for (const CornerAttribute& a : m.attributes) {
-            const std::size_t width = 3 * std::size_t(a.components);
-            g.attribute_layout.push_back({a.name, std::uint32_t(all.size()), a.components, a.direction});
-            if (sorted) {
-                all.insert(all.end(), a.data, a.data + nt * width);
-            } else {
-                std::vector<float> p = permuted(a.data, width);
-                all.insert(all.end(), p.begin(), p.end());
-            }
+            g.attribute_layout.push_back({a.name, std::uint32_t(total), a.components, a.direction});
+            total += nt * 3 * std::size_t(a.components);
         }
-        g.attributes = make_storage_buffer(all.data(), all.size() * sizeof(float), "corner attributes");
+        g.attributes = make_storage_buffer(nullptr, total * sizeof(float), "corner attributes");
+        for (std::size_t k = 0; k < m.attributes.size(); ++k) {
+            const CornerAttribute& a = m.attributes[k];
+            const std::size_t width = 3 * std::size_t(a.components);
+            std::vector<float> p;
+            if (!sorted) p = permuted(a.data, width);
+            glNamedBufferSubData(g.attributes.get(), GLintptr(g.attribute_layout[k].offset * sizeof(float)),
+                                 GLsizeiptr(nt * width * sizeof(float)), sorted ? a.data : p.data());
+        }
+        check_gl("uploading corner attributes");
     }
     for (int k = 0; k < 3; ++k) {
         g.texspace_location[k] = m.texspace_location[std::size_t(k)];

@@ -31,6 +31,8 @@ set(DEFERRED_BLENDER_TESTS
     memory
     light_culling
     world_ao
+    node_materials
+    node_probes
 )
 
 foreach(_name IN LISTS DEFERRED_BLENDER_TESTS)

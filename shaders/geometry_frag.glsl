@@ -141,7 +141,7 @@ void main() {
     material_graph_eval(c);
     vec3 shading_normal = finite_or(c.N, N);
     shading_normal = dot(shading_normal, shading_normal) > 0.0 ? normalize(shading_normal) : N;
-    out_emission = vec4(clamp(finite_or(c.emission, vec3(0.0)), vec3(0.0), vec3(65504.0)), 1.0);
+    out_emission = vec4(clamp(finite_or(c.emission, vec3(0.0)), vec3(-65504.0), vec3(65504.0)), 1.0);
     out_base = vec4(clamp(finite_or(c.base_color, vec3(0.0)), vec3(0.0), vec3(65504.0)),
                     clamp(finite_or(c.alpha, 1.0), 0.0, 1.0));
     out_params0 = vec4(clamp(finite_or(c.metallic, 0.0), 0.0, 1.0), clamp(finite_or(c.roughness, 0.5), 0.0, 1.0),

@@ -57,9 +57,10 @@ float mat_const(int i) { return material_constants[g_const_base + i]; }
 vec3 mat_const3(int i) { return vec3(mat_const(i), mat_const(i + 1), mat_const(i + 2)); }
 
 /* Implicit socket conversions (Cycles ConvertNode, svm/convert.h): colour ->
- * float is the scene-linear luminance (Blender's default OCIO config: Rec.709
- * weights), vector -> float the average of the components. */
-float node_color_to_float(vec3 c) { return dot(c, vec3(0.2126, 0.7152, 0.0722)); }
+ * float is the scene-linear luminance (Blender's default OCIO config: the
+ * Rec.709 weights as Cycles 3.4.1 derives them, measured), vector -> float the
+ * average of the components. */
+float node_color_to_float(vec3 c) { return dot(c, vec3(0.2126729950, 0.7151526453, 0.0721754596)); }
 float node_vector_to_float(vec3 v) { return (v.x + v.y + v.z) * (1.0 / 3.0); }
 
 /* No closure (an unlinked shader socket, a Holdout we do not model): black. */

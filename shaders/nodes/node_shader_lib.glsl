@@ -28,7 +28,7 @@ void node_bsdf_principled(vec3 base_color, float metallic, float specular, float
     c.sheen_tint = clamp01(sheen_tint);
     c.clearcoat = clamp01(clearcoat);
     c.clearcoat_roughness = clamp01(clearcoat_roughness);
-    c.emission = max(emission, vec3(0.0)) * max(emission_strength, 0.0);
+    c.emission = emission * emission_strength; /* Cycles does not clamp: negative light subtracts */
     c.alpha = clamp01(alpha);
     c.N = closure_normal(normal);
     c.reflects = 1.0;
@@ -59,10 +59,12 @@ void node_bsdf_glossy(vec3 color, float roughness, vec3 normal, out Closure c) {
 /* An unlinked shader socket: no closure (black). */
 void node_closure_none(out Closure c) { c = closure_none(); }
 
-/* Emission: radiance colour x strength (svm_node_emission_weight). */
+/* Emission: radiance colour x strength (svm_node_emission_weight; the
+ * closure weight is not clamped, so a negative colour or strength emits
+ * negative radiance in Cycles, and here). */
 void node_emission(vec3 color, float strength, out Closure c) {
     c = closure_none();
-    c.emission = max(color, vec3(0.0)) * max(strength, 0.0);
+    c.emission = color * strength;
 }
 
 /* Transparent BSDF: coverage 0 with the node's colour as transmission; the

@@ -29,6 +29,7 @@ layout(location = OUT_UV) out vec2 out_uv;
 /* A node material (material_lib.glsl, nodes/, the generated graph). */
 in vec3 v_object_position;
 in vec3 v_object_normal;
+flat in vec3 v_true_normal;
 flat in uint v_instance;
 #if MATERIAL_ATTRIBUTE_COUNT > 0
 in vec4 v_attr[MATERIAL_ATTRIBUTE_COUNT];
@@ -95,7 +96,9 @@ void shading_point_init(vec3 N, vec3 Ng, vec3 V, bool back) {
     vec3 view = (frame.view * vec4(v_position, 1.0)).xyz;
     g_sd.P_view = vec3(view.xy, -view.z);
     g_sd.view_depth = -view.z;
-    g_sd.view_distance = length(v_position);
+    /* The camera ray's length: from the camera, or for an orthographic one from
+     * its origin on the near plane (Cycles' camera_sample_orthographic). */
+    g_sd.view_distance = frame.camera_position.w > 0.5 ? -view.z - frame.jitter.z : length(v_position);
     vec2 ndc = gl_FragCoord.xy * frame.viewport.zw * 2.0 - 1.0 - frame.jitter.xy;
     g_sd.window = ndc * 0.5 + 0.5;
     g_sd.dPdx = dFdxFine(v_position);
@@ -122,6 +125,11 @@ void main() {
      * (negative determinant) reverses the screen winding, hence the xor. */
     const bool back = gl_FrontFacing == (v_mirrored != 0u);
     vec3 Ng = normalize(cross(dFdx(v_position), dFdy(v_position)));
+#ifdef MATERIAL_GRAPH
+    /* Node materials read Ng (True Normal, flat Normal Map): exact from the
+     * triangle's vertices rather than from screen derivatives. */
+    if (dot(v_true_normal, v_true_normal) > 0.0) Ng = normalize(v_true_normal);
+#endif
     vec3 V = frame_view_vector(v_position);
     if (dot(Ng, V) < 0.0) Ng = -Ng;
     vec3 N = Ng;

@@ -31,6 +31,7 @@ layout(std430, binding = SSBO_ATTRIBUTES) readonly buffer Attributes { float cor
 layout(location = 3) uniform ivec4 attribute_layout[8];
 out vec3 v_object_position;
 out vec3 v_object_normal;
+flat out vec3 v_true_normal;  /* world, from the triangle's three vertices (Cycles' Ng) */
 flat out uint v_instance;
 #if MATERIAL_ATTRIBUTE_COUNT > 0
 out vec4 v_attr[MATERIAL_ATTRIBUTE_COUNT];
@@ -65,8 +66,22 @@ void main() {
     if ((mesh_flags & 1u) != 0u) {
         n = vec3(corner_normals[3u * corner], corner_normals[3u * corner + 1u], corner_normals[3u * corner + 2u]);
         v_normal = mat3(inst.normal_matrix) * n;
+#ifdef MATERIAL_GRAPH
+        /* Cycles applies a single user's transform to the mesh and normalises
+         * each vertex normal there, before interpolation: under non-uniform
+         * scale that changes the interpolated direction (Texture Coordinate
+         * Normal measured 3.3e-3 off without it). */
+        v_normal = normalize(v_normal);
+#endif
     }
 #ifdef MATERIAL_GRAPH
+    {
+        const uint t0 = indices[3u * triangle], t1 = indices[3u * triangle + 1u], t2 = indices[3u * triangle + 2u];
+        vec3 p0 = vec3(positions[3u * t0], positions[3u * t0 + 1u], positions[3u * t0 + 2u]);
+        vec3 p1 = vec3(positions[3u * t1], positions[3u * t1 + 1u], positions[3u * t1 + 2u]);
+        vec3 p2 = vec3(positions[3u * t2], positions[3u * t2 + 1u], positions[3u * t2 + 2u]);
+        v_true_normal = mat3(inst.normal_matrix) * cross(p1 - p0, p2 - p0);
+    }
     v_object_position = p;
     v_object_normal = n;
     v_instance = instance;

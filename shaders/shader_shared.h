@@ -99,7 +99,8 @@ SHARED_ASSERT_SIZE(GpuInstance, 176);
  *                     filter's reach in whole pixels (tile frusta are widened by it)
  *   world_occlusion : x index (GpuShadow) of this sample's world-occlusion map, < 0 without
  *                     one; yzw unused
- *   jitter          : xy this sample's pixel-filter offset in NDC (added by projection), zw unused */
+ *   jitter          : xy this sample's pixel-filter offset in NDC (added by projection), z the
+ *                     camera's clip start, w unused */
 SHARED_STRUCT(FrameConstants) {
     mat4 view;
     mat4 projection;

@@ -530,7 +530,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         jitter[3][1] = 2.0 * oy / settings.height;
         const glm::dmat4 projection = jitter * cam.projection;
         fc.projection = to_gpu(projection);
-        fc.jitter = {float(jitter[3][0]), float(jitter[3][1]), 0.0f, 0.0f};
+        fc.jitter = {float(jitter[3][0]), float(jitter[3][1]), float(cam.clip_start), 0.0f};
         fc.inv_projection = to_gpu(glm::inverse(projection));
         // Where in each light-shape cell (and on the sun's disk) this sample looks.
         fc.sample_shift = {u[2], u[3], float(std::fmod(0.5 + sample * 0.6180339887498949, 1.0)), 0.0f};

@@ -134,7 +134,7 @@ void node_light_path(out float is_camera, out float is_shadow, out float is_diff
 void node_camera_data(out vec3 view_vector, out float view_z_depth, out float view_distance) {
     view_vector = normalize(g_sd.P_view);
     view_z_depth = g_sd.view_depth;
-    view_distance = g_sd.view_distance;
+    view_distance = length(g_sd.P_view); /* from the camera position, also orthographic */
 }
 
 /* svm_node_tangent (tex_coord.h): a UV map's tangent (attribute slot, xyz)

@@ -118,3 +118,38 @@ void node_normal(vec3 direction, vec3 normal, out vec3 out_normal, out float out
     out_normal = normalize(direction);
     out_dot = dot(out_normal, normalize(normal));
 }
+
+/* Vector Rotate (vector_rotate.h svm_node_vector_rotate, util/math
+ * rotate_around_axis). Types: 0 axis-angle, 1 X, 2 Y, 3 Z, 4 Euler XYZ. */
+#define NODE_VECTOR_ROTATE_TYPE_AXIS 0
+#define NODE_VECTOR_ROTATE_TYPE_AXIS_X 1
+#define NODE_VECTOR_ROTATE_TYPE_AXIS_Y 2
+#define NODE_VECTOR_ROTATE_TYPE_AXIS_Z 3
+#define NODE_VECTOR_ROTATE_TYPE_EULER_XYZ 4
+vec3 node_rotate_around_axis(vec3 p, vec3 axis, float angle) {
+    float c = cos(angle), s = sin(angle), t = 1.0 - c;
+    vec3 r;
+    r.x = ((c + t * axis.x * axis.x) * p.x) + ((t * axis.x * axis.y - axis.z * s) * p.y) +
+          ((t * axis.x * axis.z + axis.y * s) * p.z);
+    r.y = ((t * axis.x * axis.y + axis.z * s) * p.x) + ((c + t * axis.y * axis.y) * p.y) +
+          ((t * axis.y * axis.z - axis.x * s) * p.z);
+    r.z = ((t * axis.x * axis.z - axis.y * s) * p.x) + ((t * axis.y * axis.z + axis.x * s) * p.y) +
+          ((c + t * axis.z * axis.z) * p.z);
+    return r;
+}
+void node_vector_rotate(int type, int invert, vec3 vector, vec3 center, vec3 axis, float angle, vec3 rotation,
+                        out vec3 result) {
+    if (type == NODE_VECTOR_ROTATE_TYPE_EULER_XYZ) {
+        mat3 rows = node_euler_to_rows(rotation);
+        result = (invert != 0 ? node_rows_apply_transposed(rows, vector - center)
+                              : node_rows_apply(rows, vector - center)) + center;
+        return;
+    }
+    vec3 a;
+    if (type == NODE_VECTOR_ROTATE_TYPE_AXIS_X) a = vec3(1.0, 0.0, 0.0);
+    else if (type == NODE_VECTOR_ROTATE_TYPE_AXIS_Y) a = vec3(0.0, 1.0, 0.0);
+    else if (type == NODE_VECTOR_ROTATE_TYPE_AXIS_Z) a = vec3(0.0, 0.0, 1.0);
+    else a = normalize(axis);
+    angle = invert != 0 ? -angle : angle;
+    result = dot(a, a) != 0.0 ? node_rotate_around_axis(vector - center, a, angle) + center : vector;
+}

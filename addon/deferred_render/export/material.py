@@ -390,12 +390,19 @@ def _sanitize(params, notes=None):
     if specular > MAX_SPECULAR and notes is not None:
         notes.append(f"Specular {specular:g} clamped to {MAX_SPECULAR:g}")
     out["specular"] = min(max(0.0, specular), MAX_SPECULAR)
-    out["emission_strength"] = max(0.0, _finite(out["emission_strength"], 0.0))
+    strength = _finite(out["emission_strength"], 0.0)
+    if strength < 0.0 and notes is not None:
+        notes.append("negative Emission Strength")
+    out["emission_strength"] = max(0.0, strength)
     base = tuple(max(0.0, _finite(c, 0.0)) for c in out["base_color"])
     if max(base) > MAX_BASE_COLOR and notes is not None:
         notes.append(f"Base Color above {MAX_BASE_COLOR:g} clamped")
     out["base_color"] = tuple(min(c, MAX_BASE_COLOR) for c in base)
-    out["emission"] = tuple(max(0.0, _finite(c, 0.0)) for c in out["emission"])
+    emission = tuple(_finite(c, 0.0) for c in out["emission"])
+    if min(emission) < 0.0 and notes is not None:
+        # Cycles emits negative light; the constant path cannot (node path does).
+        notes.append("negative Emission")
+    out["emission"] = tuple(max(0.0, c) for c in emission)
     return out
 
 

@@ -46,3 +46,15 @@ def normal(b):
     direction = tuple(b.node.outputs["Normal"].default_value)
     b.call("node_normal", [b.const(direction, "vector"), b.input("Normal", "vector")],
            [("Normal", "vector"), ("Dot", "float")])
+
+
+VECTOR_ROTATE_TYPES = {"AXIS_ANGLE": 0, "X_AXIS": 1, "Y_AXIS": 2, "Z_AXIS": 3, "EULER_XYZ": 4}
+
+
+@register("ShaderNodeVectorRotate")
+def vector_rotate(b):
+    b.call("node_vector_rotate",
+           [b.int(VECTOR_ROTATE_TYPES[b.node.rotation_type]), b.int(int(b.node.invert)),
+            b.input("Vector", "vector"), b.input("Center", "vector"), b.input("Axis", "vector"),
+            b.input("Angle", "float"), b.input("Rotation", "vector")],
+           [("Vector", "vector")])

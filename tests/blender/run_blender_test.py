@@ -43,6 +43,10 @@ TESTS = {
     "alignment_cycles": (ANALYTIC, True),
     "bad_scenes": (ANALYTIC, True),
     "memory": (ANALYTIC, True),
+    "light_culling": (ANALYTIC, True),
+    "world_ao": (ANALYTIC, True),
+    "node_materials": (ANALYTIC, True),
+    "node_probes": (ANALYTIC, True),
 }
 BENCHMARKS = {"bench_export": (None, True)}
 

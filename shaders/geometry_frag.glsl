@@ -30,6 +30,7 @@ layout(location = OUT_UV) out vec2 out_uv;
 in vec3 v_object_position;
 in vec3 v_object_normal;
 flat in vec3 v_true_normal;
+in vec2 v_barycentric;
 flat in uint v_instance;
 #if MATERIAL_ATTRIBUTE_COUNT > 0
 in vec4 v_attr[MATERIAL_ATTRIBUTE_COUNT];
@@ -81,6 +82,7 @@ void shading_point_init(vec3 N, vec3 Ng, vec3 V, bool back) {
     size = vec3(size.x != 0.0 ? size.x : 1e-8, size.y != 0.0 ? size.y : 1e-8, size.z != 0.0 ? size.z : 1e-8);
     g_sd.generated = (v_object_position - (texspace_location - size)) / (2.0 * size);
     g_sd.uv = vec3(v_uv, 0.0);
+    g_sd.barycentric = v_barycentric;
     g_sd.object_to_world = mat3(inst.model);
     g_sd.normal_to_world = mat3(inst.normal_matrix);
     /* object_inverse_normal_transform: normalize(M^T N). */
@@ -106,6 +108,34 @@ void shading_point_init(vec3 N, vec3 Ng, vec3 V, bool back) {
     for (int k = 0; k < 8; ++k) g_sd.attr[k] = vec4(0.0);
 #if MATERIAL_ATTRIBUTE_COUNT > 0
     for (int k = 0; k < MATERIAL_ATTRIBUTE_COUNT; ++k) g_sd.attr[k] = v_attr[k];
+#endif
+#ifdef MATERIAL_BUMP
+    /* Cycles' sd->dP: orthographic, the pixel's size on the camera plane;
+     * perspective, the ray length times the per-pixel change of the ray's
+     * direction (camera_sample_perspective, differential_transfer_compact). */
+    if (frame.camera_position.w > 0.5) {
+        g_sd.bump_dP = 0.5 * (2.0 / (abs(frame.projection[0][0]) * frame.viewport.x) +
+                              2.0 / (abs(frame.projection[1][1]) * frame.viewport.y));
+    } else {
+        vec3 D = normalize(v_position);
+        g_sd.bump_dP = length(v_position) * 0.5 * (length(dFdxFine(D)) + length(dFdyFine(D)));
+    }
+    g_sd.dgenerated_dx = dFdxFine(g_sd.generated);
+    g_sd.dgenerated_dy = dFdyFine(g_sd.generated);
+    g_sd.duv_dx = dFdxFine(g_sd.uv);
+    g_sd.duv_dy = dFdyFine(g_sd.uv);
+    for (int k = 0; k < 8; ++k) {
+        g_sd.dattr_dx[k] = vec4(0.0);
+        g_sd.dattr_dy[k] = vec4(0.0);
+    }
+#if MATERIAL_ATTRIBUTE_COUNT > 0
+    for (int k = 0; k < MATERIAL_ATTRIBUTE_COUNT; ++k) {
+        g_sd.dattr_dx[k] = dFdxFine(v_attr[k]);
+        g_sd.dattr_dy[k] = dFdyFine(v_attr[k]);
+    }
+#endif
+#else
+    g_sd.bump_dP = 0.0;
 #endif
 }
 

@@ -32,6 +32,7 @@ layout(location = 3) uniform ivec4 attribute_layout[8];
 out vec3 v_object_position;
 out vec3 v_object_normal;
 flat out vec3 v_true_normal;  /* world, from the triangle's three vertices (Cycles' Ng) */
+out vec2 v_barycentric;       /* weights of the triangle's corners 0 and 1 */
 flat out uint v_instance;
 #if MATERIAL_ATTRIBUTE_COUNT > 0
 out vec4 v_attr[MATERIAL_ATTRIBUTE_COUNT];
@@ -82,6 +83,7 @@ void main() {
         vec3 p2 = vec3(positions[3u * t2], positions[3u * t2 + 1u], positions[3u * t2 + 2u]);
         v_true_normal = mat3(inst.normal_matrix) * cross(p1 - p0, p2 - p0);
     }
+    v_barycentric = vec2(corner % 3u == 0u ? 1.0 : 0.0, corner % 3u == 1u ? 1.0 : 0.0);
     v_object_position = p;
     v_object_normal = n;
     v_instance = instance;

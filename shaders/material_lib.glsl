@@ -40,9 +40,16 @@ struct ShadingPoint {
     vec3 dPdx, dPdy;    /* one-pixel differentials of P (camera-relative, Bump) */
     vec3 P_view;        /* Cycles' camera space: +z forward */
     vec2 window;        /* position in the unjittered frame, [0, 1] */
+    vec2 barycentric;   /* weights of the triangle's corners 0 and 1 (Geometry Parametric) */
     mat3 normal_to_world; /* object -> world for normals (inverse transpose) */
     mat3 object_to_world; /* object -> world for directions */
     vec4 attr[8];       /* attribute slots of the material (CornerAttribute by name) */
+    /* Bump (MATERIAL_BUMP): Cycles' compact ray differential at P (the pixel's
+     * footprint, not projected onto the surface) and the screen derivatives
+     * of the values node_bump_offset() moves. */
+    float bump_dP;
+    vec3 dgenerated_dx, dgenerated_dy, duv_dx, duv_dy;
+    vec4 dattr_dx[8], dattr_dy[8];
 };
 
 ShadingPoint g_sd;

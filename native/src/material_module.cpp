@@ -7,6 +7,7 @@
 
 #include <deferred/renderer.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace deferred {
@@ -89,6 +90,8 @@ GLuint MaterialModule::program(ShaderLibrary& shaders, std::uint32_t graph, cons
     // The node library files the graph calls into (and theirs), then the graph.
     std::vector<std::string> functions = material_graph_functions(g.graph);
     functions.push_back("node_closure_none");
+    if (std::find(functions.begin(), functions.end(), "node_bump_offset") != functions.end())
+        v.defines.push_back("MATERIAL_BUMP");
     std::string source = "#include \"material_lib.glsl\"\n";
     for (const std::string& file : shaders.node_files_for(functions)) source += "#include \"" + file + "\"\n";
     source += g.glsl;

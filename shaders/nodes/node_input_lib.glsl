@@ -62,7 +62,11 @@ void node_object_info(out vec3 location, out vec3 color, out float alpha, out fl
 /* svm_node_geometry. Tangent: radial around Z through the generated
  * coordinates (geom/primitive.h primitive_tangent), made orthogonal to N. */
 void node_geometry(out vec3 position, out vec3 normal, out vec3 tangent, out vec3 true_normal,
-                   out vec3 incoming, out float backfacing) {
+                   out vec3 incoming, out vec3 parametric, out float backfacing) {
+    /* Parametric: (1 - u - v, u, 0) with Cycles' barycentrics u, v of
+     * corners 1 and 2 (geom/triangle.h: f = u f1 + v f2 + (1 - u - v) f0),
+     * i.e. the weights of corners 0 and 1. */
+    parametric = vec3(g_sd.barycentric, 0.0);
     position = g_sd.P;
     normal = g_sd.N;
     vec3 t = vec3(-(g_sd.generated.y - 0.5), g_sd.generated.x - 0.5, 0.0);

@@ -91,17 +91,105 @@ void node_normal_map(int space, int has_tangent, int smooth_normal, float streng
     result = N;
 }
 
-/* svm_node_set_bump (bump.h), Mikkelsen's surface gradient. Cycles samples
- * the height at P + dP/dx and P + dP/dy (one pixel along the camera ray
- * differentials); the fragment shader's fine derivatives are the same one-
- * pixel differences, taken between the two pixels of a quad. */
-void node_bump(int invert, float strength, float dist, float height, vec3 normal_in, out vec3 result) {
-    vec3 dPdx = g_sd.dPdx, dPdy = g_sd.dPdy;
-    float dhdx = dFdxFine(height), dhdy = dFdyFine(height);
-    vec3 Rx = cross(dPdy, normal_in);
-    vec3 Ry = cross(normal_in, dPdx);
-    float det = dot(dPdx, Rx);
-    vec3 surfgrad = dhdx * Rx + dhdy * Ry;
+/* Cycles util/math.h make_orthonormals. */
+void node_make_orthonormals(vec3 N, out vec3 a, out vec3 b) {
+    if (N.x != N.y || N.x != N.z)
+        a = vec3(N.z - N.y, N.x - N.z, N.y - N.x);
+    else
+        a = vec3(N.z - N.y, N.x + N.z, -N.y - N.x);
+    a = normalize(a);
+    b = cross(N, a);
+}
+
+/* Cycles kernel/closure/bsdf_util.h ensure_valid_reflection: rotate N towards
+ * Ng just enough that the reflection of I stays above the surface. */
+vec3 node_ensure_valid_reflection(vec3 Ng, vec3 I, vec3 N) {
+    vec3 R = 2.0 * dot(N, I) * N - I;
+    float threshold = min(0.9 * dot(Ng, I), 0.01);
+    if (dot(Ng, R) >= threshold) return N;
+    float NdotNg = dot(N, Ng);
+    vec3 X = normalize(N - NdotNg * Ng);
+    float Ix = dot(I, X), Iz = dot(I, Ng);
+    float Ix2 = Ix * Ix, Iz2 = Iz * Iz;
+    float a = Ix2 + Iz2;
+    float b = sqrt(max(Ix2 * (a - threshold * threshold), 0.0));
+    float c = Iz * threshold + a;
+    float fac = 0.5 / a;
+    float N1_z2 = fac * (b + c), N2_z2 = fac * (-b + c);
+    bool valid1 = (N1_z2 > 1e-5) && (N1_z2 <= 1.0 + 1e-5);
+    bool valid2 = (N2_z2 > 1e-5) && (N2_z2 <= 1.0 + 1e-5);
+    vec2 N_new;
+    if (valid1 && valid2) {
+        vec2 N1 = vec2(sqrt(max(1.0 - N1_z2, 0.0)), sqrt(max(N1_z2, 0.0)));
+        vec2 N2 = vec2(sqrt(max(1.0 - N2_z2, 0.0)), sqrt(max(N2_z2, 0.0)));
+        float R1 = 2.0 * (N1.x * Ix + N1.y * Iz) * N1.y - Iz;
+        float R2 = 2.0 * (N2.x * Ix + N2.y * Iz) * N2.y - Iz;
+        valid1 = R1 >= 1e-5;
+        valid2 = R2 >= 1e-5;
+        if (valid1 && valid2)
+            N_new = R1 < R2 ? N1 : N2;
+        else
+            N_new = R1 > R2 ? N1 : N2;
+    } else if (valid1 || valid2) {
+        float Nz2 = valid1 ? N1_z2 : N2_z2;
+        N_new = vec2(sqrt(max(1.0 - Nz2, 0.0)), sqrt(max(Nz2, 0.0)));
+    } else {
+        return Ng;
+    }
+    return N_new.x * X + N_new.y * Ng;
+}
+
+/* Cycles' bump offsets (kernel/util/differential.h differential_from_compact):
+ * two vectors of the compact ray differential's length along an orthonormal
+ * basis of Ng. */
+void node_bump_differentials(out vec3 dx, out vec3 dy) {
+    vec3 a, b;
+    node_make_orthonormals(g_sd.Ng, a, b);
+    dx = g_sd.bump_dP * a;
+    dy = g_sd.bump_dP * b;
+}
+
+/* Bump evaluation, as Cycles' svm_node_*_bump_dx/dy variants: the height
+ * graph is evaluated again with the shading point moved to P + dP.dx (axis 0)
+ * or P + dP.dy (axis 1). Values linear over the triangle (UVs, generated,
+ * attributes) move by their gradient along the offset, found from their
+ * screen derivatives; object and camera positions are transformed exactly.
+ * node_bump_restore() puts the point back. */
+ShadingPoint g_sd_unbumped;
+void node_bump_offset(int axis) {
+    g_sd_unbumped = g_sd;
+#ifdef MATERIAL_BUMP
+    vec3 dx, dy;
+    node_bump_differentials(dx, dy);
+    vec3 d = axis == 0 ? dx : dy;
+    /* Screen offsets (s, t) with s dP/dx + t dP/dy = d (d lies in the plane). */
+    vec3 ex = g_sd.dPdx, ey = g_sd.dPdy;
+    float xx = dot(ex, ex), xy = dot(ex, ey), yy = dot(ey, ey);
+    float det = xx * yy - xy * xy;
+    vec2 st = det > 0.0 ? vec2(yy * dot(ex, d) - xy * dot(ey, d), xx * dot(ey, d) - xy * dot(ex, d)) / det
+                        : vec2(0.0);
+    g_sd.P += d;
+    g_sd.P_object += inverse(g_sd.object_to_world) * d;
+    g_sd.generated += st.x * g_sd.dgenerated_dx + st.y * g_sd.dgenerated_dy;
+    g_sd.uv += st.x * g_sd.duv_dx + st.y * g_sd.duv_dy;
+    for (int k = 0; k < 8; ++k) g_sd.attr[k] += st.x * g_sd.dattr_dx[k] + st.y * g_sd.dattr_dy[k];
+    vec3 view = mat3(frame.view) * (g_sd.P - frame.camera_position.xyz);
+    g_sd.P_view = vec3(view.xy, -view.z);
+    g_sd.window += st * frame.viewport.zw;
+#endif
+}
+void node_bump_restore() { g_sd = g_sd_unbumped; }
+
+/* svm_node_set_bump (displace.h), Mikkelsen's surface gradient with the
+ * heights at P, P + dP.dx and P + dP.dy. */
+void node_bump(int invert, float strength, float dist, float h_c, float h_x, float h_y, vec3 normal_in,
+               out vec3 result) {
+    vec3 dx, dy;
+    node_bump_differentials(dx, dy);
+    vec3 Rx = cross(dy, normal_in);
+    vec3 Ry = cross(normal_in, dx);
+    float det = dot(dx, Rx);
+    vec3 surfgrad = (h_x - h_c) * Rx + (h_y - h_c) * Ry;
     float absdet = abs(det);
     if (invert != 0) dist = -dist;
     strength = max(strength, 0.0);
@@ -110,7 +198,7 @@ void node_bump(int invert, float strength, float dist, float height, vec3 normal
         n = normal_in;
     else
         n = normalize(strength * n + (1.0 - strength) * normal_in);
-    result = n;
+    result = node_ensure_valid_reflection(g_sd.Ng, g_sd.I, n);
 }
 
 /* Normal node (normal.h): the direction set on the node, and its dot product. */

@@ -56,14 +56,12 @@ LIMITS = {EXACT: {"max": 1e-4}, STATISTICAL: {"mean": 1e-3, "p99": 1e-2}}
 # asserted; test_node_probes fails when one of them passes (remove it then).
 # Example: "geometry_pointiness": "needs per-vertex curvature from the exporter".
 KNOWN_UNSUPPORTED = {
-    "geometry_parametric": "Geometry Parametric: barycentrics are not exported (warned, 0)",
     "geometry_pointiness": "Geometry Pointiness: needs per-vertex curvature (warned, 0)",
     "geometry_random_per_island": "Geometry Random Per Island: mesh islands are not exported (warned, 0)",
     "attribute_object_property": "Attribute of type Object/Instancer is not read (warned, 0)",
-    "bump_noise_sphere": "Bump differentiates the height in screen space (EEVEE's method); Cycles 3.4 evaluates "
-                         "the height graph again at P + dP along its compact ray differentials",
-    "bump_wave_plane_invert": "Bump: screen-space derivatives, not Cycles' offset evaluation",
-    "bump_uv_sine_plane": "Bump: screen-space derivatives, not Cycles' offset evaluation",
+    "geometry_parametric": "supported (corner weights, as Cycles' u, v); the probe plane's diagonal passes "
+                           "through 30 pixel centres of the tile, where Cycles' 0.005 px jitter picks either "
+                           "triangle (every other pixel of the tile is exact: 1.4e-8)",
     "geometry_true_normal": "supported (exact per triangle from its vertices), but the probe sphere's facets are "
                             "smaller than a pixel: ~1% of pixel centres lie within Cycles' 0.005 px filter jitter "
                             "of an edge and see the neighbouring facet (mean 1.1e-3, p99 8.8e-2)",

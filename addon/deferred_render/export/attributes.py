@@ -24,7 +24,8 @@ def _get(collection, attr, count, width):
     return buf.reshape(count, width)
 
 
-def _render_uv(mesh):
+def render_uv_layer(mesh):
+    """The UV map Cycles renders with (active for rendering, else the active one)."""
     for layer in mesh.uv_layers:
         if layer.active_render:
             return layer
@@ -60,7 +61,7 @@ class CornerGather:
 
 
 def _uv(mesh, name, gather):
-    layer = _render_uv(mesh) if name == "" else mesh.uv_layers.get(name)
+    layer = render_uv_layer(mesh) if name == "" else mesh.uv_layers.get(name)
     if layer is None:
         return None
     return gather(_get(layer.data, "uv", len(mesh.loops), 2), "CORNER")
@@ -97,7 +98,7 @@ def _generic(mesh, name, gather):
 
 
 def _tangents(mesh, name, gather):
-    layer = _render_uv(mesh) if name == "" else mesh.uv_layers.get(name)
+    layer = render_uv_layer(mesh) if name == "" else mesh.uv_layers.get(name)
     if layer is None:
         return None
     mesh.calc_tangents(uvmap=layer.name)  # RuntimeError on n-gons

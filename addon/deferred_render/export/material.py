@@ -32,6 +32,8 @@ a material without nodes renders with.
 
 import math
 
+from ..materials.builder import material_output
+
 # Native parameter -> (kind, Principled input names: Blender 3.x first, then 4.x).
 # Every read of a Principled BSDF input goes through this table.
 PRINCIPLED_INPUTS = (
@@ -421,14 +423,7 @@ def material_params(material):
     if not material.use_nodes or material.node_tree is None:
         return viewport_params(material), notes
 
-    tree = material.node_tree
-    output = None
-    try:
-        output = tree.get_output_node("CYCLES")
-    except (AttributeError, TypeError):
-        pass
-    if output is None:
-        output = next((n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial"), None)
+    output = material_output(material.node_tree)
     if output is None:
         # Cycles renders a node material without output as black; we keep its viewport colour.
         notes.append("no Material Output node")

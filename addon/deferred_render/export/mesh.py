@@ -80,13 +80,6 @@ def _get(collection, attr, count, dtype, width=1):
     return buf if width == 1 else buf.reshape(count, width)
 
 
-def _active_render_uv_layer(mesh):
-    for layer in mesh.uv_layers:
-        if layer.active_render:
-            return layer
-    return mesh.uv_layers.active if len(mesh.uv_layers) else None
-
-
 def _normalized(vectors):
     """Unit vectors; zero-length or non-finite ones become +Z (degenerate faces).
 
@@ -153,7 +146,7 @@ def mesh_arrays(mesh, name=None, split_normals=None, attribute_keys=(), warn=Non
     corner_normals = _normalized(corner_normals)
 
     corner_uvs = None
-    uv_layer = _active_render_uv_layer(mesh)
+    uv_layer = attribute_export.render_uv_layer(mesh)
     if uv_layer is not None:
         nloops = len(mesh.loops)
         loop_uvs = _get(uv_layer.data, "uv", nloops, np.float32, 2)

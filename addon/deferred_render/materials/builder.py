@@ -148,6 +148,19 @@ class NodeBuilder:
         self.outputs = list(outputs)
         self._graph.append_node(func, args, [t for _, t in outputs])
 
+    def at_bump_offset(self, axis, evaluate):
+        """``evaluate()`` (argument-building calls) with the shading point moved
+        to P + dP.dx (axis 0) or P + dP.dy (axis 1), as Cycles evaluates a
+        Bump node's height: every node upstream is emitted again there."""
+        graph = self._graph
+        graph.append_node("node_bump_offset", [("int", axis)], [])
+        graph.variant = graph.variant + (axis,)
+        try:
+            return evaluate()
+        finally:
+            graph.variant = graph.variant[:-1]
+            graph.append_node("node_bump_restore", [], [])
+
     def unsupported(self, reason):
         self._graph.note(f"{_label(self.node)}: {reason} (default output used)")
 
@@ -171,7 +184,7 @@ class ImageRegistry:
             return self._ids[key]
         from . import images
         try:
-            result = images.image_pixels(image)
+            result = images.cached_image_pixels(image)
             for w in result.warnings:
                 self._warn(f"Image '{image.name}': {w}")
             native_id = self._add_image(result.pixels)
@@ -197,8 +210,9 @@ class GraphBuilder:
         self.attributes = []     # attribute keys, by slot
         self.notes = []
         self._registry = images
-        self._emitted = {}       # (ctx key, node pointer) -> (IR index, outputs) or None
+        self._emitted = {}       # (bump variant, ctx key, node pointer) -> (IR index, outputs) or None
         self._in_progress = set()
+        self.variant = ()        # bump offsets entered, innermost last (nodes re-emitted per variant)
         self._none = None
 
     def note(self, text):
@@ -239,7 +253,7 @@ class GraphBuilder:
 
     def emit(self, node, ctx):
         """IR index and outputs of a node (emitting it first), or None."""
-        key = (tuple(g.as_pointer() for g in ctx), node.as_pointer())
+        key = (self.variant, tuple(g.as_pointer() for g in ctx), node.as_pointer())
         if key in self._emitted:
             return self._emitted[key]
         if key in self._in_progress:

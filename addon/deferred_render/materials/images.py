@@ -52,6 +52,7 @@ Alpha association of 8/16-bit formats other than PNG is assumed to be the same
 as PNG's.
 """
 
+import collections
 import os
 import struct
 
@@ -645,3 +646,59 @@ def _float_texels(p, raw, channels, warnings):
             return _half_texels(rgba)  # unchanged file values: exact halves
         return _half_bits_to_float_image(vals)
     return _zero_non_finite(vals, warnings, p.name)
+
+
+# --------------------------------------------------------------------------------------
+# Across renders: every final render builds a new native renderer, but an
+# animation or a re-render should not decode its images again. Keyed by what
+# decides the texels; an image with unsaved edits (is_dirty) is never cached.
+# --------------------------------------------------------------------------------------
+
+CACHE_BYTES = 1 << 30
+_cache = collections.OrderedDict()  # key -> ImagePixels, least recently used first
+
+
+def _cache_key(image):
+    import zlib
+
+    if image is None or image.is_dirty:
+        return None
+    key = [image.name_full, image.source, image.colorspace_settings.name, image.alpha_mode,
+           tuple(image.size), bool(image.use_half_precision) if hasattr(image, "use_half_precision") else None]
+    if image.packed_file is not None:
+        data = image.packed_file.data
+        key += ["packed", len(data), zlib.crc32(data)]
+    elif image.source == "GENERATED":
+        key += ["generated", image.generated_type, image.generated_width, image.generated_height,
+                tuple(image.generated_color), image.use_generated_float]
+    elif image.source in {"FILE", "TILED"}:
+        path = _image_path(image)
+        try:
+            key += ["file", path, os.path.getmtime(path), os.path.getsize(path)]
+        except OSError:
+            return None
+    else:  # movies and sequences: the frame Blender holds changes
+        return None
+    return tuple(key)
+
+
+def cached_image_pixels(image):
+    """image_pixels(), remembered across renders (up to CACHE_BYTES of texels)."""
+    key = _cache_key(image)
+    if key is None:
+        return image_pixels(image)
+    hit = _cache.get(key)
+    if hit is not None:
+        _cache.move_to_end(key)
+        return hit
+    result = image_pixels(image)
+    _cache[key] = result
+    total = sum(r.pixels.nbytes for r in _cache.values())
+    while total > CACHE_BYTES and len(_cache) > 1:
+        _, old = _cache.popitem(last=False)
+        total -= old.pixels.nbytes
+    return result
+
+
+def clear_cache():
+    _cache.clear()

@@ -21,10 +21,10 @@ ImageTextureNode/EnvironmentTextureNode, blender/shader.cpp):
   is not the identity (TextureMapping::compute_transform, as a 3x4 block).
 """
 
-import math
 
 from . import register
 from .. import images
+from .texture_mapping import mapping_args as _mapping_args
 
 INTERPOLATION = {"Linear": 0, "Closest": 1, "Cubic": 2, "Smart": 3}
 EXTENSION = {"REPEAT": 0, "EXTEND": 1, "CLIP": 2}
@@ -32,7 +32,6 @@ PROJECTION = {"FLAT": 0, "BOX": 1, "SPHERE": 2, "TUBE": 3}
 ENV_PROJECTION = {"EQUIRECTANGULAR": 0, "MIRROR_BALL": 1}
 
 # Texture mapping modes of node_image_lib.glsl img_mapping_apply().
-MAP_NONE, MAP_AFFINE, MAP_AFFINE_NORMALIZE = 0, 1, 2
 
 OUTPUTS = [("Color", "color"), ("Alpha", "float")]
 ENV_OUTPUTS = [("Color", "color")]  # Blender's Environment Texture has no Alpha output
@@ -127,93 +126,6 @@ def _group_output(tree):
         if getattr(n, "is_active_output", False):
             return n
     return outs[0] if outs else None
-
-
-# --------------------------------------------------------------------------------------
-# Texture mapping (scene/shader_nodes.cpp TextureMapping::skip / compute_transform)
-# --------------------------------------------------------------------------------------
-
-def _mat_mul(a, b):
-    return [[sum(a[i][k] * b[k][j] for k in range(4)) for j in range(4)] for i in range(4)]
-
-
-def _rotate(angle, axis):
-    """util/transform.h transform_rotate (4x4 rows)."""
-    s, c = math.sin(angle), math.cos(angle)
-    t = 1.0 - c
-    x, y, z = axis
-    return [[x * x * t + c, x * y * t - z * s, x * z * t + y * s, 0.0],
-            [y * x * t + z * s, y * y * t + c, y * z * t - x * s, 0.0],
-            [z * x * t - y * s, z * y * t + x * s, z * z * t + c, 0.0],
-            [0.0, 0.0, 0.0, 1.0]]
-
-
-def _inverse(m):
-    """4x4 inverse (Gauss-Jordan, partial pivoting)."""
-    n = 4
-    a = [list(m[i]) + [1.0 if i == j else 0.0 for j in range(n)] for i in range(n)]
-    for col in range(n):
-        piv = max(range(col, n), key=lambda r: abs(a[r][col]))
-        if abs(a[piv][col]) < 1e-30:
-            return [[1.0 if i == j else 0.0 for j in range(n)] for i in range(n)]
-        a[col], a[piv] = a[piv], a[col]
-        p = a[col][col]
-        a[col] = [v / p for v in a[col]]
-        for r in range(n):
-            if r != col and a[r][col] != 0.0:
-                f = a[r][col]
-                a[r] = [rv - f * cv for rv, cv in zip(a[r], a[col])]
-    return [row[n:] for row in a]
-
-
-def texture_mapping(mapping):
-    """(mode, 12 floats) for a bpy TexMapping, or (MAP_NONE, None) when Cycles skips it."""
-    if mapping is None:
-        return MAP_NONE, None
-    t = tuple(mapping.translation)
-    r = tuple(mapping.rotation)
-    s = tuple(mapping.scale)
-    axes = (mapping.mapping_x, mapping.mapping_y, mapping.mapping_z)
-    if t == (0.0, 0.0, 0.0) and r == (0.0, 0.0, 0.0) and s == (1.0, 1.0, 1.0) and \
-            axes == ("X", "Y", "Z"):
-        return MAP_NONE, None
-    vtype = mapping.vector_type
-    axis_index = {"NONE": 0, "X": 1, "Y": 2, "Z": 3}
-    mmat = [[0.0] * 4 for _ in range(4)]
-    mmat[3][3] = 1.0
-    for row, ax in enumerate(axes):
-        i = axis_index.get(ax, 0)
-        if i:
-            mmat[row][i - 1] = 1.0
-    sc = list(s)
-    if vtype in ("TEXTURE", "NORMAL"):
-        sc = [(math.copysign(1e-5, v) if v != 0.0 else 1e-5) if abs(v) < 1e-5 else v for v in sc]
-    smat = [[sc[0], 0, 0, 0], [0, sc[1], 0, 0], [0, 0, sc[2], 0], [0, 0, 0, 1.0]]
-    rmat = _mat_mul(_mat_mul(_rotate(r[2], (0, 0, 1)), _rotate(r[1], (0, 1, 0))),
-                    _rotate(r[0], (1, 0, 0)))
-    tmat = [[1.0, 0, 0, t[0]], [0, 1.0, 0, t[1]], [0, 0, 1.0, t[2]], [0, 0, 0, 1.0]]
-    if vtype == "TEXTURE":
-        mat = _inverse(_mat_mul(_mat_mul(tmat, rmat), smat))
-    elif vtype == "POINT":
-        mat = _mat_mul(_mat_mul(tmat, rmat), smat)
-    elif vtype == "VECTOR":
-        mat = _mat_mul(rmat, smat)
-    else:  # NORMAL: transposed inverse, no translation
-        inv = _inverse(_mat_mul(rmat, smat))
-        mat = [[inv[j][i] for j in range(4)] for i in range(4)]
-        for i in range(3):
-            mat[i][3] = 0.0
-        mat[3] = [0.0, 0.0, 0.0, 1.0]
-    mat = _mat_mul(mat, mmat)
-    block = [float(mat[i][j]) for i in range(3) for j in range(4)]
-    return (MAP_AFFINE_NORMALIZE if vtype == "NORMAL" else MAP_AFFINE), block
-
-
-def _mapping_args(b):
-    mode, block = texture_mapping(getattr(b.node, "texture_mapping", None))
-    if mode == MAP_NONE:
-        return [b.int(MAP_NONE), b.int(0)]
-    return [b.int(mode), b.block(block)]
 
 
 # --------------------------------------------------------------------------------------

@@ -64,12 +64,12 @@ def object_info(b):
 
 @register("ShaderNodeNewGeometry")
 def geometry(b):
-    for name in ("Parametric", "Pointiness", "Random Per Island"):
+    for name in ("Pointiness", "Random Per Island"):
         if b.node.outputs[name].is_linked:
             b._graph.note(f"'{b.node.name}': Geometry '{name}' is not supported (0 used)")
     b.call("node_geometry", [],
            [("Position", "vector"), ("Normal", "vector"), ("Tangent", "vector"), ("True Normal", "vector"),
-            ("Incoming", "vector"), ("Backfacing", "float")])
+            ("Incoming", "vector"), ("Parametric", "vector"), ("Backfacing", "float")])
 
 
 @register("ShaderNodeLayerWeight")

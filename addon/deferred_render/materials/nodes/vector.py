@@ -35,9 +35,17 @@ def normal_map(b):
 
 @register("ShaderNodeBump")
 def bump(b):
+    # Cycles evaluates the height at P, P + dP.dx and P + dP.dy (svm bump_dx/dy
+    # variants); an unlinked height is constant: no offset evaluation needed.
+    h_c = b.input("Height", "float")
+    if b.is_linked("Height"):
+        h_x = b.at_bump_offset(0, lambda: b.input("Height", "float"))
+        h_y = b.at_bump_offset(1, lambda: b.input("Height", "float"))
+    else:
+        h_x = h_y = h_c
     b.call("node_bump",
            [b.int(int(b.node.invert)), b.input("Strength", "float"), b.input("Distance", "float"),
-            b.input("Height", "float"), b.input("Normal", "vector", implicit="N")],
+            h_c, h_x, h_y, b.input("Normal", "vector", implicit="N")],
            [("Normal", "vector")])
 
 

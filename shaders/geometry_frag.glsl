@@ -26,7 +26,10 @@ layout(location = OUT_UV) out vec2 out_uv;
 #endif
 
 #ifdef MATERIAL_GRAPH
-/* A node material (material_lib.glsl, nodes/, the generated graph). */
+/* A node material (material_lib.glsl, nodes/, the generated graph). Depth
+ * was laid down by the pre-pass: test before shading (no discard, no depth
+ * write here), so hidden fragments cost nothing. */
+layout(early_fragment_tests) in;
 in vec3 v_object_position;
 in vec3 v_object_normal;
 flat in vec3 v_true_normal;

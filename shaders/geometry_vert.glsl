@@ -39,6 +39,10 @@ out vec4 v_attr[MATERIAL_ATTRIBUTE_COUNT];
 #endif
 #endif
 
+/* The same depth from every geometry program: node materials test for equal
+ * depth against the depth pre-pass drawn with the constant-material program. */
+invariant gl_Position;
+
 out vec3 v_position;  /* camera-relative world */
 out vec3 v_normal;    /* world, unnormalised */
 out vec2 v_uv;

@@ -13,7 +13,9 @@
     BLENDER_USER_SCRIPTS=build/blender_scripts blender -b --factory-startup \\
         --addons deferred_render -E DEFERRED_RENDER --python bench/materials/bench_materials.py
 
-Environment: BENCH_SAMPLES (default 4), BENCH_SIZE ("1920x1080").
+Environment: BENCH_SAMPLES (default 4), BENCH_SIZE ("1920x1080"), BENCH_PARTS
+(the textured material's parts, default "image,noise,normal"), BENCH_ONLY_GEOMETRY=1
+(the first table only).
 """
 
 import os
@@ -63,7 +65,13 @@ def sphere_grid(materials, n=8):
     bpy.data.objects.remove(base)
 
 
-def textured_material(image):
+PARTS = os.environ.get("BENCH_PARTS", "image,noise,normal").split(",")
+
+
+def textured_material(image, parts=PARTS):
+    """Principled fed by the parts named: 'image' (UV + Mapping -> Image
+    Texture -> Base Color), 'noise' (Noise -> ColorRamp -> Roughness),
+    'normal' (the image through a tangent-space Normal Map)."""
     mat = bpy.data.materials.new("textured")
     mat.use_nodes = True
     nt = mat.node_tree
@@ -75,15 +83,18 @@ def textured_material(image):
     tex.image = image
     nt.links.new(tc.outputs["UV"], mp.inputs["Vector"])
     nt.links.new(mp.outputs["Vector"], tex.inputs["Vector"])
-    nt.links.new(tex.outputs["Color"], bsdf.inputs["Base Color"])
-    noise = nt.nodes.new("ShaderNodeTexNoise")
-    noise.inputs["Scale"].default_value = 8
-    ramp = nt.nodes.new("ShaderNodeValToRGB")
-    nt.links.new(noise.outputs["Fac"], ramp.inputs["Fac"])
-    nt.links.new(ramp.outputs["Color"], bsdf.inputs["Roughness"])
-    nmap = nt.nodes.new("ShaderNodeNormalMap")
-    nt.links.new(tex.outputs["Color"], nmap.inputs["Color"])
-    nt.links.new(nmap.outputs["Normal"], bsdf.inputs["Normal"])
+    if "image" in parts:
+        nt.links.new(tex.outputs["Color"], bsdf.inputs["Base Color"])
+    if "noise" in parts:
+        noise = nt.nodes.new("ShaderNodeTexNoise")
+        noise.inputs["Scale"].default_value = 8
+        ramp = nt.nodes.new("ShaderNodeValToRGB")
+        nt.links.new(noise.outputs["Fac"], ramp.inputs["Fac"])
+        nt.links.new(ramp.outputs["Color"], bsdf.inputs["Roughness"])
+    if "normal" in parts:
+        nmap = nt.nodes.new("ShaderNodeNormalMap")
+        nt.links.new(tex.outputs["Color"], nmap.inputs["Color"])
+        nt.links.new(nmap.outputs["Normal"], bsdf.inputs["Normal"])
     return mat
 
 
@@ -108,7 +119,7 @@ def geometry_cost():
     image.pack()
     rows = []
     for label, mats in (("constant Principled", [constant_material()]),
-                        ("image + noise/ramp + normal map", [textured_material(image)])):
+                        (" + ".join(PARTS), [textured_material(image)])):
         for ob in [o for o in scene.objects if o.type == "MESH"]:
             bpy.data.objects.remove(ob)
         sphere_grid(mats)
@@ -161,6 +172,10 @@ def export_attributes():
 def main():
     print(f"BENCH node materials at {WIDTH}x{HEIGHT}, {SAMPLES} samples")
     rows = geometry_cost()
+    if os.environ.get("BENCH_ONLY_GEOMETRY"):
+        for label, geometry, total in rows:
+            print(f"| {label} | {geometry:.1f} | {total:.1f} | {geometry / rows[0][1]:.2f}x |")
+        return
     base = rows[0][1]
     print("| materials | geometry ms / sample | frame ms / sample | geometry vs constant |")
     print("| --- | --- | --- | --- |")

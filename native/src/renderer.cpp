@@ -465,6 +465,16 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     auto draw_geometry = [&](const ShadowModule::CasterTest& keep) -> std::uint64_t {
         const std::uint64_t n = cull(keep, false);
         glUseProgram(geometry);
+        if (!graph_programs.empty()) {
+            // Depth first, so node materials (the expensive fragments) shade
+            // each pixel once: the colour pass then tests for equal depth
+            // (gl_Position is invariant across the programs).
+            glColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+            for (const Culled& c : visible) draw_range(c, 0, scene.meshes()[c.draw->mesh].triangle_count);
+            glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+            glDepthMask(GL_FALSE);
+            glDepthFunc(GL_EQUAL);
+        }
         for (const Culled& c : visible) {
             const GpuMesh& mesh = scene.meshes()[c.draw->mesh];
             if (graph_programs.empty()) {
@@ -493,6 +503,8 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
                 }
             }
         }
+        glDepthMask(GL_TRUE);
+        glDepthFunc(GL_GREATER);  // reversed Z
         return n;
     };
     // The camera's frustum, widened by the pixel filter's reach (jittered

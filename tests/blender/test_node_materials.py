@@ -160,6 +160,36 @@ def test_bad_trees(checks, scene, plane):
     checks.check(not errors, "no error", str(errors))
 
 
+def test_image_sizes(checks, scene, plane):
+    """A 1x1 image is its texel everywhere; an image 16384 px wide is scaled
+    to 8192 with a warning, and renders."""
+    def image_material(name, image):
+        mat, em = emission_material(name)
+        tex = mat.node_tree.nodes.new("ShaderNodeTexImage")
+        tex.image = image
+        tex.interpolation = 'Closest'
+        mat.node_tree.links.new(tex.outputs["Color"], em.inputs["Color"])
+        return mat
+
+    tiny = bpy.data.images.new("tiny", 1, 1)
+    tiny.colorspace_settings.name = 'Non-Color'  # first: changing it regenerates the pixels
+    tiny.pixels.foreach_set(np.array([0.5, 0.25, 1.0, 1.0], dtype=np.float32))
+    images, messages = render_combined(scene, plane, image_material("tiny image", tiny), "tiny_image")
+    img = images["Combined"]
+    want = np.round(np.array([0.5, 0.25, 1.0]) * 255) / 255  # 8-bit texel, Non-Color
+    checks.check(np.abs(img - want).max() < 1e-6, "a 1x1 image fills the surface with its texel",
+                 f"{centre(img)} vs {want}")
+
+    wide = bpy.data.images.new("wide", 16384, 16)
+    wide.generated_type = 'COLOR_GRID'
+    images, messages = render_combined(scene, plane, image_material("wide image", wide), "wide_image")
+    w = warnings_of(messages)
+    checks.check(any("16384x16" in m and "8192" in m for m in w), "a 16384 px image is scaled to 8192, warned",
+                 str(w))
+    checks.check(np.isfinite(images["Combined"]).all() and images["Combined"].max() > 0.0,
+                 "and it renders")
+
+
 def test_emission_pass(checks, scene, plane):
     scene.view_layers[0].use_pass_emit = True
     mat, em = emission_material("textured emission")
@@ -209,7 +239,7 @@ def main():
         checks.finish()
     scene, plane = setup_scene()
     for test in (test_groups_reroutes_mutes, test_unsupported_node_named, test_alpha_warned, test_bad_trees,
-                 test_emission_pass, test_program_cache):
+                 test_image_sizes, test_emission_pass, test_program_cache):
         checks.run(test.__name__, test, checks, scene, plane)
     checks.finish()
 

@@ -1,7 +1,8 @@
 /* Geometry pass, vertex stage: vertex pulling. Triangle t, corner c is vertex
  * 3t + c of a glDrawArraysInstanced call; positions are fetched through the
  * index buffer, per-corner normals and UVs directly (Blender keeps split
- * normals and UVs on loops). No vertex arrays, one draw per mesh. */
+ * normals and UVs on loops). No vertex arrays; one draw per mesh, or per
+ * material slot range when node materials are drawn. */
 #include "frame_lib.glsl"
 
 layout(std430, binding = SSBO_POSITIONS) readonly buffer Positions { float positions[]; };
@@ -26,7 +27,7 @@ layout(location = 2) uniform mat4 shadow_view_projection;
 #ifdef MATERIAL_GRAPH
 /* Node materials: the mesh's named per-corner attributes, one float array;
  * slot k of the material reads attribute_layout[k] = (offset in floats or -1
- * when the mesh lacks it, components, 1 for object-space directions). */
+ * when the mesh lacks it, components). Values stay in object space. */
 layout(std430, binding = SSBO_ATTRIBUTES) readonly buffer Attributes { float corner_attributes[]; };
 layout(location = 3) uniform ivec4 attribute_layout[8];
 out vec3 v_object_position;
@@ -100,7 +101,6 @@ void main() {
             const int base = layout_k.x + int(corner) * layout_k.y;
             for (int c = 0; c < layout_k.y; ++c) a[c] = corner_attributes[base + c];
             if (layout_k.y == 1) a.xyz = vec3(a.x);  /* a float attribute: every component */
-            if (layout_k.z != 0) a.xyz = mat3(inst.model) * a.xyz;
         }
         v_attr[k] = a;
     }

@@ -9,6 +9,7 @@ Layout (BlendLuxCore style, see shared/STYLE.md):
 - ``properties/``  the ``scene.deferred_render`` settings group
 - ``ui/``          Render Properties panels, and which of Blender's own
                    panels are shown for this engine
+- ``materials/``   node trees -> the native renderer's graph IR (and images)
 - ``native.py``    the lazy, guarded import of the compiled ``deferred_native``
 
 The compiled module is optional at registration time: without it the engine
@@ -27,15 +28,18 @@ bl_info = {
 }
 
 from . import native, properties, engine, ui  # noqa: E402,F401
+from .materials import handlers as material_handlers  # noqa: E402
 
 
 def register():
     properties.register()
     engine.register()
     ui.register()
+    material_handlers.register()
 
 
 def unregister():
+    material_handlers.unregister()
     ui.unregister()
     engine.unregister()
     properties.unregister()

@@ -100,6 +100,7 @@ int int_from(const py::handle& obj, const std::string& what) {
 // and kinds are checked here; links, offsets and names by the renderer.
 MaterialGraph graph_from_python(const py::dict& d) {
     MaterialGraph g;
+    if (d.contains("name")) g.name = d["name"].cast<std::string>();
     const py::list nodes = d["nodes"].cast<py::list>();
     for (std::size_t i = 0; i < nodes.size(); ++i) {
         const py::dict n = nodes[i].cast<py::dict>();
@@ -117,9 +118,10 @@ MaterialGraph graph_from_python(const py::dict& d) {
                 arg.kind = GraphArg::Kind::Const;
                 arg.type = socket_type_from(t[1], where);
                 arg.value = int_from(t[2], where);
-            } else if (kind == "block" && t.size() == 2) {
+            } else if (kind == "block" && t.size() == 3) {
                 arg.kind = GraphArg::Kind::Block;
                 arg.value = int_from(t[1], where);
+                arg.output = int_from(t[2], where);  // length
             } else if (kind == "link" && t.size() == 5) {
                 arg.kind = GraphArg::Kind::Link;
                 arg.type = socket_type_from(t[1], where);
@@ -259,18 +261,20 @@ void declare_renderer(py::module_& m) {
                                                " values (one per triangle), got " + std::to_string(n));
                  }
                  if (!attributes.is_none()) {
-                     // (name, (3T, C) float32 array, direction) per attribute.
+                     // (name, (3T, C) float32 array) per attribute; the arrays
+                     // must be numpy arrays (borrowed, not converted copies).
                      for (const py::handle& a : attributes) {
                          const py::tuple t = py::reinterpret_borrow<py::object>(a).cast<py::tuple>();
-                         if (t.size() != 3) throw py::value_error("attributes: expected (name, array, direction) tuples");
+                         if (t.size() != 2) throw py::value_error("attributes: expected (name, array) tuples");
                          CornerAttribute attr;
                          attr.name = t[0].cast<std::string>();
                          const std::string what = "attribute '" + attr.name + "'";
-                         py::array arr = t[1].cast<py::array>();
+                         if (!py::isinstance<py::array>(t[1]))
+                             throw py::value_error(what + ": expected a numpy array");
+                         py::array arr = py::reinterpret_borrow<py::array>(t[1]);
                          if (arr.ndim() != 2) throw py::value_error(what + ": expected a (3T, C) array");
                          attr.components = int(arr.shape(1));
                          attr.data = borrow<float>(arr, what.c_str(), {3 * nt, -1});
-                         attr.direction = t[2].cast<bool>();
                          mesh.attributes.push_back(attr);
                      }
                  }

@@ -114,8 +114,12 @@ void validate_material_graph(const MaterialGraph& g) {
                         invalid(at + ": constant offset " + std::to_string(arg.value) + " is outside the constants");
                     break;
                 case GraphArg::Kind::Block:
-                    if (arg.value < 0 || std::size_t(arg.value) > g.constants.size())
-                        invalid(at + ": block offset " + std::to_string(arg.value) + " is outside the constants");
+                    // Every float the node library may read (mat_const(offset + i),
+                    // i < length) lies inside the material's constants.
+                    if (arg.value < 0 || arg.output < 0 ||
+                        std::size_t(arg.value) + std::size_t(arg.output) > g.constants.size())
+                        invalid(at + ": block of " + std::to_string(arg.output) + " floats at " +
+                                std::to_string(arg.value) + " is outside the constants");
                     break;
                 case GraphArg::Kind::Link: {
                     if (arg.node < 0 || std::size_t(arg.node) >= i)

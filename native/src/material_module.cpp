@@ -43,6 +43,7 @@ std::uint32_t MaterialModule::add_image(const ImageData& image) {
                             image.bytes);
     else
         glTextureSubImage2D(stored.texture.get(), 0, 0, 0, image.width, image.height, GL_RGBA, GL_FLOAT, image.floats);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 4);  // GL's default, as the rest of the library expects
     check_gl("uploading a material image");
     image_bytes_ += texels * (image.bytes ? 4 : 16);
     images_.push_back(std::move(stored));
@@ -111,7 +112,6 @@ void MaterialModule::bind_for_draw(std::uint32_t graph, const GpuMesh& mesh) con
             if (a.name == g.graph.attributes[std::size_t(k)]) {
                 layout[4 * k] = GLint(a.offset);
                 layout[4 * k + 1] = a.components;
-                layout[4 * k + 2] = a.direction ? 1 : 0;
             }
     }
     glUniform4iv(3, kMaxGraphAttributes, layout);

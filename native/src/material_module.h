@@ -27,10 +27,9 @@ public:
     // Validates a graph (images must exist) and keeps it; returns its index.
     std::uint32_t add_graph(const MaterialGraph& graph);
 
-    std::size_t graph_count() const { return graphs_.size(); }
-    std::size_t image_count() const { return images_.size(); }
     std::size_t image_bytes() const { return image_bytes_; }
     std::uint32_t constants_offset(std::uint32_t graph) const { return graphs_[graph].constants_offset; }
+    const std::string& name(std::uint32_t graph) const { return graphs_[graph].graph.name; }
     // True if some graph can produce sheen or clearcoat (the G-buffer's params1).
     bool uses_params1() const;
 

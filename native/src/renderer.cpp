@@ -450,8 +450,9 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
             // Never a failed frame for one material: it takes the default
             // surface (its GpuMaterial holds Material's defaults).
             graph_failed[id] = true;
-            result.warnings.push_back("material " + std::to_string(id) +
-                                      ": its node graph did not compile (default surface used): " + e.what());
+            const std::string& name = this->materials.name(std::uint32_t(scene.materials()[id].graph));
+            result.warnings.push_back("Material '" + (name.empty() ? std::to_string(id) : name) +
+                                      "': its node graph did not compile (default surface used): " + e.what());
         }
     }
     {
@@ -460,6 +461,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
             if (std::find(distinct.begin(), distinct.end(), p) == distinct.end()) distinct.push_back(p);
         result.timings.material_programs = distinct.size();
     }
+    result.timings.upload_ms += timer.lap_ms();  // compiling stays out of the geometry pass's time
     // The geometry pass: constant materials with the shared program, then
     // each node material with its own over the slot ranges that use it.
     auto draw_geometry = [&](const ShadowModule::CasterTest& keep) -> std::uint64_t {
@@ -702,7 +704,16 @@ std::uint32_t Renderer::add_material(const Material& material) {
 }
 
 std::uint32_t Renderer::add_image(const ImageData& image) {
-    return impl_->thread.run([&] { return impl_->materials.add_image(image); });
+    return impl_->thread.run([&] {
+        // Images count against the same memory budget as the frame's targets.
+        const std::size_t bytes = std::size_t(std::max(image.width, 0)) * std::size_t(std::max(image.height, 0)) *
+                                  (image.floats ? 16 : 4);
+        if (impl_->materials.image_bytes() + bytes > memory_budget_bytes())
+            throw InvalidInput("image: " + std::to_string(image.width) + "x" + std::to_string(image.height) +
+                               " would take the images over the " + std::to_string(memory_budget_bytes() >> 20) +
+                               " MiB budget (DEFERRED_MEMORY_BUDGET_MB)");
+        return impl_->materials.add_image(image);
+    });
 }
 
 std::uint32_t Renderer::add_graph_material(const Material& base, const MaterialGraph& graph) {

@@ -96,9 +96,10 @@ std::int32_t validate_mesh(const MeshData& m) {
     std::int32_t max_mat = 0;
     if (m.material_indices) {
         for (std::size_t t = 0; t < m.triangle_count; ++t) {
-            if (m.material_indices[t] < 0)
+            if (m.material_indices[t] < 0 || m.material_indices[t] > InputLimits::kMaxMaterialSlot)
                 invalid("material_indices: element " + std::to_string(t) + " = " +
-                        std::to_string(m.material_indices[t]) + " is negative");
+                        std::to_string(m.material_indices[t]) + " is outside 0.." +
+                        std::to_string(InputLimits::kMaxMaterialSlot) + " (Blender's material slots)");
             max_mat = std::max(max_mat, m.material_indices[t]);
         }
     }
@@ -265,7 +266,7 @@ std::uint32_t SceneStore::add_mesh(const MeshData& m) {
         // One buffer, each attribute uploaded straight from the caller's array.
         std::size_t total = 0;
         for (const CornerAttribute& a : m.attributes) {
-            g.attribute_layout.push_back({a.name, std::uint32_t(total), a.components, a.direction});
+            g.attribute_layout.push_back({a.name, std::uint32_t(total), a.components});
             total += nt * 3 * std::size_t(a.components);
         }
         g.attributes = make_storage_buffer(nullptr, total * sizeof(float), "corner attributes");
@@ -293,6 +294,8 @@ std::uint32_t SceneStore::add_material(const Material& m) {
         if (std::size_t(m.mix_with) >= materials_.size())
             invalid("material: mix_with " + std::to_string(m.mix_with) + " is not an earlier material (" +
                     std::to_string(materials_.size()) + " materials)");
+        if (materials_[std::size_t(m.mix_with)].graph >= 0)
+            invalid("material: mix_with " + std::to_string(m.mix_with) + " is a node material (graphs mix inside)");
         int depth = 1;
         for (std::int32_t k = m.mix_with; k >= 0; k = materials_[std::size_t(k)].mix_with) ++depth;
         if (depth > kMaxMixChain)

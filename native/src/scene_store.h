@@ -20,7 +20,6 @@ struct MeshAttributeLayout {
     std::string name;
     std::uint32_t offset = 0;  // first float
     int components = 0;
-    bool direction = false;
 };
 
 struct GpuMesh {
@@ -56,6 +55,7 @@ struct InputLimits {
     static constexpr float kMinLightExtent = 1e-6f;  // smaller point/spot radius: 0; smaller area extent: raised
     static constexpr float kMaxWorld = 1e12f;        // world colour
     static constexpr std::uint32_t kMaxPassIndex = 1u << 24;  // exact in the float32 index passes
+    static constexpr std::int32_t kMaxMaterialSlot = 32766;   // Blender's MAXMAT (32767 slots)
 };
 
 // Validation only (plain CPU, no GL: usable by tests and sanitizer builds).

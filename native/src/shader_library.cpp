@@ -11,6 +11,8 @@
 #include <filesystem>
 #include <functional>
 #include <regex>
+
+#include <unistd.h>
 #include <sstream>
 
 namespace deferred {
@@ -136,8 +138,8 @@ GLuint ShaderLibrary::link(const std::vector<GLuint>& stages, const std::string&
 
 namespace {
 
-// FNV-1a, 64 bit: the disk cache's file name (collisions are caught by
-// storing and comparing the full key hash of a second seed).
+// FNV-1a, 64 bit: the disk cache's file name; a second 64-bit hash of the
+// same key (another seed) is stored in the file and compared on load.
 std::uint64_t fnv1a(const std::string& s, std::uint64_t h = 1469598103934665603ull) {
     for (unsigned char c : s) {
         h ^= c;
@@ -237,7 +239,9 @@ GLuint ShaderLibrary::build(const std::string& key, const std::vector<std::pair<
             glGetProgramBinary(p, length, nullptr, &format, binary.data());
             std::error_code ec;
             std::filesystem::create_directories(cache_dir_, ec);
-            const std::string tmp = path + ".tmp" + std::to_string(reinterpret_cast<std::uintptr_t>(this));
+            // Unique per process and library: parallel renders share the folder.
+            const std::string tmp = path + ".tmp" + std::to_string(::getpid()) + "_" +
+                                    std::to_string(reinterpret_cast<std::uintptr_t>(this));
             if (std::FILE* f = std::fopen(tmp.c_str(), "wb")) {
                 const bool written = std::fwrite(&h2, sizeof h2, 1, f) == 1 && std::fwrite(&format, sizeof format, 1, f) == 1 &&
                                      std::fwrite(binary.data(), 1, binary.size(), f) == binary.size();

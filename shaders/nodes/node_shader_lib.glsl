@@ -67,8 +67,8 @@ void node_emission(vec3 color, float strength, out Closure c) {
     c.emission = color * strength;
 }
 
-/* Transparent BSDF: coverage 0 with the node's colour as transmission; the
- * add-on warns that alpha is not rendered yet. */
+/* Transparent BSDF: coverage 0 (its colour is not used until transparency is
+ * rendered; the add-on warns). */
 void node_bsdf_transparent(vec3 color, out Closure c) {
     c = closure_none();
     c.alpha = 0.0;
@@ -78,7 +78,9 @@ void node_bsdf_transparent(vec3 color, out Closure c) {
  * linear in the weights and mix exactly; the BSDF is one side, picked with
  * its weight's probability from g_mix_u, which is then rescaled so nested
  * mixes stay uniform and stratified. A side that reflects nothing keeps the
- * other side's lobes with the reflecting weight folded into the colours. */
+ * other side's lobes scaled by the reflecting weight: exact for the diffuse
+ * and metallic lobes (linear in the base colour); the dielectric specular
+ * weight scales F0, which leaves the grazing-angle Fresnel rise unscaled. */
 void node_mix_shader(float fac, Closure a, Closure b, out Closure c) {
     fac = clamp01(fac);
     vec3 emission = mix(a.emission, b.emission, fac);

@@ -155,9 +155,14 @@ void node_bump_differentials(out vec3 dx, out vec3 dy) {
  * attributes) move by their gradient along the offset, found from their
  * screen derivatives; object and camera positions are transformed exactly.
  * node_bump_restore() puts the point back. */
-ShadingPoint g_sd_unbumped;
+/* A Bump inside another Bump's height nests offsets: the points to restore
+ * are kept on a small stack (the add-on nests at most NODE_BUMP_DEPTH). */
+#define NODE_BUMP_DEPTH 4
+ShadingPoint g_sd_unbumped[NODE_BUMP_DEPTH];
+int g_bump_depth = 0;
 void node_bump_offset(int axis) {
-    g_sd_unbumped = g_sd;
+    g_sd_unbumped[min(g_bump_depth, NODE_BUMP_DEPTH - 1)] = g_sd;
+    g_bump_depth = min(g_bump_depth + 1, NODE_BUMP_DEPTH);
 #ifdef MATERIAL_BUMP
     vec3 dx, dy;
     node_bump_differentials(dx, dy);
@@ -178,7 +183,10 @@ void node_bump_offset(int axis) {
     g_sd.window += st * frame.viewport.zw;
 #endif
 }
-void node_bump_restore() { g_sd = g_sd_unbumped; }
+void node_bump_restore() {
+    g_bump_depth = max(g_bump_depth - 1, 0);
+    g_sd = g_sd_unbumped[g_bump_depth];
+}
 
 /* svm_node_set_bump (displace.h), Mikkelsen's surface gradient with the
  * heights at P, P + dP.dx and P + dP.dy. */

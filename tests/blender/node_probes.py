@@ -861,7 +861,9 @@ def _vector_cases():
             Case("camera_data", "ShaderNodeCameraData", camera_data),
             Case("normal_dot", "ShaderNodeNormal", normal_dot, shape="sphere"),
             Case("tangent_radial_z", "ShaderNodeTangent", tangent('RADIAL'), shape="sphere"),
-            Case("tangent_uv_map", "ShaderNodeTangent", tangent('UV_MAP'), shape="sphere")]
+            Case("tangent_uv_map", "ShaderNodeTangent", tangent('UV_MAP'), shape="sphere"),
+            Case("tangent_uv_map_turned", "ShaderNodeTangent", tangent('UV_MAP'), shape="sphere",
+                 setup=_turn_and_squash)]
 
 
 def _normal_cases():
@@ -887,6 +889,7 @@ def _normal_cases():
 
     nm = "ShaderNodeNormalMap"
     return [Case("normal_map_tangent", nm, normal_map('TANGENT'), shape="sphere"),
+            Case("normal_map_tangent_turned", nm, normal_map('TANGENT'), shape="sphere", setup=_turn_and_squash),
             Case("normal_map_tangent_strength_2", nm, normal_map('TANGENT', 2.0), shape="sphere"),
             Case("normal_map_object", nm, normal_map('OBJECT'), shape="sphere", setup=_turn_and_squash),
             Case("normal_map_world", nm, normal_map('WORLD'), shape="sphere"),

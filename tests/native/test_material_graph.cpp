@@ -255,7 +255,7 @@ TEST_F(MaterialGraphRender, AttributesAreReadByNameAndMissingOnesAreZero) {
         colors[c * 4 + 3] = 1.0f;
     }
     MeshData data = plane.view();
-    data.attributes.push_back({"color:Col", 4, colors.data(), false});
+    data.attributes.push_back({"color:Col", 4, colors.data()});
     const std::uint32_t mesh = r.add_mesh(data);
 
     // node_vertex_color(attr0) -> Emission colour.
@@ -282,7 +282,7 @@ TEST_F(MaterialGraphRender, AttributesAreReadByNameAndMissingOnesAreZero) {
     std::vector<float> nan_colors = colors;
     nan_colors[5] = std::nanf("");
     MeshData bad = plane.view();
-    bad.attributes.push_back({"color:Col", 4, nan_colors.data(), false});
+    bad.attributes.push_back({"color:Col", 4, nan_colors.data()});
     EXPECT_THROW(r.add_mesh(bad), InvalidInput);
 }
 

@@ -109,7 +109,7 @@ def _tangents(mesh, name, gather):
 
 
 def corner_attributes(mesh, keys, gather, warn):
-    """[(key, (3T, C) float32, is_direction)] for the keys the mesh has."""
+    """[(key, (3T, C) float32)] for the keys the mesh has (object space)."""
     out = []
     for key in sorted(keys):
         kind, _, name = key.partition(":")
@@ -133,5 +133,5 @@ def corner_attributes(mesh, keys, gather, warn):
                  "the material reads 0")
             continue
         data = np.nan_to_num(np.ascontiguousarray(data, dtype=np.float32), nan=0.0, posinf=0.0, neginf=0.0)
-        out.append((key, data, kind == "tangent"))
+        out.append((key, data))
     return out

@@ -252,9 +252,11 @@ class SceneExporter:
 
     def _mesh_extras(self, arrays):
         """Keyword arguments only node materials need (recorders without them work)."""
-        if not arrays.attributes and not self._material_attributes:
+        if not hasattr(self.renderer, "add_graph_material"):
             return {}
-        return {"attributes": [(k, a, d) for k, a, d in arrays.attributes],
+        # Texture space always: a mesh exported first for a constant material
+        # may be shared with a node material reading Generated coordinates.
+        return {"attributes": list(arrays.attributes),
                 "texspace_location": arrays.texspace_location, "texspace_size": arrays.texspace_size}
 
     # -- the walk ---------------------------------------------------------

@@ -425,7 +425,7 @@ def material_params(material):
 
     output = material_output(material.node_tree)
     if output is None:
-        # Cycles renders a node material without output as black; we keep its viewport colour.
+        # Not a parameter set: the node path renders it black, as Cycles does.
         notes.append("no Material Output node")
         return viewport_params(material), notes
     surface = output.inputs.get("Surface")

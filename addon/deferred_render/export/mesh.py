@@ -43,7 +43,7 @@ class MeshArrays:
         self.corner_normals = corner_normals  # (T*3, 3) float32
         self.corner_uvs = corner_uvs          # (T*3, 2) float32 or None
         self.material_indices = material_indices  # (T,) int32
-        self.attributes = list(attributes)    # [(key, (T*3, C) float32, is_direction)] node materials read
+        self.attributes = list(attributes)    # [(key, (T*3, C) float32)] node materials read
         self.texspace_location = texspace_location
         self.texspace_size = texspace_size
 
@@ -60,7 +60,7 @@ class MeshArrays:
         for arr in (self.positions, self.indices, self.corner_normals, self.corner_uvs, self.material_indices):
             if arr is not None:
                 total += arr.nbytes
-        return total + sum(a.nbytes for _, a, _ in self.attributes)
+        return total + sum(a.nbytes for _, a in self.attributes)
 
 
 class MeshSkipped(Exception):

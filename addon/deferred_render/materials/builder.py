@@ -14,7 +14,7 @@ The IR (what ``Renderer.add_graph_material`` takes)::
      "constants": [float, ...], "images": [native image id, ...],
      "attributes": ["uv:UVMap", "color:Col", ...]}
 
-with args ``("int", v)``, ``("const", type, offset)``, ``("block", offset)``,
+with args ``("int", v)``, ``("const", type, offset)``, ``("block", offset, length)``,
 ``("link", type, node, output, from_type)``, ``("shading", name)``,
 ``("image", slot)``. Values never enter the GLSL, so materials that differ
 only in values share one program.
@@ -32,6 +32,7 @@ LUMINANCE = (0.2126729950, 0.7151526453, 0.0721754596)
 MAX_NODES = 4096
 MAX_ATTRIBUTES = 8
 MAX_IMAGES = 16
+MAX_BUMP_DEPTH = 4  # NODE_BUMP_DEPTH in shaders/nodes/node_vector_lib.glsl
 
 
 class SpecError(Exception):
@@ -123,8 +124,9 @@ class NodeBuilder:
 
     def block(self, floats):
         offset = len(self._graph.constants)
-        self._graph.constants.extend(_finite(float(x)) for x in floats)
-        return ("block", offset)
+        values = [_finite(float(x)) for x in floats]
+        self._graph.constants.extend(values)
+        return ("block", offset, len(values))
 
     def int(self, value):
         return ("int", int(value))
@@ -134,8 +136,10 @@ class NodeBuilder:
 
     def attribute(self, key):
         """An attribute slot (mesh data by key: 'uv:NAME', 'tangent:NAME',
-        'color:NAME', 'attr:NAME'; an empty NAME is the active render one)."""
-        return ("shading", f"attr{self._graph.attribute_slot(key)}")
+        'color:NAME', 'attr:NAME'; an empty NAME is the active render one);
+        beyond the slot limit the value 0 ("attr_none")."""
+        slot = self._graph.attribute_slot(key)
+        return ("shading", "attr_none" if slot is None else f"attr{slot}")
 
     def image(self, image):
         return ("image", self._graph.image_slot(image))
@@ -153,6 +157,9 @@ class NodeBuilder:
         to P + dP.dx (axis 0) or P + dP.dy (axis 1), as Cycles evaluates a
         Bump node's height: every node upstream is emitted again there."""
         graph = self._graph
+        if len(graph.variant) >= MAX_BUMP_DEPTH:
+            graph.note(f"{_label(self.node)}: Bump nodes nested deeper than {MAX_BUMP_DEPTH} (flat)")
+            return evaluate()
         graph.append_node("node_bump_offset", [("int", axis)], [])
         graph.variant = graph.variant + (axis,)
         try:
@@ -189,7 +196,8 @@ class ImageRegistry:
                 self._warn(f"Image '{image.name}': {w}")
             native_id = self._add_image(result.pixels)
             self._ids[key] = (native_id, result)
-        except (images.ImageUnavailable, ValueError) as ex:
+        except (images.ImageUnavailable, ValueError, RuntimeError, MemoryError) as ex:
+            # Unreadable, refused by the native validation, or out of (GPU) memory.
             self._warn(f"Image '{getattr(image, 'name', '?')}': {ex} (rendered magenta, as Cycles does)")
             self._ids[key] = (self.magenta(), None)
         return self._ids[key]
@@ -234,7 +242,7 @@ class GraphBuilder:
         if key not in self.attributes:
             if len(self.attributes) >= MAX_ATTRIBUTES:
                 self.note(f"more than {MAX_ATTRIBUTES} attributes read (attribute '{key}' is 0)")
-                return MAX_ATTRIBUTES - 1
+                return None
             self.attributes.append(key)
         return self.attributes.index(key)
 
@@ -271,7 +279,14 @@ class GraphBuilder:
                     self.note(f"{_label(node)} is not supported (its outputs take their default values)")
             if spec is not None:
                 b = NodeBuilder(self, node, ctx)
-                spec(b)
+                try:
+                    spec(b)
+                except (GraphCycle, graph_walk.GraphError):
+                    raise
+                except Exception as ex:  # a spec meeting a node it does not expect: its defaults
+                    self.note(f"{_label(node)} could not be translated ({type(ex).__name__}: {ex}); "
+                              "its outputs take their default values")
+                    b.emitted = False
                 if b.emitted:
                     entry = (len(self.nodes) - 1, b.outputs)
         finally:
@@ -319,6 +334,13 @@ def build_material_graph(material, images=None):
     """MaterialGraph for a node material, or raise GraphCycle/SpecError.
 
     ``images``: an ImageRegistry (texture nodes upload through it)."""
+    try:
+        return _build(material, images)
+    except graph_walk.GraphError as ex:  # groups too deep or containing themselves, link loops
+        raise GraphCycle(str(ex)) from ex
+
+
+def _build(material, images):
     tree = material.node_tree
     g = GraphBuilder(images)
     output = material_output(tree)
@@ -339,6 +361,6 @@ def build_material_graph(material, images=None):
             s = output.inputs.get(name)
             if s is not None and s.is_linked:
                 g.note(f"{name} (not rendered)")
-    ir = {"nodes": g.nodes, "surface": surface, "constants": g.constants,
+    ir = {"name": material.name, "nodes": g.nodes, "surface": surface, "constants": g.constants,
           "images": g.images, "attributes": g.attributes}
     return MaterialGraph(ir, g.notes, list(g.attributes))

@@ -55,6 +55,7 @@ as PNG's.
 import collections
 import os
 import struct
+import threading
 
 import numpy as np
 
@@ -656,6 +657,7 @@ def _float_texels(p, raw, channels, warnings):
 
 CACHE_BYTES = 1 << 30
 _cache = collections.OrderedDict()  # key -> ImagePixels, least recently used first
+_cache_lock = threading.Lock()      # renders run on Blender's render thread, handlers on the main one
 
 
 def _cache_key(image):
@@ -687,18 +689,29 @@ def cached_image_pixels(image):
     key = _cache_key(image)
     if key is None:
         return image_pixels(image)
-    hit = _cache.get(key)
-    if hit is not None:
-        _cache.move_to_end(key)
-        return hit
+    with _cache_lock:
+        hit = _cache.get(key)
+        if hit is not None:
+            _cache.move_to_end(key)
+            return hit
     result = image_pixels(image)
-    _cache[key] = result
-    total = sum(r.pixels.nbytes for r in _cache.values())
-    while total > CACHE_BYTES and len(_cache) > 1:
-        _, old = _cache.popitem(last=False)
-        total -= old.pixels.nbytes
+    with _cache_lock:
+        _cache[key] = result
+        total = sum(r.pixels.nbytes for r in _cache.values())
+        while total > CACHE_BYTES and len(_cache) > 1:
+            _, old = _cache.popitem(last=False)
+            total -= old.pixels.nbytes
     return result
 
 
-def clear_cache():
-    _cache.clear()
+def forget(name_full=None):
+    """Drop the cached pixels of one image (by name_full), or of all. The
+    pixels come from Blender's buffers, which a reload or an edit replaces
+    without the file's time changing: the add-on calls this from its
+    depsgraph and file-load handlers."""
+    with _cache_lock:
+        if name_full is None:
+            _cache.clear()
+        else:
+            for key in [k for k in _cache if k[0] == name_full]:
+                del _cache[key]

@@ -22,7 +22,7 @@ struct GraphArg {
     enum class Kind : std::uint8_t {
         Int,      // literal `value` compiled into the shader (enums): structural
         Const,    // `type` read from the constants at `value` (float: 1, colour/vector: 3 floats)
-        Block,    // the int offset `value` of a block in the constants (read with mat_const)
+        Block,    // the int offset `value` of a block of `output` floats in the constants (read with mat_const)
         Link,     // output `output` of the earlier node `node`, of type `from`, converted to `type`
         Shading,  // a value of the shading point named `name` (N, P, uv, attr0, ...)
         Image,    // the sampler2D of the graph's image slot `value`
@@ -43,6 +43,7 @@ struct GraphNode {
 };
 
 struct MaterialGraph {
+    std::string name;                  // the material's, for messages
     std::vector<GraphNode> nodes;      // topological order: links point to earlier nodes
     std::int32_t surface_node = -1;    // the closure reaching the Material Output's Surface
     std::int32_t surface_output = 0;
@@ -66,8 +67,7 @@ struct ImageData {
 struct CornerAttribute {
     std::string name;
     int components = 0;  // 1..4
-    const float* data = nullptr;
-    bool direction = false;  // xyz is an object-space direction (tangents): transformed by the model matrix
+    const float* data = nullptr;  // object space for directions (tangents): the node library transforms them
 };
 
 }  // namespace deferred

@@ -45,7 +45,10 @@ def uv_map(b):
 def attribute(b):
     if b.node.attribute_type != "GEOMETRY":
         b._graph.note(f"'{b.node.name}': {b.node.attribute_type.title()} attributes are not read (0 used)")
-    b.call("node_attribute", [b.attribute("attr:" + b.node.attribute_name)],
+        value = b.shading("attr_none")
+    else:
+        value = b.attribute("attr:" + b.node.attribute_name)
+    b.call("node_attribute", [value],
            [("Color", "color"), ("Vector", "vector"), ("Fac", "float"), ("Alpha", "float")])
 
 

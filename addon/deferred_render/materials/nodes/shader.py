@@ -9,6 +9,10 @@ Diffuse BSDF of their Color input (builder.py, '#unsupported_shader').
 """
 
 from . import register
+from .. import graph as graph_walk
+
+# Shader nodes without a reflecting lobe (for Add Shader's note).
+_NOT_REFLECTING = {"ShaderNodeEmission", "ShaderNodeBackground", "ShaderNodeBsdfTransparent", "ShaderNodeHoldout"}
 
 
 def _value(b, identifier):
@@ -56,8 +60,18 @@ def diffuse(b):
 
 @register("ShaderNodeBsdfGlossy", "ShaderNodeBsdfAnisotropic")
 def glossy(b):
-    b.call("node_bsdf_glossy",
-           [b.input("Color", "color"), b.input("Roughness", "float"), b.input("Normal", "vector", implicit="N")],
+    distribution = getattr(b.node, "distribution", "GGX")
+    if distribution == "SHARP":
+        roughness = b.const(0.0, "float")  # Cycles: a perfect mirror, Roughness unused
+    else:
+        roughness = b.input("Roughness", "float")
+        if distribution != "GGX":
+            b._graph.note(f"'{b.node.name}': {distribution.replace('_', ' ').title()} distribution shaded as GGX")
+    if b.node.bl_idname == "ShaderNodeBsdfAnisotropic":
+        anisotropy = _value(b, "Anisotropy")
+        if anisotropy is None or abs(anisotropy) > 1e-6:
+            b._graph.note(f"'{b.node.name}': anisotropy is not rendered (isotropic)")
+    b.call("node_bsdf_glossy", [b.input("Color", "color"), roughness, b.input("Normal", "vector", implicit="N")],
            [("BSDF", "closure")])
 
 
@@ -84,8 +98,8 @@ def add_shader(b):
     reflecting = 0
     for identifier in ("Shader", "Shader_001"):
         socket = next(s for s in b.node.inputs if s.identifier == identifier)
-        link = socket.links[0] if socket.is_linked else None
-        if link is not None and link.from_node.bl_idname not in {"ShaderNodeEmission", "ShaderNodeBackground"}:
+        source = graph_walk.resolve_input(socket, b.ctx)  # through reroutes, groups, mutes
+        if isinstance(source, graph_walk.Output) and source.node.bl_idname not in _NOT_REFLECTING:
             reflecting += 1
     if reflecting == 2:
         b._graph.note(f"'{b.node.name}': Add Shader of two BSDFs is drawn one at a time at twice the weight "

@@ -249,6 +249,7 @@ GLuint ShaderLibrary::build(const std::string& key, const std::vector<std::pair<
                 // Renamed into place only when whole: a reader never sees half a file.
                 if (written) std::filesystem::rename(tmp, path, ec);
                 if (!written || ec) std::filesystem::remove(tmp, ec);
+                if (compile_count_ == 1) prune_disk_cache();
             }
         }
         while (glGetError() != GL_NO_ERROR) {
@@ -299,6 +300,19 @@ std::vector<std::string> ShaderLibrary::node_files_for(const std::vector<std::st
         visit(file);
     }
     return order;
+}
+
+// The disk cache keeps at most kMaxCachedPrograms files: the least recently
+// written go first (checked once per library, i.e. per renderer).
+void ShaderLibrary::prune_disk_cache() const {
+    constexpr std::size_t kMaxCachedPrograms = 4096;
+    std::error_code ec;
+    std::vector<std::pair<std::filesystem::file_time_type, std::filesystem::path>> files;
+    for (const auto& entry : std::filesystem::directory_iterator(cache_dir_, ec))
+        if (entry.path().extension() == ".bin") files.emplace_back(entry.last_write_time(ec), entry.path());
+    if (files.size() <= kMaxCachedPrograms) return;
+    std::sort(files.begin(), files.end());
+    for (std::size_t i = 0; i + kMaxCachedPrograms < files.size(); ++i) std::filesystem::remove(files[i].second, ec);
 }
 
 GLuint ShaderLibrary::compute_program(const std::string& comp_file, const ShaderVariant& variant) {

@@ -62,6 +62,7 @@ private:
     GLuint link(const std::vector<GLuint>& stages, const std::string& label, bool retrievable) const;
     GLuint build(const std::string& key, const std::vector<std::pair<GLenum, std::string>>& stages,
                  const std::string& label);
+    void prune_disk_cache() const;
     void expand_into(const std::string& file, std::string& out, std::vector<std::string>& included) const;
     std::string map_log(const std::string& log) const;
 

@@ -557,7 +557,125 @@ def build_analytic():
     save(scene, "analytic")
 
 
+def _node(nodes, kind, inputs=None, **props):
+    node = nodes.new(kind)
+    for key, value in props.items():
+        setattr(node, key, value)
+    for key, value in (inputs or {}).items():
+        node.inputs[key].default_value = value
+    return node
+
+
+def build_materials():
+    """Everyday node materials (textures, UVs, bump, procedurals, vertex
+    colours, Object Info, emission): what node-tree support renders."""
+    scene = new_scene("Materials")
+    set_world(scene, (0.03, 0.03, 0.035))
+    add_camera(scene, location=(0.0, -11.0, 4.5), target=(0.0, 0.0, 0.9), lens=45.0)
+    add_light("Sun", "SUN", (4, -4, 8), 3.0, target=(0, 0, 0), angle=0.05)
+    add_light("Key", "AREA", (-4, -3, 5), 600.0, target=(0, 0, 0.5), size=2.0)
+
+    def floor_material(nodes, links):  # Brick through Hue/Saturation, Voronoi bump
+        bsdf = _node(nodes, "ShaderNodeBsdfPrincipled", {"Roughness": 0.6})
+        brick = _node(nodes, "ShaderNodeTexBrick", {"Scale": 3.0, "Color1": (0.55, 0.22, 0.12, 1),
+                                                     "Color2": (0.35, 0.15, 0.1, 1)})
+        hue = _node(nodes, "ShaderNodeHueSaturation", {"Saturation": 0.8})
+        links.new(brick.outputs["Color"], hue.inputs["Color"])
+        links.new(hue.outputs["Color"], bsdf.inputs["Base Color"])
+        bump = _node(nodes, "ShaderNodeBump", {"Distance": 0.02})
+        links.new(brick.outputs["Fac"], bump.inputs["Height"])
+        links.new(bump.outputs["Normal"], bsdf.inputs["Normal"])
+        return bsdf.outputs[0]
+
+    floor = mesh_object("Floor", plane_mesh("Floor", 16.0, 16.0), material=shader_material("Bricks", floor_material))
+    floor.data.uv_layers[0].data.foreach_set("uv", [c * 4 for c in (0, 0, 1, 0, 1, 1, 0, 1)])
+
+    def marble(nodes, links):  # Noise -> ColorRamp base colour, Musgrave bump
+        bsdf = _node(nodes, "ShaderNodeBsdfPrincipled", {"Roughness": 0.25})
+        noise = _node(nodes, "ShaderNodeTexNoise", {"Scale": 3.0, "Detail": 6.0, "Distortion": 2.0})
+        ramp = _node(nodes, "ShaderNodeValToRGB")
+        ramp.color_ramp.elements[0].color = (0.05, 0.07, 0.12, 1)
+        ramp.color_ramp.elements[1].color = (0.9, 0.88, 0.8, 1)
+        links.new(noise.outputs["Fac"], ramp.inputs["Fac"])
+        links.new(ramp.outputs["Color"], bsdf.inputs["Base Color"])
+        musgrave = _node(nodes, "ShaderNodeTexMusgrave", {"Scale": 8.0})
+        bump = _node(nodes, "ShaderNodeBump", {"Distance": 0.05, "Strength": 0.3})
+        links.new(musgrave.outputs["Fac"], bump.inputs["Height"])
+        links.new(bump.outputs["Normal"], bsdf.inputs["Normal"])
+        return bsdf.outputs[0]
+
+    primitive(bpy.ops.mesh.primitive_monkey_add, "Suzanne", shader_material("Marble", marble), smooth=True,
+              location=(-3.0, 0.0, 1.0), rotation=(0.0, 0.0, 0.4))
+
+    def grid(nodes, links):  # image texture (generated colour grid) through UV + Mapping
+        bsdf = _node(nodes, "ShaderNodeBsdfPrincipled", {"Roughness": 0.4})
+        image = bpy.data.images.new("ColorGrid", 1024, 1024)
+        image.generated_type = 'COLOR_GRID'
+        tex = _node(nodes, "ShaderNodeTexImage", image=image)
+        coords = _node(nodes, "ShaderNodeTexCoord")
+        mapping = _node(nodes, "ShaderNodeMapping", {"Scale": (2.0, 1.0, 1.0)})
+        links.new(coords.outputs["UV"], mapping.inputs["Vector"])
+        links.new(mapping.outputs["Vector"], tex.inputs["Vector"])
+        links.new(tex.outputs["Color"], bsdf.inputs["Base Color"])
+        return bsdf.outputs[0]
+
+    primitive(bpy.ops.mesh.primitive_uv_sphere_add, "GridSphere", shader_material("Grid", grid), smooth=True,
+              location=(-1.0, 1.5, 1.0), radius=1.0)
+
+    def layered(nodes, links):  # Layer Weight mixing Diffuse and Glossy
+        diffuse = _node(nodes, "ShaderNodeBsdfDiffuse", {"Color": (0.1, 0.3, 0.7, 1)})
+        glossy = _node(nodes, "ShaderNodeBsdfGlossy", {"Roughness": 0.15})
+        weight = _node(nodes, "ShaderNodeLayerWeight", {"Blend": 0.3})
+        mix = _node(nodes, "ShaderNodeMixShader")
+        links.new(weight.outputs["Fresnel"], mix.inputs["Fac"])
+        links.new(diffuse.outputs[0], mix.inputs[1])
+        links.new(glossy.outputs[0], mix.inputs[2])
+        return mix.outputs[0]
+
+    primitive(bpy.ops.mesh.primitive_uv_sphere_add, "Coated", shader_material("Coated", layered), smooth=True,
+              location=(1.2, 0.5, 1.0), radius=1.0)
+
+    def random_colour(nodes, links):  # Object Info Random through a ColorRamp
+        bsdf = _node(nodes, "ShaderNodeBsdfPrincipled")
+        info = _node(nodes, "ShaderNodeObjectInfo")
+        ramp = _node(nodes, "ShaderNodeValToRGB")
+        ramp.color_ramp.elements[0].color = (0.9, 0.2, 0.1, 1)
+        ramp.color_ramp.elements[1].color = (0.1, 0.4, 0.9, 1)
+        links.new(info.outputs["Random"], ramp.inputs["Fac"])
+        links.new(ramp.outputs["Color"], bsdf.inputs["Base Color"])
+        return bsdf.outputs[0]
+
+    blocks = shader_material("RandomBlocks", random_colour)
+    for k in range(5):
+        primitive(bpy.ops.mesh.primitive_cube_add, f"Block{k}", blocks, size=0.5,
+                  location=(3.0 + 0.6 * (k % 2), -2.0 + 0.8 * k, 0.25))
+
+    def painted(nodes, links):  # vertex colours
+        bsdf = _node(nodes, "ShaderNodeBsdfPrincipled")
+        colour = _node(nodes, "ShaderNodeVertexColor", layer_name="Paint")
+        links.new(colour.outputs["Color"], bsdf.inputs["Base Color"])
+        return bsdf.outputs[0]
+
+    cube = primitive(bpy.ops.mesh.primitive_cube_add, "Painted", shader_material("Painted", painted), size=1.2,
+                     location=(1.5, -2.5, 0.6), rotation=(0.0, 0.0, 0.6))
+    paint = cube.data.color_attributes.new("Paint", 'FLOAT_COLOR', 'POINT')
+    for i, v in enumerate(cube.data.vertices):
+        paint.data[i].color = (0.5 + 0.5 * v.co.x / 0.6, 0.5 + 0.5 * v.co.y / 0.6, 0.5 + 0.5 * v.co.z / 0.6, 1.0)
+
+    def panel(nodes, links):  # an emissive checker panel
+        emission = _node(nodes, "ShaderNodeEmission", {"Strength": 4.0})
+        checker = _node(nodes, "ShaderNodeTexChecker", {"Scale": 6.0, "Color1": (1.0, 0.6, 0.2, 1),
+                                                         "Color2": (0.02, 0.02, 0.02, 1)})
+        links.new(checker.outputs["Color"], emission.inputs["Color"])
+        return emission.outputs[0]
+
+    mesh_object("Panel", plane_mesh("Panel", 3.0, 1.5), material=shader_material("Panel", panel),
+                location=(0.0, 4.0, 1.5)).rotation_euler = (1.5708, 0.0, 0.0)
+    save(scene, "materials")
+
+
 BUILDERS = {
+    "materials": build_materials,
     "showcase": build_showcase,
     "box_room": build_box_room,
     "many_lights": build_many_lights,

@@ -28,7 +28,7 @@ import blender_test_utils as U  # noqa: E402
 from deferred_render.engine import passes as pass_table  # noqa: E402
 
 # sample -> resolution percentage for the test (samples = 1 everywhere)
-SAMPLES = {"analytic": 100, "showcase": 50, "box_room": 50, "instancing": 50, "many_lights": 25}
+SAMPLES = {"analytic": 100, "showcase": 50, "box_room": 50, "instancing": 50, "many_lights": 25, "materials": 50}
 
 
 def expected_channels(sample, native_passes):

@@ -258,43 +258,62 @@ GLuint ShaderLibrary::build(const std::string& key, const std::vector<std::pair<
     return p;
 }
 
-void ShaderLibrary::index_node_files() {
-    static const std::regex def_re(R"((?:^|\n)[ \t]*(?:void|float|int|uint|bool|vec[234]|ivec[234]|uvec[234]|mat[234]|double|dvec[234]|Closure)[ \t]+([A-Za-z_]\w*)[ \t]*\([^;{}]*\)\s*\{)");  // definitions, not prototypes
-    static const std::regex ident_re(R"([A-Za-z_]\w*)");
-    std::map<std::string, std::string> defined_in;
-    for (const auto& [file, text] : sources_) {
-        if (file.rfind("nodes/", 0) != 0) continue;
-        auto& defs = node_definitions_[file];
-        for (std::sregex_iterator it(text.begin(), text.end(), def_re), end; it != end; ++it) {
-            defs.push_back((*it)[1].str());
-            defined_in.emplace((*it)[1].str(), file);
+namespace {
+
+// nodes/ file -> functions it defines, and the node files it calls into.
+// The sources are embedded, so the index is built once per process.
+struct NodeFileIndex {
+    std::map<std::string, std::vector<std::string>> definitions, dependencies;
+};
+
+const NodeFileIndex& node_file_index() {
+    static const NodeFileIndex index = [] {
+        static const std::regex def_re(R"((?:^|\n)[ \t]*(?:void|float|int|uint|bool|vec[234]|ivec[234]|uvec[234]|mat[234]|double|dvec[234]|Closure)[ \t]+([A-Za-z_]\w*)[ \t]*\([^;{}]*\)\s*\{)");  // definitions, not prototypes
+        static const std::regex ident_re(R"([A-Za-z_]\w*)");
+        NodeFileIndex idx;
+        std::map<std::string, std::string> defined_in, text_of;
+        for (const ShaderSource& src : embedded_shader_sources()) {
+            const std::string file = src.name;
+            if (file.rfind("nodes/", 0) != 0) continue;
+            const std::string text = src.text;
+            text_of[file] = text;
+            auto& defs = idx.definitions[file];
+            for (std::sregex_iterator it(text.begin(), text.end(), def_re), end; it != end; ++it) {
+                defs.push_back((*it)[1].str());
+                defined_in.emplace((*it)[1].str(), file);
+            }
         }
-    }
-    for (const auto& [file, defs] : node_definitions_) {
-        const std::string& text = sources_.at(file);
-        auto& deps = node_dependencies_[file];
-        for (std::sregex_iterator it(text.begin(), text.end(), ident_re), end; it != end; ++it) {
-            auto d = defined_in.find(it->str());
-            if (d != defined_in.end() && d->second != file &&
-                std::find(deps.begin(), deps.end(), d->second) == deps.end())
-                deps.push_back(d->second);
+        for (const auto& [file, defs] : idx.definitions) {
+            const std::string& text = text_of.at(file);
+            auto& deps = idx.dependencies[file];
+            for (std::sregex_iterator it(text.begin(), text.end(), ident_re), end; it != end; ++it) {
+                auto d = defined_in.find(it->str());
+                if (d != defined_in.end() && d->second != file &&
+                    std::find(deps.begin(), deps.end(), d->second) == deps.end())
+                    deps.push_back(d->second);
+            }
         }
-    }
+        return idx;
+    }();
+    return index;
 }
 
+}  // namespace
+
 std::vector<std::string> ShaderLibrary::node_files_for(const std::vector<std::string>& functions) {
-    if (node_definitions_.empty()) index_node_files();
+    const NodeFileIndex& index = node_file_index();
     std::vector<std::string> order, visiting;
     std::function<void(const std::string&)> visit = [&](const std::string& file) {
         if (std::find(order.begin(), order.end(), file) != order.end()) return;
         if (std::find(visiting.begin(), visiting.end(), file) != visiting.end()) return;  // mutual: order as found
         visiting.push_back(file);
-        for (const std::string& dep : node_dependencies_[file]) visit(dep);
+        if (auto deps = index.dependencies.find(file); deps != index.dependencies.end())
+            for (const std::string& dep : deps->second) visit(dep);
         order.push_back(file);
     };
     for (const std::string& f : functions) {
         std::string file;
-        for (const auto& [name, defs] : node_definitions_)
+        for (const auto& [name, defs] : index.definitions)
             if (std::find(defs.begin(), defs.end(), f) != defs.end()) file = name;
         if (file.empty()) throw Error("no file of the node library defines " + f + "()");
         visit(file);

@@ -69,9 +69,6 @@ private:
     std::map<std::string, std::string> sources_;
     std::vector<std::string> file_ids_;  // #line source-string number -> file name
     std::map<std::string, Program> programs_;
-    // nodes/ file -> functions it defines, and the node files it calls into.
-    std::map<std::string, std::vector<std::string>> node_definitions_, node_dependencies_;
-    void index_node_files();
     const std::map<std::string, std::string>* generated_ = nullptr;  // during one graphics_program()
     std::size_t compile_count_ = 0, disk_loads_ = 0;
     double compile_ms_ = 0.0, load_ms_ = 0.0;

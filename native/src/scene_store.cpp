@@ -96,7 +96,10 @@ std::int32_t validate_mesh(const MeshData& m) {
     std::int32_t max_mat = 0;
     if (m.material_indices) {
         for (std::size_t t = 0; t < m.triangle_count; ++t) {
-            if (m.material_indices[t] < 0 || m.material_indices[t] > InputLimits::kMaxMaterialSlot)
+            if (m.material_indices[t] < 0)
+                invalid("material_indices: element " + std::to_string(t) + " = " +
+                        std::to_string(m.material_indices[t]) + " is negative");
+            if (m.material_indices[t] > InputLimits::kMaxMaterialSlot)
                 invalid("material_indices: element " + std::to_string(t) + " = " +
                         std::to_string(m.material_indices[t]) + " is outside 0.." +
                         std::to_string(InputLimits::kMaxMaterialSlot) + " (Blender's material slots)");

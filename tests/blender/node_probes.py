@@ -902,6 +902,55 @@ def _normal_cases():
 
 
 RGB_SANITY = (0.2, 0.5, 0.8)
+def _proxy_cases():
+    """Inputs with a default link (Normal, texture Vector) reached only
+    through a group input left unlinked on the group node, or through an
+    unconnected reroute: Cycles removes such proxies before it links default
+    inputs, so they read the geometry normal / texture coordinates, not the
+    value the group socket shows (library material 'Fresnel')."""
+    def group_of(kind, inner):
+        """A group whose input socket of ``kind`` feeds ``inner(group_tree,
+        socket) -> output socket``; the group node's input keeps its default."""
+        def f(t):
+            tree = bpy.data.node_groups.new(f"probe group {kind}", "ShaderNodeTree")
+            gin = tree.nodes.new("NodeGroupInput")
+            gout = tree.nodes.new("NodeGroupOutput")
+            tree.inputs.new(kind, "In")
+            tree.outputs.new("NodeSocketColor", "Out")
+            result = inner(tree, gin.outputs[0])
+            tree.links.new(result, gout.inputs[0])
+            node = t.node("ShaderNodeGroup", node_tree=tree)
+            node.inputs[0].default_value = (0.0, 0.0, 0.0) if kind == "NodeSocketVector" else 0.25
+            return t.out(node)
+        return f
+
+    def layer_weight(tree, sock):
+        n = tree.nodes.new("ShaderNodeLayerWeight")
+        tree.links.new(sock, n.inputs["Normal"])
+        return n.outputs["Fresnel"]
+
+    def noise(tree, sock):
+        n = tree.nodes.new("ShaderNodeTexNoise")
+        n.inputs["Scale"].default_value = 3.3
+        tree.links.new(sock, n.inputs["Vector"])
+        return n.outputs["Fac"]
+
+    def reroute_normal(t):
+        r = t.node("NodeReroute")
+        n = t.node("ShaderNodeFresnel")
+        t.links.new(r.outputs[0], n.inputs["Normal"])
+        return t.out(n)
+
+    return [
+        Case("group_input_to_layer_weight_normal", "ShaderNodeLayerWeight",
+             group_of("NodeSocketVector", layer_weight), shape="sphere"),
+        Case("group_float_input_to_layer_weight_normal", "ShaderNodeLayerWeight",
+             group_of("NodeSocketFloat", layer_weight), shape="sphere"),
+        Case("group_input_to_noise_vector", "ShaderNodeTexNoise", group_of("NodeSocketVector", noise)),
+        Case("reroute_to_fresnel_normal", "ShaderNodeFresnel", reroute_normal, shape="sphere"),
+    ]
+
+
 RGB_SANITY_CASE = "rgb"   # Cycles must show exactly RGB_SANITY on this tile
 
 
@@ -909,7 +958,7 @@ def all_cases():
     cases = (_math_cases() + _vector_math_cases() + _clamp_map_range_cases() + _mix_cases() + _mix_rgb_cases()
              + _color_cases() + _separate_combine_cases() + _ramp_curve_cases() + _converter_cases()
              + _texture_cases() + _image_cases() + _input_cases() + _attribute_cases() + _vector_cases()
-             + _normal_cases())
+             + _normal_cases() + _proxy_cases())
     names = [c.name for c in cases]
     dup = {n for n in names if names.count(n) > 1}
     assert not dup, f"duplicate case names: {dup}"

@@ -103,7 +103,13 @@ class NodeBuilder:
         target = final if final is not None else socket
         if type == "closure":
             return self._graph.closure_none()
-        if implicit is not None and (final is None or getattr(target, "hide_value", False)):
+        if implicit is not None:
+            # Cycles removes group inputs, reroutes and muted nodes (proxies)
+            # before it links default inputs (Shader::set_graph ->
+            # remove_proxy_nodes, then ShaderGraph::default_inputs): a
+            # Normal or texture Vector reached only through them is
+            # unlinked there and reads the geometry normal / texture
+            # coordinates, whatever value the group socket shows.
             return ("shading", implicit)
         value = getattr(target, "default_value", None)
         if value is None:

@@ -104,6 +104,34 @@ float principled_diffuse_factor(float NdotL, float NdotV, float LdotV, float rou
     return f * M_1_PI_F * NdotL;
 }
 
+/* Diffuse BSDF without the colour: Oren-Nayar in Fujii's form, f cos =
+ * nl (A + B t), t = L.V - nl nv, divided by max(nl, nv) where positive,
+ * A = 1 / (pi + (pi/2 - 2/3) sigma), B = sigma A (bsdf_oren_nayar.h,
+ * Cycles 3.4). sigma = 0 is Lambert, cos / pi. */
+float oren_nayar_factor(float NdotL, float NdotV, float LdotV, float sigma) {
+    if (NdotL <= 0.0) return 0.0;
+    float nl = NdotL, nv = max(NdotV, 0.0);
+    float t = LdotV - nl * nv;
+    if (t > 0.0) t /= max(nl, nv) + 1.175494e-38;
+    sigma = clamp(sigma, 0.0, 1.0);
+    float A = 1.0 / (M_PI_F + ((3.0 * M_PI_F - 4.0) / 6.0) * sigma);
+    return nl * (A + sigma * A * t);
+}
+
+/* Its directional albedo, in closed form: A pi + B E(mu_v) with, for the
+ * azimuth-integrated t (the positive half divided by max(mu, mu_v)),
+ * E = 2 s_v [ (1 - s_v^3) / (3 mu_v) + pi/4 - (mu_v s_v + asin mu_v) / 2 - 1/3 ],
+ * s_v = sqrt(1 - mu_v^2) (checked against quadrature in the native tests). */
+float oren_nayar_albedo(float mu_v, float sigma) {
+    mu_v = clamp(mu_v, 0.0, 1.0);
+    sigma = clamp(sigma, 0.0, 1.0);
+    float A = 1.0 / (M_PI_F + ((3.0 * M_PI_F - 4.0) / 6.0) * sigma);
+    float s_v = sqrt(max(1.0 - mu_v * mu_v, 0.0));
+    float near = mu_v < 1e-3 ? 0.5 * mu_v : (1.0 - s_v * s_v * s_v) / (3.0 * mu_v);
+    float E = 2.0 * s_v * (near + 0.25 * M_PI_F - 0.5 * (mu_v * s_v + asin(mu_v)) - 1.0 / 3.0);
+    return A * M_PI_F + sigma * A * E;
+}
+
 /* Sheen without the weight: f cos = (1 - L.H)^5 cos_l (bsdf_principled_sheen.h). */
 float principled_sheen_factor(vec3 N, vec3 V, vec3 L) {
     float NdotL = dot(N, L), NdotV = dot(N, V);
@@ -176,9 +204,16 @@ float principled_diffuse_albedo(float mu_v, float roughness) {
     return t1 + t2 + t3;
 }
 
+/* Directional albedo of the surface's diffuse lobe (Burley or Oren-Nayar). */
+float diffuse_lobe_albedo(SurfaceParams s, float mu_v) {
+    return s.diffuse_sigma >= 0.0 ? oren_nayar_albedo(mu_v, s.diffuse_sigma) : principled_diffuse_albedo(mu_v, s.roughness);
+}
+
 /* The diffuse group alone (Burley + sheen), f cos for unit radiance. */
 vec3 principled_eval_diffuse(SurfaceParams s, PrincipledWeights w, vec3 N, vec3 V, vec3 L) {
-    vec3 d = w.diffuse * principled_diffuse_factor(dot(N, L), dot(N, V), dot(L, V), s.roughness);
+    float NdotL = dot(N, L), NdotV = dot(N, V), LdotV = dot(L, V);
+    vec3 d = w.diffuse * (s.diffuse_sigma >= 0.0 ? oren_nayar_factor(NdotL, NdotV, LdotV, s.diffuse_sigma)
+                                                 : principled_diffuse_factor(NdotL, NdotV, LdotV, s.roughness));
     if (w.sheen != vec3(0.0)) d += w.sheen * principled_sheen_factor(N, V, L);
     return d;
 }

@@ -8,7 +8,9 @@
  *  emission      RGBA32F       rgb: emission x strength, a: coverage (1)          always
  *                              (float: textured emission reaches Combined and the
  *                              Emission pass at the node library's precision)
- *  base          RGBA16F       rgb: base colour, a: material alpha                always
+ *  base          RGBA16F       rgb: base colour, a: diffuse model (< 0: the      always
+ *                              Principled BSDF's Burley lobe; >= 0: a Diffuse
+ *                              BSDF, Oren-Nayar sigma, 0 = Lambert)
  *  params0       RGBA16F       metallic, roughness, specular, specular tint       always
  *  normal        RG16 unorm    world shading normal, octahedral (32 bits,        always
  *                              0.0037 deg max error), facing the viewer
@@ -26,7 +28,7 @@
 
 struct SurfaceParams {
     vec3 base_color;
-    float alpha;
+    float diffuse_sigma; /* < 0: Burley (Principled); >= 0: Oren-Nayar sigma (Diffuse BSDF) */
     float metallic, roughness, specular, specular_tint;
     float sheen, sheen_tint, clearcoat, clearcoat_roughness;
     vec3 N;
@@ -35,7 +37,7 @@ struct SurfaceParams {
 SurfaceParams gbuffer_unpack(vec4 base, vec4 params0, vec4 params1, vec2 normal_enc) {
     SurfaceParams s;
     s.base_color = base.rgb;
-    s.alpha = base.a;
+    s.diffuse_sigma = base.a;
     s.metallic = params0.x;
     s.roughness = params0.y;
     s.specular = params0.z;

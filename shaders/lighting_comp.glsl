@@ -87,7 +87,7 @@ LightContribution world_light(PrincipledWeights w, SurfaceParams s, vec3 P, vec3
     LightContribution r;
     vec3 Lw = frame.world_color.rgb;
     float NdotV = dot(N, V);
-    r.diffuse = w.diffuse * principled_diffuse_albedo(NdotV, s.roughness);
+    r.diffuse = w.diffuse * diffuse_lobe_albedo(s, NdotV);
     r.glossy = principled_mirror_weight(w, N, V);
     bool spec_lobe = w.specular != 0.0 && w.alpha2 > 1e-7;
     if (spec_lobe || w.sheen != vec3(0.0)) {

@@ -50,7 +50,8 @@ SHARED_STRUCT(GpuLight) {
 SHARED_ASSERT_SIZE(GpuLight, 96);
 
 /* One material (Blender 3.4 Principled BSDF constants).
- *   base_alpha : rgb base colour, a alpha
+ *   base_diffuse : rgb base colour, a diffuse model: < 0 the Principled BSDF's
+ *                  (Burley), >= 0 a Diffuse BSDF: Oren-Nayar with this sigma (0: Lambert)
  *   params0    : metallic, roughness, specular, specular_tint
  *   params1    : sheen, sheen_tint, clearcoat, clearcoat_roughness
  *   emission   : rgb emission colour x strength, w = material pass index
@@ -58,7 +59,7 @@ SHARED_ASSERT_SIZE(GpuLight, 96);
  *                x < 0: none; z offset of a node material's constants in the constants
  *                buffer; w unused */
 SHARED_STRUCT(GpuMaterial) {
-    vec4 base_alpha;
+    vec4 base_diffuse;
     vec4 params0;
     vec4 params1;
     vec4 emission;

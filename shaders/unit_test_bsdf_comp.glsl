@@ -7,7 +7,7 @@ layout(local_size_x = 64) in;
 
 struct BsdfCase {
     vec4 N, V, L;
-    vec4 base_alpha, params0, params1;
+    vec4 base_diffuse, params0, params1;
 };
 layout(std430, binding = 0) readonly buffer Cases { BsdfCase cases[]; };
 layout(std430, binding = 1) writeonly buffer Results { vec4 results[]; }; /* diffuse, glossy per case */
@@ -16,7 +16,7 @@ void main() {
     uint i = gl_GlobalInvocationID.x;
     if (i >= uint(cases.length())) return;
     BsdfCase c = cases[i];
-    SurfaceParams s = gbuffer_unpack(c.base_alpha, c.params0, c.params1, vec2(0.5));
+    SurfaceParams s = gbuffer_unpack(c.base_diffuse, c.params0, c.params1, vec2(0.5));
     PrincipledWeights w = principled_weights(s);
     LobeEval e = principled_eval(s, w, c.N.xyz, c.V.xyz, c.L.xyz);
     results[2u * i] = vec4(e.diffuse, 0.0);

@@ -123,6 +123,7 @@ void validate_material(const Material& m) {
     require_range(m.clearcoat_roughness, 0, 1, o, "clearcoat_roughness");
     require_range(m.emission_strength, 0, std::numeric_limits<float>::max(), o, "emission_strength");
     require_range(m.alpha, 0, 1, o, "alpha");
+    require_range(m.diffuse_roughness, -1, 1, o, "diffuse_roughness (-1: Principled, 0..1: Diffuse BSDF)");
     if (m.pass_index >= InputLimits::kMaxPassIndex)
         invalid("material: pass_index " + std::to_string(m.pass_index) + " must be below 2^24");
 }

@@ -40,6 +40,10 @@ void node_bsdf_diffuse(vec3 color, float roughness, vec3 normal, out Closure c) 
     c = closure_none();
     c.base_color = max(color, vec3(0.0));
     c.roughness = 1.0;
+    /* svm_node_closure_bsdf: roughness 0 is Lambert, else Oren-Nayar with
+     * sigma = roughness (saturated in bsdf_oren_nayar_setup); Lambert is
+     * Oren-Nayar at sigma 0, so one model serves both. */
+    c.diffuse_sigma = clamp01(roughness);
     c.N = closure_normal(normal);
     c.reflects = 1.0;
 }

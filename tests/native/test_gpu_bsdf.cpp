@@ -14,7 +14,7 @@ using namespace deferred;
 
 namespace {
 struct alignas(16) Case {
-    float N[4], V[4], L[4], base_alpha[4], params0[4], params1[4];
+    float N[4], V[4], L[4], base_diffuse[4], params0[4], params1[4];
 };
 
 // Values representable exactly as half floats, as the G-buffer stores them.
@@ -52,6 +52,12 @@ TEST_F(GpuBsdf, MatchesOracleWithin1e4Relative) {
         m.sheen_tint = half_exact(u(rng));
         m.clearcoat = half_exact(u(rng) < 0.5f ? 0.0f : u(rng));
         m.clearcoat_roughness = half_exact(0.1f + 0.9f * u(rng));
+        // One case in four is a Diffuse BSDF (Oren-Nayar, sigma 0 = Lambert
+        // included), which has no specular, sheen or clearcoat.
+        if (i % 4 == 3) {
+            m.diffuse_roughness = half_exact(u(rng) < 0.25f ? 0.0f : u(rng));
+            m.metallic = m.specular = m.sheen = m.clearcoat = 0.0f;
+        }
         const glm::dvec3 N = random_dir(rng, glm::dvec3(0, 0, 1), -1.0);
         // Keep away from exactly grazing configurations, where float cos
         // cannot carry 1e-4 relative precision.
@@ -60,10 +66,10 @@ TEST_F(GpuBsdf, MatchesOracleWithin1e4Relative) {
         Case& c = cases[i];
         auto put = [](float* dst, glm::dvec3 v) { dst[0] = float(v.x); dst[1] = float(v.y); dst[2] = float(v.z); dst[3] = 0; };
         put(c.N, N); put(c.V, V); put(c.L, L);
-        float ba[4] = {m.base_color[0], m.base_color[1], m.base_color[2], 1.0f};
+        float ba[4] = {m.base_color[0], m.base_color[1], m.base_color[2], m.diffuse_roughness};
         float p0[4] = {m.metallic, m.roughness, m.specular, m.specular_tint};
         float p1[4] = {m.sheen, m.sheen_tint, m.clearcoat, m.clearcoat_roughness};
-        std::copy(ba, ba + 4, c.base_alpha); std::copy(p0, p0 + 4, c.params0); std::copy(p1, p1 + 4, c.params1);
+        std::copy(ba, ba + 4, c.base_diffuse); std::copy(p0, p0 + 4, c.params0); std::copy(p1, p1 + 4, c.params1);
     }
     Buffer in = make_storage_buffer(cases.data(), cases.size() * sizeof(Case), "cases");
     Buffer out = make_storage_buffer(nullptr, std::size_t(n) * 32, "results");

@@ -109,6 +109,23 @@ TEST(WorldLight, OpenFloorIsLitExactlyByTheWorld) {
     EXPECT_LT(worst_ao, 1e-6);
 }
 
+TEST(WorldLight, DiffuseBsdfFloorIsLitByItsOwnAlbedo) {
+    // A Diffuse BSDF (Oren-Nayar; sigma 0 is Lambert, albedo exactly 1)
+    // under a uniform world: the closed-form directional albedo of
+    // bsdf_lib.glsl against the oracle's quadrature of Cycles' eval, over
+    // the grazing-to-steep view angles of the perspective floor.
+    const glm::vec3 world(1.0f, 0.5f, 0.25f);
+    const double eye[3] = {0.0, -6.0, 1.0}, target[3] = {0.0, 10.0, 0.0};
+    for (float sigma : {0.0f, 0.5f, 1.0f}) {
+        Material m = white_floor();
+        m.diffuse_roughness = sigma;
+        const FrameResult f = open_floor(m, world, eye, target, 96, 64, 4, {});
+        const double worst = max_error_against_albedo(f, m, world, eye, 11, 96);
+        std::printf("Diffuse BSDF floor, sigma %.1f: max relative error against the albedo %.2e\n", sigma, worst);
+        EXPECT_LT(worst, 1e-3) << "sigma " << sigma;
+    }
+}
+
 TEST(WorldLight, AmbientOcclusionUnderAPlateConvergesToItsFormFactor) {
     // A 2 m square plate 1 m above the floor; the camera looks down from
     // between them at the 1 m around the centre. AO there is 1 minus the

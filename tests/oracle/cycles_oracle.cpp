@@ -50,6 +50,7 @@ struct Prepared {
     bool has_diffuse = false, has_sheen = false, has_specular = false, has_clearcoat = false;
     dvec3 diffuse_weight{0.0};  // base * (1 - m)
     double roughness = 0.0;     // Burley retro-reflection roughness (not squared)
+    double diffuse_sigma = -1;  // >= 0: a Diffuse BSDF, Oren-Nayar sigma (0 = Lambert)
     dvec3 sheen_weight{0.0};
     double spec_alpha = 0.0, spec_ior = 1.0, spec_F0 = 0.0;
     dvec3 spec_cspec0{0.0};
@@ -73,6 +74,7 @@ Prepared prepare(const deferred::Material& mat) {
         p.has_diffuse = true;
         p.diffuse_weight = base * diffuse_weight;
         p.roughness = roughness;
+        if (mat.diffuse_roughness >= 0.0f) p.diffuse_sigma = std::min(double(mat.diffuse_roughness), 1.0);
     }
 
     // Sheen: tint normalised by linear_rgb_to_gray (Rec.709 Y), NOT the
@@ -107,6 +109,19 @@ Prepared prepare(const deferred::Material& mat) {
         p.clearcoat = mat.clearcoat;
     }
     return p;
+}
+
+// bsdf_oren_nayar.h (Cycles 3.4): bsdf_oren_nayar_get_intensity with the
+// setup's A = 1 / (pi + (3 pi - 4) / 6 sigma), B = sigma A; eval is zero for
+// a light below N. Returns f*cos.
+double oren_nayar(double sigma, dvec3 N, dvec3 V, dvec3 L) {
+    if (glm::dot(N, L) <= 0.0) return 0.0;
+    const double nl = std::max(glm::dot(N, L), 0.0), nv = std::max(glm::dot(N, V), 0.0);
+    double t = glm::dot(L, V) - nl * nv;
+    if (t > 0.0) t /= std::max(nl, nv) + 1.17549435e-38;
+    sigma = saturate(sigma);
+    const double div = 1.0 / (kPi + ((3.0 * kPi - 4.0) / 6.0) * sigma);
+    return nl * (div + sigma * div * t);
 }
 
 // bsdf_principled_diffuse.h bsdf_principled_diffuse_compute_brdf, components
@@ -170,7 +185,9 @@ dvec3 microfacet_reflect(bool clearcoat, double alpha, double ior, double F0, dv
 
 Lobes eval_prepared(const Prepared& p, dvec3 N, dvec3 V, dvec3 L) {
     Lobes out;
-    if (p.has_diffuse) out.diffuse = p.diffuse_weight * principled_diffuse(p.roughness, N, V, L);
+    if (p.has_diffuse)
+        out.diffuse = p.diffuse_weight * (p.diffuse_sigma >= 0.0 ? oren_nayar(p.diffuse_sigma, N, V, L)
+                                                                  : principled_diffuse(p.roughness, N, V, L));
     if (p.has_sheen) out.sheen = p.sheen_weight * principled_sheen(N, V, L);
     if (p.has_specular)
         out.specular = microfacet_reflect(false, p.spec_alpha, p.spec_ior, p.spec_F0, p.spec_cspec0,

@@ -19,7 +19,7 @@ using namespace deferred;
 namespace {
 
 struct alignas(16) Case {
-    float N[4], V[4], L[4], base_alpha[4], params0[4], params1[4];
+    float N[4], V[4], L[4], base_diffuse[4], params0[4], params1[4];
 };
 
 class BsdfExtremes : public deferred::testing::GLTest {
@@ -46,10 +46,10 @@ Case make_case(const Material& m, glm::dvec3 N, glm::dvec3 V, glm::dvec3 L) {
         dst[0] = float(v.x); dst[1] = float(v.y); dst[2] = float(v.z); dst[3] = 0;
     };
     put(c.N, N); put(c.V, V); put(c.L, L);
-    const float ba[4] = {m.base_color[0], m.base_color[1], m.base_color[2], 1.0f};
+    const float ba[4] = {m.base_color[0], m.base_color[1], m.base_color[2], m.diffuse_roughness};
     const float p0[4] = {m.metallic, m.roughness, m.specular, m.specular_tint};
     const float p1[4] = {m.sheen, m.sheen_tint, m.clearcoat, m.clearcoat_roughness};
-    std::copy(ba, ba + 4, c.base_alpha);
+    std::copy(ba, ba + 4, c.base_diffuse);
     std::copy(p0, p0 + 4, c.params0);
     std::copy(p1, p1 + 4, c.params1);
     return c;

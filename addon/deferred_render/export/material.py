@@ -6,8 +6,8 @@ per material. The node tree is reduced to that set:
 - Principled BSDF: inputs read by *name* through PRINCIPLED_INPUTS (3.x names
   first, then the 4.x names), never by index. Inputs driven by an RGB or Value
   node are folded to their constant; any other link is not understood.
-- Diffuse BSDF  -> base colour, metallic 0, specular 0, roughness 1 (the
-  Burley diffuse of the Principled BSDF stands in for Lambert/Oren-Nayar).
+- Diffuse BSDF  -> base colour, metallic 0, specular 0 and its own diffuse
+  model (``diffuse_roughness``: Oren-Nayar sigma, 0 = Lambert), as Cycles.
 - Glossy BSDF   -> metallic 1 with the node's colour and roughness (Cycles'
   Glossy has no Fresnel; a metal's Fresnel tends to white at grazing angles).
 - Emission      -> black, non-reflective surface with that emission.
@@ -76,6 +76,9 @@ DEFAULT_PARAMS = {
     "emission": (0.0, 0.0, 0.0),
     "emission_strength": 1.0,
     "alpha": 1.0,
+    # < 0: the Principled BSDF's diffuse lobe (Burley); 0..1: a Diffuse BSDF,
+    # Oren-Nayar with this sigma (0: Lambert), as Cycles shades it.
+    "diffuse_roughness": -1.0,
     "pass_index": 0,
 }
 
@@ -180,6 +183,9 @@ def _diffuse(node, notes):
         "metallic": 0.0,
         "specular": 0.0,
         "roughness": 1.0,
+        # svm_node_closure_bsdf: Lambert at roughness 0, else Oren-Nayar (sigma saturated).
+        "diffuse_roughness": min(max(_finite(_scalar(_input_value(node.inputs["Roughness"], notes,
+                                                                   "Diffuse 'Roughness'")), 0.0), 0.0), 1.0),
     }
 
 
@@ -234,12 +240,12 @@ def _mix(a, b, t):
     out["emission_strength"] = 1.0
     if not _reflects(a):      # mixing with pure emission scales the BSDF only by its colours
         for key in ("metallic", "roughness", "specular", "specular_tint", "sheen", "sheen_tint",
-                    "clearcoat", "clearcoat_roughness", "alpha"):
+                    "clearcoat", "clearcoat_roughness", "alpha", "diffuse_roughness"):
             out[key] = b[key]
         out["specular"] = t * b["specular"]
     elif not _reflects(b):
         for key in ("metallic", "roughness", "specular", "specular_tint", "sheen", "sheen_tint",
-                    "clearcoat", "clearcoat_roughness", "alpha"):
+                    "clearcoat", "clearcoat_roughness", "alpha", "diffuse_roughness"):
             out[key] = a[key]
         out["specular"] = (1.0 - t) * a["specular"]
     return out
@@ -251,7 +257,7 @@ MAX_COMPONENTS = 8
 # Parameters that must be equal for two sets to mix exactly as one set
 # (radiance is linear in the colours and emission only).
 _SHAPE_PARAMS = ("metallic", "roughness", "specular", "specular_tint", "sheen", "sheen_tint",
-                 "clearcoat", "clearcoat_roughness", "alpha")
+                 "clearcoat", "clearcoat_roughness", "alpha", "diffuse_roughness")
 
 
 def _components(x):

@@ -57,6 +57,10 @@ struct Material {
     Vec3 emission{0.0f, 0.0f, 0.0f};
     float emission_strength = 1.0f;
     float alpha = 1.0f;
+    // The diffuse lobe: < 0 the Principled BSDF's (Burley, with `roughness`);
+    // >= 0 a Diffuse BSDF: Oren-Nayar with this sigma (0 = Lambert), as
+    // Cycles' svm_node_closure_bsdf chooses (values above 1 act as 1).
+    float diffuse_roughness = -1.0f;
     std::uint32_t pass_index = 0;  // IndexMA
     // Stochastic mix (a Mix Shader of BSDFs that one parameter set cannot
     // represent): each film sample shades a pixel with this material with

@@ -224,11 +224,17 @@ void declare_renderer(py::module_& m) {
             d["programs_loaded"] = self.last.programs_loaded;
             d["load_ms"] = self.last.load_ms;
             d["material_programs"] = self.last.material_programs;
+            d["images_uploaded"] = self.last.images_uploaded;
+            d["images_reused"] = self.last.images_reused;
             return d;
         })
         .def_property_readonly("last_warnings", [](PyRenderer& self) { return self.last_warnings; },
                                "What the last render() could not do as asked (list of str).")
-        .def("clear_scene", [](PyRenderer& self) { self.get().clear_scene(); })
+        .def("clear_scene", [](PyRenderer& self) {
+                 py::gil_scoped_release release;
+                 self.get().clear_scene();
+             },
+             "Drops the scene and keeps the GL context, compiled programs and keyed images for the next one.")
         .def("cancel", [](PyRenderer& self) { self.get().cancel(); },
              "Stop a render() running on another thread at its next sample (it raises Cancelled).")
         .def("add_mesh",
@@ -288,7 +294,7 @@ void declare_renderer(py::module_& m) {
              py::arg("attributes") = py::none(), py::arg("texspace_location") = py::none(),
              py::arg("texspace_size") = py::none())
         .def("add_image",
-             [](PyRenderer& self, const py::object& pixels) {
+             [](PyRenderer& self, const py::object& pixels, const std::string& key) {
                  ImageData image;
                  py::ssize_t h = 0;
                  if (!py::isinstance<py::array>(pixels)) throw py::value_error("add_image: expected a numpy array");
@@ -301,9 +307,23 @@ void declare_renderer(py::module_& m) {
                  image.height = int(h);
                  image.width = int(a.shape(1));
                  py::gil_scoped_release release;
-                 return self.get().add_image(image);
+                 return self.get().add_image(image, key);
              },
-             py::arg("pixels"), "An RGBA image (H, W, 4), uint8 or float32, row 0 at the bottom; returns its id.")
+             py::arg("pixels"), py::kw_only(), py::arg("key") = std::string(),
+             "An RGBA image (H, W, 4), uint8 or float32, row 0 at the bottom; returns its id. With a key "
+             "(a name for its content), the image outlives clear_scene() while each scene uses it.")
+        .def("find_image",
+             [](PyRenderer& self, const std::string& key) -> py::object {
+                 std::int64_t id;
+                 {
+                     py::gil_scoped_release release;
+                     id = self.get().find_image(key);
+                 }
+                 if (id < 0) return py::none();
+                 return py::int_(id);
+             },
+             py::arg("key"), "The id of an image kept (by key) from the previous scene, or None; "
+             "the current scene then counts as using it.")
         .def("add_graph_material",
              [](PyRenderer& self, const py::dict& graph, const py::object& pass_index) {
                  Material base;

@@ -12,9 +12,45 @@
 
 namespace deferred {
 
-void MaterialModule::clear() { *this = MaterialModule(); }
+void MaterialModule::clear() {
+    // A clear right after a clear (nothing added or found in between) keeps
+    // the images: "used by the last scene" means the last non-empty one.
+    if (!scene_started_) return;
+    scene_started_ = false;
+    for (StoredImage& im : images_) {
+        if (im.texture && (!im.used || im.key.empty())) {
+            image_bytes_ -= im.bytes;
+            im = StoredImage();
+        }
+        im.used = false;
+    }
+    graphs_.clear();
+    constants_.clear();
+    constants_buffer_.reset();
+    images_uploaded_ = images_reused_ = 0;
+}
 
-std::uint32_t MaterialModule::add_image(const ImageData& image) {
+void MaterialModule::release_unused() {
+    for (StoredImage& im : images_)
+        if (im.texture && !im.used) {
+            image_bytes_ -= im.bytes;
+            im = StoredImage();
+        }
+}
+
+std::int64_t MaterialModule::find_image(const std::string& key) {
+    if (key.empty()) return -1;
+    for (std::size_t i = 0; i < images_.size(); ++i)
+        if (images_[i].texture && images_[i].key == key) {
+            if (!images_[i].used) ++images_reused_;
+            images_[i].used = true;
+            scene_started_ = true;
+            return std::int64_t(i);
+        }
+    return -1;
+}
+
+std::uint32_t MaterialModule::add_image(const ImageData& image, const std::string& key) {
     GLint max_size = 0;
     glGetIntegerv(GL_MAX_TEXTURE_SIZE, &max_size);
     if (image.width <= 0 || image.height <= 0)
@@ -45,7 +81,25 @@ std::uint32_t MaterialModule::add_image(const ImageData& image) {
         glTextureSubImage2D(stored.texture.get(), 0, 0, 0, image.width, image.height, GL_RGBA, GL_FLOAT, image.floats);
     glPixelStorei(GL_UNPACK_ALIGNMENT, 4);  // GL's default, as the rest of the library expects
     check_gl("uploading a material image");
-    image_bytes_ += texels * (image.bytes ? 4 : 16);
+    stored.bytes = texels * (image.bytes ? 4 : 16);
+    stored.used = true;
+    scene_started_ = true;
+    image_bytes_ += stored.bytes;
+    ++images_uploaded_;
+    if (!key.empty()) {
+        // A new upload under a kept key replaces that image (its content changed).
+        for (StoredImage& old : images_)
+            if (old.texture && old.key == key && !old.used) {
+                image_bytes_ -= old.bytes;
+                old = StoredImage();
+            }
+        stored.key = key;
+    }
+    for (std::size_t i = 0; i < images_.size(); ++i)
+        if (!images_[i].texture) {
+            images_[i] = std::move(stored);
+            return std::uint32_t(i);
+        }
     images_.push_back(std::move(stored));
     return std::uint32_t(images_.size() - 1);
 }
@@ -53,9 +107,10 @@ std::uint32_t MaterialModule::add_image(const ImageData& image) {
 std::uint32_t MaterialModule::add_graph(const MaterialGraph& graph) {
     validate_material_graph(graph);
     for (std::uint32_t id : graph.images)
-        if (id >= images_.size())
+        if (id >= images_.size() || !images_[id].texture)
             throw InvalidInput("material graph: image id " + std::to_string(id) + " does not exist (" +
                                std::to_string(images_.size()) + " images)");
+    scene_started_ = true;
     StoredGraph g;
     g.graph = graph;
     g.graph.constants.clear();

@@ -20,10 +20,24 @@ struct GpuMesh;
 
 class MaterialModule {
 public:
+    // Drops the graphs and constants of the scene. Images outlive it: one
+    // added with a key, or found by it, since the previous clear stays on
+    // the GPU for the next scene (a persistent renderer finds it again by
+    // its key and uploads nothing); every other image is released.
     void clear();
+    // Releases everything, images included.
+    void release_all() { *this = MaterialModule(); }
 
     // Validates and uploads an image (RGBA8 or RGBA32F); returns its id.
-    std::uint32_t add_image(const ImageData& image);
+    // A non-empty key (the caller's name for the content: file, time,
+    // settings) lets the next scene find it with find_image().
+    std::uint32_t add_image(const ImageData& image, const std::string& key = {});
+    // Releases the kept images this scene has not used yet (to make room).
+    void release_unused();
+    // The id of a kept image with this key (marked as used by this scene), or -1.
+    std::int64_t find_image(const std::string& key);
+    std::size_t images_uploaded() const { return images_uploaded_; }  // since the last clear
+    std::size_t images_reused() const { return images_reused_; }      // found by key since the last clear
     // Validates a graph (images must exist) and keeps it; returns its index.
     std::uint32_t add_graph(const MaterialGraph& graph);
 
@@ -51,11 +65,16 @@ private:
         bool principled = false;
     };
     struct StoredImage {
-        Texture texture;
+        Texture texture;  // null: a released slot, reused by the next upload
         int width = 0, height = 0;
+        std::size_t bytes = 0;
+        std::string key;
+        bool used = false;  // added or found since the last clear
     };
     std::vector<StoredGraph> graphs_;
     std::vector<StoredImage> images_;
+    std::size_t images_uploaded_ = 0, images_reused_ = 0;
+    bool scene_started_ = false;  // something added or found since the last clear
     std::vector<float> constants_;
     std::size_t image_bytes_ = 0;
     Buffer constants_buffer_;

@@ -108,7 +108,7 @@ struct Renderer::Impl {
             culling = LightCulling();
             shadows = ShadowModule();
             scene.clear();
-            materials.clear();
+            materials.release_all();
             shaders.reset();
             empty_vao.reset();
             dummy_ssbo.reset();
@@ -666,6 +666,8 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     result.timings.tile_light_pairs = culled ? culling.last_index_count() : 0;
     result.timings.passes_ms = passes_ms;
     result.timings.programs_compiled = shaders->compile_count() - compiles_before;
+    result.timings.images_uploaded = materials.images_uploaded();
+    result.timings.images_reused = materials.images_reused();
     result.timings.compile_ms = shaders->compile_ms() - compile_ms_before;
     result.timings.programs_loaded = shaders->disk_loads() - loads_before;
     result.timings.load_ms = shaders->load_ms() - load_ms_before;
@@ -704,17 +706,24 @@ std::uint32_t Renderer::add_material(const Material& material) {
     return impl_->thread.run([&] { return impl_->scene.add_material(m); });
 }
 
-std::uint32_t Renderer::add_image(const ImageData& image) {
+std::uint32_t Renderer::add_image(const ImageData& image, const std::string& key) {
     return impl_->thread.run([&] {
-        // Images count against the same memory budget as the frame's targets.
+        // Images count against the same memory budget as the frame's targets;
+        // images kept from the previous scene and not used by this one go
+        // first when the new one would not fit.
         const std::size_t bytes = std::size_t(std::max(image.width, 0)) * std::size_t(std::max(image.height, 0)) *
                                   (image.floats ? 16 : 4);
+        if (impl_->materials.image_bytes() + bytes > memory_budget_bytes()) impl_->materials.release_unused();
         if (impl_->materials.image_bytes() + bytes > memory_budget_bytes())
             throw InvalidInput("image: " + std::to_string(image.width) + "x" + std::to_string(image.height) +
                                " would take the images over the " + std::to_string(memory_budget_bytes() >> 20) +
                                " MiB budget (DEFERRED_MEMORY_BUDGET_MB)");
-        return impl_->materials.add_image(image);
+        return impl_->materials.add_image(image, key);
     });
+}
+
+std::int64_t Renderer::find_image(const std::string& key) {
+    return impl_->thread.run([&] { return impl_->materials.find_image(key); });
 }
 
 std::uint32_t Renderer::add_graph_material(const Material& base, const MaterialGraph& graph) {

@@ -5,6 +5,7 @@ test_node_probes.py's job."""
 
 import math
 import os
+import time
 import sys
 import tempfile
 
@@ -233,13 +234,66 @@ def test_program_cache(checks, scene, plane):
                  "the edited value is rendered (Math Add 0.75 + 0.5)", f"{centre(images['Combined'])}")
 
 
+def test_persistent_data(checks, scene, plane):
+    """Render Properties > Persistent Data keeps the native renderer between
+    renders: the second render of an unchanged scene compiles nothing (the
+    disk cache is off, so this is the kept programs) and uploads no image
+    (found by its content key); a changed image is uploaded again; turning
+    the option off releases the kept renderer."""
+    from deferred_render.engine import final, session
+    os.environ["DEFERRED_SHADER_CACHE"] = "off"
+    try:
+        image = bpy.data.images.new("persistent grid", 64, 32)
+        image.generated_type = 'COLOR_GRID'
+        mat, em = emission_material("persistent image")
+        tex = mat.node_tree.nodes.new("ShaderNodeTexImage")
+        tex.image = image
+        mat.node_tree.links.new(tex.outputs["Color"], em.inputs["Color"])
+        scene.render.use_persistent_data = True
+        session.release()
+        runs = []
+        for tag in ("persistent_1", "persistent_2"):
+            t0 = time.perf_counter()
+            images, _ = render_combined(scene, plane, mat, tag)
+            runs.append((images["Combined"], dict(final.last_timings), time.perf_counter() - t0))
+        (first, t1, s1), (second, t2, s2) = runs
+        print(f"  first render {s1:.2f} s ({t1.get('programs_compiled')} programs compiled, "
+              f"{t1.get('images_uploaded')} images uploaded); second {s2:.2f} s "
+              f"({t2.get('programs_compiled')} compiled, {t2.get('programs_loaded')} loaded, "
+              f"{t2.get('images_uploaded')} uploaded, {t2.get('images_reused')} reused)")
+        checks.check(session.kept(), "the renderer is kept after a render with Persistent Data")
+        checks.check(t1.get("programs_compiled", 0) > 0 and t1.get("images_uploaded") == 1,
+                     "the first render compiles and uploads the image", str(t1))
+        checks.check(t2.get("programs_compiled") == 0 and t2.get("programs_loaded") == 0,
+                     "the second render compiles nothing and loads nothing (programs kept)", str(t2))
+        checks.check(t2.get("images_uploaded") == 0 and t2.get("images_reused") == 1,
+                     "the second render uploads no image (found by its key)", str(t2))
+        checks.check(np.array_equal(first, second) and first.max() > 0.1, "and renders the same image",
+                     f"max |diff| {np.abs(first - second).max():.2e}")
+
+        image.generated_type = 'UV_GRID'  # new content: a new key
+        images, _ = render_combined(scene, plane, mat, "persistent_3")
+        t3 = dict(final.last_timings)
+        checks.check(t3.get("images_uploaded") == 1 and t3.get("images_reused") == 0,
+                     "a changed image is uploaded again", str(t3))
+        checks.check(np.abs(images["Combined"] - second).max() > 0.1, "and the new content is rendered")
+
+        scene.render.use_persistent_data = False
+        render_combined(scene, plane, mat, "persistent_off")
+        checks.check(not session.kept(), "with the option off, nothing is kept after the render")
+    finally:
+        scene.render.use_persistent_data = False
+        session.release()
+        del os.environ["DEFERRED_SHADER_CACHE"]
+
+
 def main():
     checks = U.Checks("node materials")
     if not U.require_engine(checks):
         checks.finish()
     scene, plane = setup_scene()
     for test in (test_groups_reroutes_mutes, test_unsupported_node_named, test_alpha_warned, test_bad_trees,
-                 test_image_sizes, test_emission_pass, test_program_cache):
+                 test_image_sizes, test_emission_pass, test_program_cache, test_persistent_data):
         checks.run(test.__name__, test, checks, scene, plane)
     checks.finish()
 

@@ -319,6 +319,77 @@ TEST_F(MaterialGraphRender, ImagesAreUploadedAsGivenAndRefusedWhenBroken) {
     EXPECT_THROW(r.add_graph_material(Material{}, g), InvalidInput);
 }
 
+// Emission of a 1x1 image read through image slot 0 (Closest, Extend, flat, no flags).
+MaterialGraph image_emission_graph(std::uint32_t image_id) {
+    auto int_arg = [](int v) {
+        GraphArg a;
+        a.kind = GraphArg::Kind::Int;
+        a.value = v;
+        return a;
+    };
+    GraphArg image;
+    image.kind = GraphArg::Kind::Image;
+    image.value = 0;
+    MaterialGraph g;
+    g.constants = {1.0f};
+    g.nodes.push_back({"node_tex_image",
+                       {int_arg(1), int_arg(1), int_arg(0), int_arg(0), int_arg(0), int_arg(0), image,
+                        shading_arg("generated")},
+                       {SocketType::Color, SocketType::Float}});
+    g.nodes.push_back({"node_emission",
+                       {link_arg(SocketType::Color, 0, 0, SocketType::Color), const_arg(SocketType::Float, 0)},
+                       {SocketType::Closure}});
+    g.surface_node = 1;
+    g.images = {image_id};
+    return g;
+}
+
+TEST_F(MaterialGraphRender, KeyedImagesOutliveTheSceneThatUsesThem) {
+    // A persistent renderer (the add-on's Persistent Data) keeps an image
+    // with a key across clear_scene() while each scene uses it: the next
+    // scene finds it by key and uploads nothing. Images no scene used since
+    // the previous clear, and images without a key, are released.
+    const std::uint8_t red[4] = {255, 0, 0, 255}, green[4] = {0, 255, 0, 255}, blue[4] = {0, 0, 255, 255};
+    auto one_texel = [](const std::uint8_t* texel) {
+        ImageData im;
+        im.width = im.height = 1;
+        im.bytes = texel;
+        return im;
+    };
+    set_world_color(r, 0, 0, 0);
+    const std::uint32_t a = r.add_image(one_texel(red), "file:a");
+    r.add_image(one_texel(green), "file:b");
+    const std::uint32_t unkeyed = r.add_image(one_texel(blue));
+    plane_with(r.add_graph_material(Material{}, image_emission_graph(a)));
+    FrameResult first = r.render(cam, small());
+    EXPECT_EQ(first.timings.images_uploaded, 3u);
+    EXPECT_EQ(first.timings.images_reused, 0u);
+
+    r.clear_scene();
+    set_world_color(r, 0, 0, 0);
+    EXPECT_EQ(r.find_image("file:a"), std::int64_t(a));
+    EXPECT_EQ(r.find_image("file:c"), -1);
+    EXPECT_EQ(r.find_image(""), -1);
+    MaterialGraph stale = image_emission_graph(unkeyed);  // released by the clear
+    EXPECT_THROW(r.add_graph_material(Material{}, stale), InvalidInput);
+    plane_with(r.add_graph_material(Material{}, image_emission_graph(a)));
+    FrameResult second = r.render(cam, small());
+    EXPECT_EQ(second.timings.images_uploaded, 0u);
+    EXPECT_EQ(second.timings.images_reused, 1u);
+    EXPECT_EQ(second.timings.programs_compiled, 0u);
+    EXPECT_EQ(second.timings.programs_loaded, 0u);
+    const glm::dvec3 c = pixel3(*second.find(Pass::Combined), 8, 8);
+    EXPECT_NEAR(c.x, 1.0, 1e-6);
+    EXPECT_NEAR(c.y, 0.0, 1e-6);
+
+    // "b" was not used by the second scene: gone after the next clear; "a"
+    // stays, also through a second clear with nothing in between.
+    r.clear_scene();
+    r.clear_scene();
+    EXPECT_EQ(r.find_image("file:b"), -1);
+    EXPECT_EQ(r.find_image("file:a"), std::int64_t(a));
+}
+
 TEST(MaterialGraphDiskCache, ASecondRendererLoadsInsteadOfCompiling) {
     const std::filesystem::path dir = std::filesystem::temp_directory_path() /
                                       ("deferred_cache_test_" + std::to_string(::getpid()));

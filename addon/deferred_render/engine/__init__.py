@@ -5,9 +5,10 @@ Thin: pass registration is in ``passes.py``, the final render in
 """
 
 import bpy
+from bpy.app.handlers import persistent
 
 from .. import native
-from . import final, passes
+from . import final, passes, session
 
 
 class DeferredRenderEngine(bpy.types.RenderEngine):
@@ -35,11 +36,22 @@ class DeferredRenderEngine(bpy.types.RenderEngine):
 classes = (DeferredRenderEngine,)
 
 
+@persistent
+def _release_kept_renderer(*_args):
+    """A new file: the renderer kept for Persistent Data holds the old one's images."""
+    session.release()
+
+
 def register():
     for cls in classes:
         bpy.utils.register_class(cls)
+    if _release_kept_renderer not in bpy.app.handlers.load_pre:
+        bpy.app.handlers.load_pre.append(_release_kept_renderer)
 
 
 def unregister():
+    if _release_kept_renderer in bpy.app.handlers.load_pre:
+        bpy.app.handlers.load_pre.remove(_release_kept_renderer)
+    session.release()
     for cls in reversed(classes):
         bpy.utils.unregister_class(cls)

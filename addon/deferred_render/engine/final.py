@@ -2,7 +2,8 @@
 
 Stages, with ``test_break()`` between each:
   1. begin the render result (so every exit leaves a valid result)
-  2. start the native renderer (own EGL context on its own thread)
+  2. start the native renderer (own EGL context on its own thread), or take
+     back the one kept by the previous render (Persistent Data, session.py)
   3. export the depsgraph (export/)
   4. render the passes registered for this view layer
   5. write every pass with ONE ``layer.passes.foreach_set("rect", flat)``
@@ -10,7 +11,8 @@ Stages, with ``test_break()`` between each:
 
 Any exception becomes ``report({'ERROR'}, ...)`` and the (zero-filled)
 result is still ended, so Blender writes an empty but valid image and goes
-on; the native session is released in ``finally``.
+on; the native session is released in ``finally`` (or kept for the next
+render when Persistent Data is on and the render succeeded).
 """
 
 import collections
@@ -20,6 +22,7 @@ import time
 import traceback
 
 from .. import native
+from . import session
 from ..export import camera as camera_export
 from ..export import world as world_export
 from ..export import export_scene
@@ -101,6 +104,7 @@ class FinalRender:
     """State of one render() call; created and dropped by the engine."""
 
     def __init__(self, engine, depsgraph):
+        self.reused_renderer = False
         self.engine = engine
         self.depsgraph = depsgraph
         self.scene = depsgraph.scene
@@ -149,6 +153,7 @@ class FinalRender:
         frame.fit_to_result(result.resolution_x, result.resolution_y)
         renderer = None
         cancelled = False
+        self._session = None
         try:
             renderer = self._render_into(result, frame)
         except RenderCancelled:
@@ -166,8 +171,12 @@ class FinalRender:
                 pass
             self.status(f"Error: {message}")
         finally:
-            # Release the native session (joins its GL thread, frees the GL
-            # context) before handing the result back.
+            # Keep the native session for the next render (Persistent Data)
+            # or release it (joins its GL thread, frees the GL context)
+            # before handing the result back.
+            if self._session is not None:
+                mod, device_index, persistent = self._session
+                session.hand_back(mod, device_index, renderer, persistent, failed=renderer is None)
             renderer = None  # noqa: F841
             engine.end_result(result, cancel=cancelled)
 
@@ -215,8 +224,11 @@ class FinalRender:
         for message in cam_warnings:
             self.warn(message)
 
-        self.status("starting GL", 0.02)
-        renderer = mod.Renderer(device_index=device_index)
+        persistent = bool(getattr(scene.render, "use_persistent_data", False))
+        self.status("starting GL" if not (persistent and session.kept()) else
+                    "reusing the renderer kept by the last render (Persistent Data)", 0.02)
+        renderer, self.reused_renderer = session.acquire(mod, device_index, persistent)
+        self._session = (mod, device_index, persistent)
         try:
             self.gl_name = renderer.gl_info.get("renderer", "?")
         except Exception:
@@ -275,6 +287,7 @@ class FinalRender:
             timings = ""
         total = time.perf_counter() - self.t0
         self.status(f"done in {total:.2f} s: export {t_export:.2f} s, render {t_render:.2f} s"
+                    + (" (renderer kept from the last render)" if self.reused_renderer else "")
                     + (f" [{timings}]" if timings else ""), 1.0)
         return renderer
 

@@ -180,7 +180,8 @@ class SceneExporter:
         if all(material_export.is_clamp_note(n) for n in notes):
             return None  # the constant parameter set represents it: no program needed
         if self._images is None:
-            self._images = graph_builder.ImageRegistry(self.renderer.add_image, self.warn)
+            self._images = graph_builder.ImageRegistry(self.renderer.add_image, self.warn,
+                                                     getattr(self.renderer, "find_image", None))
         try:
             graph = graph_builder.build_material_graph(material, self._images)
         except (graph_builder.GraphCycle, graph_builder.SpecError, RecursionError) as ex:

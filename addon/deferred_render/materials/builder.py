@@ -183,10 +183,16 @@ def _label(node):
 
 
 class ImageRegistry:
-    """Blender image -> native image id, once per export (missing: magenta)."""
+    """Blender image -> native image id, once per export (missing: magenta).
 
-    def __init__(self, add_image, warn):
+    Images whose content has a key (images.native_key: file, time, settings,
+    packed data) are uploaded with it; a renderer kept from the last render
+    (Persistent Data) gives the id back from ``find_image`` and nothing is
+    uploaded again."""
+
+    def __init__(self, add_image, warn, find_image=None):
         self._add_image = add_image
+        self._find_image = find_image
         self._warn = warn
         self._ids = {}
         self._magenta = None
@@ -200,7 +206,11 @@ class ImageRegistry:
             result = images.cached_image_pixels(image)
             for w in result.warnings:
                 self._warn(f"Image '{image.name}': {w}")
-            native_id = self._add_image(result.pixels)
+            content_key = images.native_key(image)
+            native_id = self._find_image(content_key) if (content_key and self._find_image) else None
+            if native_id is None:
+                native_id = (self._add_image(result.pixels, key=content_key) if content_key
+                             else self._add_image(result.pixels))
             self._ids[key] = (native_id, result)
         except (images.ImageUnavailable, ValueError, RuntimeError, MemoryError) as ex:
             # Unreadable, refused by the native validation, or out of (GPU) memory.

@@ -704,6 +704,20 @@ def cached_image_pixels(image):
     return result
 
 
+def native_key(image):
+    """A string naming the image's texels for the native image cache (a
+    persistent renderer finds kept images by it), or "" when they have no
+    stable name (unsaved edits, movies). The key holds everything that
+    decides the texels (file, time and size, packed data, generation
+    settings, colour space, alpha mode), so an edit that changes them gives a
+    new key; unsaved pixel edits make the image dirty, hence keyless."""
+    import hashlib
+    key = _cache_key(image)
+    if key is None:
+        return ""
+    return hashlib.sha1(repr(key).encode()).hexdigest()
+
+
 def forget(name_full=None):
     """Drop the cached pixels of one image (by name_full), or of all. The
     pixels come from Blender's buffers, which a reload or an edit replaces

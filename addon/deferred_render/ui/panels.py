@@ -73,6 +73,9 @@ class DEFERRED_RENDER_PT_device(_EnginePanel, bpy.types.Panel):
     def draw(self, context):
         layout = self.split_layout()
         layout.prop(context.scene.deferred_render, "device_index")
+        # Cycles' option, same meaning: keep the renderer (GL context,
+        # programs, images) between renders and animation frames.
+        layout.prop(context.scene.render, "use_persistent_data", text="Persistent Data")
         error = native.error_message()
         if error:
             col = layout.column(align=True)

@@ -110,6 +110,8 @@ struct FrameTimings {
     std::size_t programs_loaded = 0;    // GL programs loaded from the disk cache instead
     double load_ms = 0;
     std::size_t material_programs = 0;  // distinct node-material programs the frame drew with
+    std::size_t images_uploaded = 0;    // images uploaded for this scene (since clear_scene)
+    std::size_t images_reused = 0;      // images kept from the previous scene and found by key
 };
 
 struct FrameResult {
@@ -130,6 +132,9 @@ public:
 
     const GLInfo& gl_info() const;
 
+    // Drops the scene (meshes, materials, lights, world) and keeps what the
+    // next one can reuse: the GL context, compiled programs, frame targets
+    // and keyed images (see add_image).
     void clear_scene();
     // Returns the mesh id. The data is validated and uploaded before returning.
     std::uint32_t add_mesh(const MeshData& mesh);
@@ -148,7 +153,11 @@ public:
     // Node materials: an image texture nodes sample (returns its id), and a
     // material evaluated from a graph (material_graph.h). `base` gives what
     // the graph does not: the pass index. Returns the material id.
-    std::uint32_t add_image(const ImageData& image);
+    // An image for node materials. With a key (the caller's name for its
+    // content), it outlives clear_scene() while each scene uses it, and
+    // find_image(key) gives its id back without an upload (-1: not kept).
+    std::uint32_t add_image(const ImageData& image, const std::string& key = {});
+    std::int64_t find_image(const std::string& key);
     std::uint32_t add_graph_material(const Material& base, const MaterialGraph& graph);
     void add_light(const Light& light);
     void set_world(const World& world);

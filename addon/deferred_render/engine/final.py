@@ -88,6 +88,9 @@ def _format_timings(timings):
     compiled, loaded = timings.get("programs_compiled", 0), timings.get("programs_loaded", 0)
     if compiled or loaded:
         text += f"; programs {compiled} compiled, {loaded} from the cache"
+    uploaded, reused = timings.get("images_uploaded", 0), timings.get("images_reused", 0)
+    if uploaded or reused:
+        text += f"; images {uploaded} uploaded, {reused} kept from the last render"
     return text
 
 

@@ -62,6 +62,7 @@ struct PrincipledWeights {
     float spec_F0;
     float alpha2;      /* GGX alpha^2, alpha = roughness^2 */
     float clearcoat;   /* clearcoat weight (0.25 factor applied in eval) */
+    int glossy_model;  /* 0: Principled specular (Fresnel); 1: Glossy BSDF GGX, 2: Beckmann (weight cspec0) */
     float cc_alpha;    /* GTR1 alpha = clearcoat_roughness^2 */
 };
 
@@ -80,6 +81,8 @@ PrincipledWeights principled_weights(SurfaceParams s) {
     /* bsdf_microfacet_ggx_fresnel_setup saturates cspec0. */
     w.cspec0 = clamp(spec * 0.08 * mix(vec3(1.0), principled_tint(s.base_color), s.specular_tint) * (1.0 - m) +
                          s.base_color * m, 0.0, 1.0);
+    w.glossy_model = s.glossy_model;
+    if (s.glossy_model != 0) w.cspec0 = max(s.base_color, vec3(0.0)); /* the Glossy BSDF's closure weight */
     w.spec_eta = 2.0 / (1.0 - sqrt(0.08 * spec)) - 1.0;
     w.spec_F0 = fresnel_dielectric_cos(1.0, w.spec_eta);
     float alpha = clamp(s.roughness * s.roughness, 0.0, 1.0);
@@ -92,7 +95,12 @@ PrincipledWeights principled_weights(SurfaceParams s) {
 
 /* Diffuse closure colour and glossy closure weight, for DiffCol/GlossCol. */
 vec3 principled_diffuse_color(PrincipledWeights w) { return w.diffuse + w.sheen; }
-vec3 principled_glossy_color(PrincipledWeights w) { return vec3(w.specular + (w.clearcoat > 0.0 ? 1.0 : 0.0)); }
+vec3 principled_glossy_color(PrincipledWeights w) {
+    /* A Glossy BSDF's closure weight is its colour; the Principled BSDF's
+     * specular closure has weight 1 (its Fresnel is in the eval). */
+    vec3 spec = w.glossy_model != 0 ? w.cspec0 * w.specular : vec3(w.specular);
+    return spec + vec3(w.clearcoat > 0.0 ? 1.0 : 0.0);
+}
 
 /* Burley diffuse with retro-reflection, without the colour: the factor B
  * such that f cos = base wd / pi * B * cos_l (bsdf_principled_diffuse.h). */
@@ -140,8 +148,22 @@ float principled_sheen_factor(vec3 N, vec3 V, vec3 L) {
     return schlick_fresnel(dot(L, H)) * NdotL;
 }
 
-/* GGX specular, f cos = F D G / (4 cos_v) (bsdf_microfacet_ggx_eval_reflect),
- * with Cycles' principled Fresnel interpolation (interpolate_fresnel_color). */
+/* Beckmann's Smith G1 as Cycles 3.4 approximates it (bsdf_beckmann_G1):
+ * 1 for a = 1 / (alpha tan) >= 1.6, else a rational fit in a. */
+float beckmann_G1(float alpha, float cos_n) {
+    float c2 = cos_n * cos_n;
+    float inv_a = alpha * sqrt(max((1.0 - c2) / c2, 0.0));
+    if (inv_a < 0.625) return 1.0;
+    float a = 1.0 / inv_a;
+    return ((2.181 * a + 3.535) * a) / ((2.577 * a + 2.276) * a + 1.0);
+}
+
+/* Specular lobe, f cos = F D G / (4 cos_v): GGX with Cycles' principled
+ * Fresnel interpolation (bsdf_microfacet_ggx_eval_reflect,
+ * interpolate_fresnel_color) for the Principled BSDF; for a Glossy BSDF F is
+ * its colour, D and G GGX's or Beckmann's
+ * (bsdf_microfacet_beckmann_eval_reflect: D = exp(-tan^2 / alpha^2) /
+ * (pi alpha^2 cos^4), G = G1(V) G1(L) as above). */
 vec3 principled_specular(PrincipledWeights w, vec3 N, vec3 V, vec3 L) {
     float NdotV = dot(N, V), NdotL = dot(N, L);
     /* Cycles returns nothing from light sampling for a near-delta lobe. */
@@ -152,9 +174,16 @@ vec3 principled_specular(PrincipledWeights w, vec3 N, vec3 V, vec3 L) {
     float cosH2 = cosH * cosH;
     vec3 nxh = cross(N, H);
     float tanH2 = dot(nxh, nxh) / cosH2;
+    if (w.glossy_model == 2) {
+        float alpha = sqrt(w.alpha2);
+        float D = exp(-tanH2 / w.alpha2) / (M_PI_F * w.alpha2 * cosH2 * cosH2);
+        float G = beckmann_G1(alpha, NdotV) * beckmann_G1(alpha, NdotL);
+        return w.cspec0 * (D * G * 0.25 / NdotV);
+    }
     float denom = w.alpha2 + tanH2;
     float D = w.alpha2 / (M_PI_F * cosH2 * cosH2 * denom * denom);
     float G = ggx_G1(w.alpha2, N, V) * ggx_G1(w.alpha2, N, L);
+    if (w.glossy_model != 0) return w.cspec0 * (D * G * 0.25 / NdotV);
     float FH = (fresnel_dielectric_cos(dot(L, H), w.spec_eta) - w.spec_F0) / (1.0 - w.spec_F0);
     vec3 F = w.cspec0 * (1.0 - FH) + vec3(FH);
     return F * (D * G * 0.25 / NdotV);
@@ -275,7 +304,9 @@ vec3 principled_mirror_weight(PrincipledWeights w, vec3 N, vec3 V) {
     float NdotV = dot(N, V);
     vec3 r = vec3(0.0);
     if (NdotV <= 0.0) return r;
-    if (w.specular != 0.0 && w.alpha2 <= 1e-7) {
+    if (w.specular != 0.0 && w.alpha2 <= 1e-7 && w.glossy_model != 0) {
+        r += w.cspec0;  /* a Glossy BSDF mirror: its colour, no Fresnel */
+    } else if (w.specular != 0.0 && w.alpha2 <= 1e-7) {
         float FH = (fresnel_dielectric_cos(NdotV, w.spec_eta) - w.spec_F0) / (1.0 - w.spec_F0);
         r += w.cspec0 * (1.0 - FH) + vec3(FH);
     }

@@ -8,9 +8,10 @@
  *  emission      RGBA32F       rgb: emission x strength, a: coverage (1)          always
  *                              (float: textured emission reaches Combined and the
  *                              Emission pass at the node library's precision)
- *  base          RGBA16F       rgb: base colour, a: diffuse model (< 0: the      always
- *                              Principled BSDF's Burley lobe; >= 0: a Diffuse
- *                              BSDF, Oren-Nayar sigma, 0 = Lambert)
+ *  base          RGBA16F       rgb: base colour, a: closure model: -1 the        always
+ *                              Principled BSDF; 0..1 a Diffuse BSDF (Oren-Nayar
+ *                              sigma, 0 = Lambert); 2 a Glossy BSDF, GGX; 3 a
+ *                              Glossy BSDF, Beckmann
  *  params0       RGBA16F       metallic, roughness, specular, specular tint       always
  *  normal        RG16 unorm    world shading normal, octahedral (32 bits,        always
  *                              0.0037 deg max error), facing the viewer
@@ -29,6 +30,7 @@
 struct SurfaceParams {
     vec3 base_color;
     float diffuse_sigma; /* < 0: Burley (Principled); >= 0: Oren-Nayar sigma (Diffuse BSDF) */
+    int glossy_model;    /* 0: Principled specular (Fresnel); 1: Glossy BSDF GGX; 2: Glossy BSDF Beckmann */
     float metallic, roughness, specular, specular_tint;
     float sheen, sheen_tint, clearcoat, clearcoat_roughness;
     vec3 N;
@@ -37,7 +39,8 @@ struct SurfaceParams {
 SurfaceParams gbuffer_unpack(vec4 base, vec4 params0, vec4 params1, vec2 normal_enc) {
     SurfaceParams s;
     s.base_color = base.rgb;
-    s.diffuse_sigma = base.a;
+    s.diffuse_sigma = base.a >= 0.0 && base.a <= 1.0 ? base.a : -1.0;
+    s.glossy_model = base.a > 1.5 ? int(base.a + 0.5) - 1 : 0;
     s.metallic = params0.x;
     s.roughness = params0.y;
     s.specular = params0.z;

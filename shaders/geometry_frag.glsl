@@ -184,7 +184,8 @@ void main() {
     shading_normal = dot(shading_normal, shading_normal) > 0.0 ? normalize(shading_normal) : N;
     out_emission = vec4(clamp(finite_or(c.emission, vec3(0.0)), vec3(-65504.0), vec3(65504.0)), 1.0);
     out_base = vec4(clamp(finite_or(c.base_color, vec3(0.0)), vec3(0.0), vec3(65504.0)),
-                    clamp(finite_or(c.diffuse_sigma, -1.0), -1.0, 1.0));
+                    /* the closure model, as gbuffer_lib.glsl lays it out */
+                    c.glossy_model > 0.5 ? 1.0 + c.glossy_model : clamp(finite_or(c.diffuse_sigma, -1.0), -1.0, 1.0));
     out_params0 = vec4(clamp(finite_or(c.metallic, 0.0), 0.0, 1.0), clamp(finite_or(c.roughness, 0.5), 0.0, 1.0),
                        clamp(finite_or(c.specular, 0.0), 0.0, 12.0), clamp(finite_or(c.specular_tint, 0.0), 0.0, 1.0));
     out_normal = octahedral_encode(shading_normal);

@@ -13,6 +13,7 @@ struct Closure {
     vec3 base_color;
     float alpha;
     float diffuse_sigma; /* < 0: Principled (Burley) diffuse; >= 0: Diffuse BSDF (Oren-Nayar) */
+    float glossy_model;  /* 0: Principled specular; 1: Glossy BSDF GGX; 2: Glossy BSDF Beckmann */
     float metallic, roughness, specular, specular_tint;
     float sheen, sheen_tint, clearcoat, clearcoat_roughness;
     vec3 emission; /* radiance (colour x strength) */
@@ -77,6 +78,7 @@ Closure closure_none() {
     c.base_color = vec3(0.0);
     c.alpha = 1.0;
     c.diffuse_sigma = -1.0;
+    c.glossy_model = 0.0;
     c.metallic = 0.0;
     c.roughness = 0.5;
     c.specular = 0.0;

@@ -338,7 +338,7 @@ void declare_renderer(py::module_& m) {
              [](PyRenderer& self, const py::object& base_color, float metallic, float roughness, float specular,
                 float specular_tint, float sheen, float sheen_tint, float clearcoat, float clearcoat_roughness,
                 const py::object& emission, float emission_strength, float alpha, float diffuse_roughness,
-                const py::object& pass_index, int mix_with, float mix_probability) {
+                int glossy_model, const py::object& pass_index, int mix_with, float mix_probability) {
                  Material mat;
                  mat.base_color = vec3_from(base_color, "base_color");
                  mat.metallic = metallic;
@@ -353,6 +353,7 @@ void declare_renderer(py::module_& m) {
                  mat.emission_strength = emission_strength;
                  mat.alpha = alpha;
                  mat.diffuse_roughness = diffuse_roughness;
+                 mat.glossy_model = glossy_model;
                  mat.pass_index = index_from(pass_index, "add_material: pass_index");
                  mat.mix_with = mix_with;
                  mat.mix_probability = mix_probability;
@@ -362,7 +363,7 @@ void declare_renderer(py::module_& m) {
              py::arg("roughness") = 0.5f, py::arg("specular") = 0.5f, py::arg("specular_tint") = 0.0f,
              py::arg("sheen") = 0.0f, py::arg("sheen_tint") = 0.5f, py::arg("clearcoat") = 0.0f,
              py::arg("clearcoat_roughness") = 0.03f, py::arg("emission") = py::make_tuple(0.0, 0.0, 0.0),
-             py::arg("emission_strength") = 1.0f, py::arg("alpha") = 1.0f, py::arg("diffuse_roughness") = -1.0f,
+             py::arg("emission_strength") = 1.0f, py::arg("alpha") = 1.0f, py::arg("diffuse_roughness") = -1.0f, py::arg("glossy_model") = 0,
              py::arg("pass_index") = 0, py::arg("mix_with") = -1, py::arg("mix_probability") = 0.0f)
         .def("add_instances",
              [](PyRenderer& self, const py::object& mesh_id_obj, const py::object& matrices,

@@ -275,8 +275,11 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     std::vector<gpu::GpuMaterial> gpu_materials;
     for (const Material& m : scene.materials()) {
         gpu::GpuMaterial g{};
+        // The closure model (gbuffer_lib.glsl): -1 Principled, 0..1 Diffuse
+        // BSDF (Oren-Nayar sigma), 1 + glossy_model for a Glossy BSDF.
         g.base_diffuse = {m.base_color[0], m.base_color[1], m.base_color[2],
-                          m.diffuse_roughness < 0.0f ? -1.0f : std::min(m.diffuse_roughness, 1.0f)};
+                          m.glossy_model > 0 ? 1.0f + float(m.glossy_model)
+                          : m.diffuse_roughness < 0.0f ? -1.0f : std::min(m.diffuse_roughness, 1.0f)};
         g.params0 = {m.metallic, m.roughness, m.specular, m.specular_tint};
         g.params1 = {m.sheen, m.sheen_tint, m.clearcoat, m.clearcoat_roughness};
         g.emission = {m.emission[0] * m.emission_strength, m.emission[1] * m.emission_strength,

@@ -124,6 +124,9 @@ void validate_material(const Material& m) {
     require_range(m.emission_strength, 0, std::numeric_limits<float>::max(), o, "emission_strength");
     require_range(m.alpha, 0, 1, o, "alpha");
     require_range(m.diffuse_roughness, -1, 1, o, "diffuse_roughness (-1: Principled, 0..1: Diffuse BSDF)");
+    if (m.glossy_model < 0 || m.glossy_model > 2)
+        invalid("material: glossy_model " + std::to_string(m.glossy_model) +
+                " must be 0 (Principled), 1 (Glossy GGX) or 2 (Glossy Beckmann)");
     if (m.pass_index >= InputLimits::kMaxPassIndex)
         invalid("material: pass_index " + std::to_string(m.pass_index) + " must be below 2^24");
 }

@@ -48,11 +48,14 @@ void node_bsdf_diffuse(vec3 color, float roughness, vec3 normal, out Closure c) 
     c.reflects = 1.0;
 }
 
-/* Glossy BSDF: a metal with the node's colour and roughness (Cycles' Glossy
- * has no Fresnel; a metal's tends to white only at grazing angles). */
-void node_bsdf_glossy(vec3 color, float roughness, vec3 normal, out Closure c) {
+/* Glossy BSDF (model 1: GGX, 2: Beckmann): a microfacet lobe whose weight
+ * is the node's colour, without Fresnel (bsdf_microfacet_{ggx,beckmann}_setup;
+ * svm_node_closure_bsdf squares Roughness into alpha). Metallic 1 keeps the
+ * diffuse lobe out. */
+void node_bsdf_glossy(int model, vec3 color, float roughness, vec3 normal, out Closure c) {
     c = closure_none();
     c.base_color = max(color, vec3(0.0));
+    c.glossy_model = float(model);
     c.metallic = 1.0;
     c.specular = 0.5;
     c.roughness = clamp01(roughness);

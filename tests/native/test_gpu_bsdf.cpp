@@ -58,6 +58,12 @@ TEST_F(GpuBsdf, MatchesOracleWithin1e4Relative) {
             m.diffuse_roughness = half_exact(u(rng) < 0.25f ? 0.0f : u(rng));
             m.metallic = m.specular = m.sheen = m.clearcoat = 0.0f;
         }
+        // And one in eight a Glossy BSDF (GGX or Beckmann, weight = colour).
+        if (i % 8 == 1) {
+            m.glossy_model = 1 + (i / 8) % 2;
+            m.metallic = 1.0f;
+            m.sheen = m.clearcoat = 0.0f;
+        }
         const glm::dvec3 N = random_dir(rng, glm::dvec3(0, 0, 1), -1.0);
         // Keep away from exactly grazing configurations, where float cos
         // cannot carry 1e-4 relative precision.
@@ -66,7 +72,7 @@ TEST_F(GpuBsdf, MatchesOracleWithin1e4Relative) {
         Case& c = cases[i];
         auto put = [](float* dst, glm::dvec3 v) { dst[0] = float(v.x); dst[1] = float(v.y); dst[2] = float(v.z); dst[3] = 0; };
         put(c.N, N); put(c.V, V); put(c.L, L);
-        float ba[4] = {m.base_color[0], m.base_color[1], m.base_color[2], m.diffuse_roughness};
+        float ba[4] = {m.base_color[0], m.base_color[1], m.base_color[2], oracle::gbuffer_closure_model(m)};
         float p0[4] = {m.metallic, m.roughness, m.specular, m.specular_tint};
         float p1[4] = {m.sheen, m.sheen_tint, m.clearcoat, m.clearcoat_roughness};
         std::copy(ba, ba + 4, c.base_diffuse); std::copy(p0, p0 + 4, c.params0); std::copy(p1, p1 + 4, c.params1);

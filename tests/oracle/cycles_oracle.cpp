@@ -51,6 +51,7 @@ struct Prepared {
     dvec3 diffuse_weight{0.0};  // base * (1 - m)
     double roughness = 0.0;     // Burley retro-reflection roughness (not squared)
     double diffuse_sigma = -1;  // >= 0: a Diffuse BSDF, Oren-Nayar sigma (0 = Lambert)
+    int glossy_model = 0;       // 1: Glossy BSDF GGX, 2: Beckmann (weight spec_cspec0, no Fresnel)
     dvec3 sheen_weight{0.0};
     double spec_alpha = 0.0, spec_ior = 1.0, spec_F0 = 0.0;
     dvec3 spec_cspec0{0.0};
@@ -98,6 +99,11 @@ Prepared prepare(const deferred::Material& mat) {
         // bsdf_microfacet.h reflection_color: F0 = fresnel_dielectric_cos(1, ior)
         // (equals 0.08*specular analytically).
         p.spec_F0 = fresnel_dielectric_cos(1.0, p.spec_ior);
+        if (mat.glossy_model != 0) {
+            // A Glossy BSDF: bsdf_microfacet_{ggx,beckmann}_setup, weight = colour.
+            p.glossy_model = mat.glossy_model;
+            p.spec_cspec0 = glm::max(base, dvec3(0.0));
+        }
     }
 
     // Clearcoat: closure weight 1 in 3.4; the 0.25*clearcoat is applied in eval.
@@ -183,13 +189,43 @@ dvec3 microfacet_reflect(bool clearcoat, double alpha, double ior, double F0, dv
     return F * G * common;
 }
 
+// bsdf_microfacet.h (3.4) bsdf_beckmann_G1: Smith G1 by a rational fit.
+double beckmann_G1(double alpha, double cos_n) {
+    const double c2 = cos_n * cos_n;
+    const double inv_a = alpha * safe_sqrt((1.0 - c2) / c2);
+    if (inv_a < 0.625) return 1.0;
+    const double a = 1.0 / inv_a;
+    return ((2.181 * a + 3.535) * a) / ((2.577 * a + 2.276) * a + 1.0);
+}
+
+// A Glossy BSDF's lobe (bsdf_microfacet_ggx_eval_reflect without Fresnel,
+// bsdf_microfacet_beckmann_eval_reflect): f*cos = D G / (4 cos_v), times its colour.
+dvec3 glossy_reflect(int model, double alpha, dvec3 colour, dvec3 N, dvec3 V, dvec3 L) {
+    if (alpha * alpha <= 1e-7) return dvec3(0.0);
+    const double cosNO = glm::dot(N, V), cosNI = glm::dot(N, L);
+    if (!(cosNI > 0.0 && cosNO > 0.0)) return dvec3(0.0);
+    const dvec3 m = glm::normalize(L + V);
+    const double c = glm::dot(N, m), c2 = c * c, tan2 = (1.0 - c2) / c2, alpha2 = alpha * alpha;
+    double D, G;
+    if (model == 2) {
+        D = std::exp(-tan2 / alpha2) / (kPi * alpha2 * c2 * c2);
+        G = beckmann_G1(alpha, cosNO) * beckmann_G1(alpha, cosNI);
+    } else {
+        D = ggx_D(c, alpha);
+        G = smith_G1(cosNO, alpha2) * smith_G1(cosNI, alpha2);
+    }
+    return colour * (D * G * 0.25 / cosNO);
+}
+
 Lobes eval_prepared(const Prepared& p, dvec3 N, dvec3 V, dvec3 L) {
     Lobes out;
     if (p.has_diffuse)
         out.diffuse = p.diffuse_weight * (p.diffuse_sigma >= 0.0 ? oren_nayar(p.diffuse_sigma, N, V, L)
                                                                   : principled_diffuse(p.roughness, N, V, L));
     if (p.has_sheen) out.sheen = p.sheen_weight * principled_sheen(N, V, L);
-    if (p.has_specular)
+    if (p.has_specular && p.glossy_model != 0)
+        out.specular = glossy_reflect(p.glossy_model, p.spec_alpha, p.spec_cspec0, N, V, L);
+    else if (p.has_specular)
         out.specular = microfacet_reflect(false, p.spec_alpha, p.spec_ior, p.spec_F0, p.spec_cspec0,
                                           0.0, N, V, L);
     if (p.has_clearcoat)
@@ -399,7 +435,8 @@ dvec3 diffuse_color(const deferred::Material& m) {
 dvec3 glossy_color(const deferred::Material& m) {
     const Prepared p = prepare(m);
     dvec3 c(0.0);
-    if (p.has_specular) c += dvec3(1.0);  // specular_weight = 1 - T(1-m) = 1
+    // Principled: specular_weight = 1 - T(1-m) = 1; a Glossy BSDF: its colour.
+    if (p.has_specular) c += p.glossy_model != 0 ? p.spec_cspec0 : dvec3(1.0);
     if (p.has_clearcoat) c += dvec3(1.0);
     return c;
 }

@@ -37,6 +37,14 @@ namespace oracle {
 struct Lobes {
     glm::dvec3 diffuse{0.0}, sheen{0.0}, specular{0.0}, clearcoat{0.0};
 };
+
+// The G-buffer's closure model for `m` (base target alpha, gbuffer_lib.glsl),
+// for the GPU unit tests that fill G-buffer parameters directly.
+inline float gbuffer_closure_model(const deferred::Material& m) {
+    if (m.glossy_model > 0) return 1.0f + float(m.glossy_model);
+    return m.diffuse_roughness < 0.0f ? -1.0f : m.diffuse_roughness;
+}
+
 Lobes eval_principled(const deferred::Material& m, glm::dvec3 N, glm::dvec3 V, glm::dvec3 L);
 
 // Directional albedo of each lobe: the integral of eval_principled over the

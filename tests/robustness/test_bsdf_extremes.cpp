@@ -46,7 +46,7 @@ Case make_case(const Material& m, glm::dvec3 N, glm::dvec3 V, glm::dvec3 L) {
         dst[0] = float(v.x); dst[1] = float(v.y); dst[2] = float(v.z); dst[3] = 0;
     };
     put(c.N, N); put(c.V, V); put(c.L, L);
-    const float ba[4] = {m.base_color[0], m.base_color[1], m.base_color[2], m.diffuse_roughness};
+    const float ba[4] = {m.base_color[0], m.base_color[1], m.base_color[2], oracle::gbuffer_closure_model(m)};
     const float p0[4] = {m.metallic, m.roughness, m.specular, m.specular_tint};
     const float p1[4] = {m.sheen, m.sheen_tint, m.clearcoat, m.clearcoat_roughness};
     std::copy(ba, ba + 4, c.base_diffuse);

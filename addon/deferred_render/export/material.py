@@ -8,8 +8,9 @@ per material. The node tree is reduced to that set:
   node are folded to their constant; any other link is not understood.
 - Diffuse BSDF  -> base colour, metallic 0, specular 0 and its own diffuse
   model (``diffuse_roughness``: Oren-Nayar sigma, 0 = Lambert), as Cycles.
-- Glossy BSDF   -> metallic 1 with the node's colour and roughness (Cycles'
-  Glossy has no Fresnel; a metal's Fresnel tends to white at grazing angles).
+- Glossy BSDF   -> its own lobe (``glossy_model``: GGX or Beckmann, weight =
+  colour, no Fresnel), metallic 1 so there is no diffuse lobe; Sharp is a
+  mirror.
 - Emission      -> black, non-reflective surface with that emission.
 - Add Shader    -> exact when at most one side reflects: that side's BSDF
   plus the emission of both.
@@ -79,6 +80,8 @@ DEFAULT_PARAMS = {
     # < 0: the Principled BSDF's diffuse lobe (Burley); 0..1: a Diffuse BSDF,
     # Oren-Nayar with this sigma (0: Lambert), as Cycles shades it.
     "diffuse_roughness": -1.0,
+    # 0: the Principled BSDF's specular; 1/2: a Glossy BSDF, GGX/Beckmann.
+    "glossy_model": 0,
     "pass_index": 0,
 }
 
@@ -190,10 +193,21 @@ def _diffuse(node, notes):
 
 
 def _glossy(node, notes):
+    distribution = getattr(node, "distribution", "GGX")
+    if distribution not in {"GGX", "BECKMANN", "SHARP"}:
+        notes.append(f"'{node.name}': {distribution.replace('_', ' ').title()} distribution shaded as GGX")
+    if node.bl_idname == "ShaderNodeBsdfAnisotropic":
+        anisotropy = node.inputs["Anisotropy"]
+        if anisotropy.is_linked or abs(_scalar(anisotropy.default_value)) > 1e-6:
+            notes.append(f"'{node.name}': anisotropy is not rendered (isotropic)")
+    roughness = (0.0 if distribution == "SHARP" else
+                 _finite(_scalar(_input_value(node.inputs["Roughness"], notes, "Glossy 'Roughness'")), 0.5))
     return {
         "base_color": _color(_input_value(node.inputs["Color"], notes, "Glossy 'Color'"), (0.8, 0.8, 0.8)),
         "metallic": 1.0,
-        "roughness": _finite(_scalar(_input_value(node.inputs["Roughness"], notes, "Glossy 'Roughness'")), 0.5),
+        "roughness": roughness,
+        # A Glossy BSDF's own lobe: weight = colour, no Fresnel; GGX or Beckmann.
+        "glossy_model": 2 if distribution == "BECKMANN" else 1,
     }
 
 
@@ -240,12 +254,12 @@ def _mix(a, b, t):
     out["emission_strength"] = 1.0
     if not _reflects(a):      # mixing with pure emission scales the BSDF only by its colours
         for key in ("metallic", "roughness", "specular", "specular_tint", "sheen", "sheen_tint",
-                    "clearcoat", "clearcoat_roughness", "alpha", "diffuse_roughness"):
+                    "clearcoat", "clearcoat_roughness", "alpha", "diffuse_roughness", "glossy_model"):
             out[key] = b[key]
         out["specular"] = t * b["specular"]
     elif not _reflects(b):
         for key in ("metallic", "roughness", "specular", "specular_tint", "sheen", "sheen_tint",
-                    "clearcoat", "clearcoat_roughness", "alpha", "diffuse_roughness"):
+                    "clearcoat", "clearcoat_roughness", "alpha", "diffuse_roughness", "glossy_model"):
             out[key] = a[key]
         out["specular"] = (1.0 - t) * a["specular"]
     return out
@@ -257,7 +271,7 @@ MAX_COMPONENTS = 8
 # Parameters that must be equal for two sets to mix exactly as one set
 # (radiance is linear in the colours and emission only).
 _SHAPE_PARAMS = ("metallic", "roughness", "specular", "specular_tint", "sheen", "sheen_tint",
-                 "clearcoat", "clearcoat_roughness", "alpha", "diffuse_roughness")
+                 "clearcoat", "clearcoat_roughness", "alpha", "diffuse_roughness", "glossy_model")
 
 
 def _components(x):
@@ -475,15 +489,21 @@ def warning_text(material, notes):
 def add_materials(add_material, params):
     """Create the material (a chain for a stochastic mix) with
     ``add_material(**kwargs) -> id``; returns the id instances refer to."""
+    def native(p):
+        p = dict(p)
+        if "glossy_model" in p:  # an enum: mixing sets of one model keeps it, as an int
+            p["glossy_model"] = int(round(p["glossy_model"]))
+        return p
+
     components = params.get("components")
     if not components:
-        return add_material(**params)
+        return add_material(**native(params))
     # Last component first; each earlier one points at the rest of the chain
     # and takes it with the rest's share of the weight.
     next_id, rest = -1, 0.0
     for p, w in reversed(components):
         total = rest + w
         probability = rest / total if next_id >= 0 and total > 0.0 else 0.0
-        next_id = add_material(**p, mix_with=next_id, mix_probability=probability)
+        next_id = add_material(**native(p), mix_with=next_id, mix_probability=probability)
         rest = total
     return next_id

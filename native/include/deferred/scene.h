@@ -61,6 +61,10 @@ struct Material {
     // >= 0 a Diffuse BSDF: Oren-Nayar with this sigma (0 = Lambert), as
     // Cycles' svm_node_closure_bsdf chooses (values above 1 act as 1).
     float diffuse_roughness = -1.0f;
+    // The specular lobe: 0 the Principled BSDF's (GGX with its Fresnel);
+    // 1 a Glossy BSDF with GGX, 2 with Beckmann: weight `base_color`, no
+    // Fresnel (metallic should be 1, so there is no diffuse lobe).
+    int glossy_model = 0;
     std::uint32_t pass_index = 0;  // IndexMA
     // Stochastic mix (a Mix Shader of BSDFs that one parameter set cannot
     // represent): each film sample shades a pixel with this material with

@@ -58,6 +58,11 @@ def diffuse(b):
            [("BSDF", "closure")])
 
 
+# node_bsdf_glossy's model (the G-buffer's closure model, gbuffer_lib.glsl).
+GLOSSY_MODEL_GGX = 1
+GLOSSY_MODEL_BECKMANN = 2
+
+
 @register("ShaderNodeBsdfGlossy", "ShaderNodeBsdfAnisotropic")
 def glossy(b):
     distribution = getattr(b.node, "distribution", "GGX")
@@ -65,13 +70,15 @@ def glossy(b):
         roughness = b.const(0.0, "float")  # Cycles: a perfect mirror, Roughness unused
     else:
         roughness = b.input("Roughness", "float")
-        if distribution != "GGX":
+        if distribution not in {"GGX", "BECKMANN"}:
             b._graph.note(f"'{b.node.name}': {distribution.replace('_', ' ').title()} distribution shaded as GGX")
     if b.node.bl_idname == "ShaderNodeBsdfAnisotropic":
         anisotropy = _value(b, "Anisotropy")
         if anisotropy is None or abs(anisotropy) > 1e-6:
             b._graph.note(f"'{b.node.name}': anisotropy is not rendered (isotropic)")
-    b.call("node_bsdf_glossy", [b.input("Color", "color"), roughness, b.input("Normal", "vector", implicit="N")],
+    model = GLOSSY_MODEL_BECKMANN if distribution == "BECKMANN" else GLOSSY_MODEL_GGX
+    b.call("node_bsdf_glossy",
+           [b.int(model), b.input("Color", "color"), roughness, b.input("Normal", "vector", implicit="N")],
            [("BSDF", "closure")])
 
 

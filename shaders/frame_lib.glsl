@@ -40,3 +40,19 @@ uint depth_bin(float d, float dmin, float dmax) {
     float t = (d - dmin) / max(dmax - dmin, 1e-30);
     return uint(clamp(t * float(DEPTH_BINS), 0.0, float(DEPTH_BINS - 1)));
 }
+
+/* Stochastic transparency: Cycles renders a surface of alpha a (Principled
+ * Alpha, a Transparent BSDF mixed in) as covering a fraction a of what is
+ * behind it, for camera and shadow rays alike. A fragment is kept when this
+ * number is below a. It is uniform per pixel (of the camera or of a shadow
+ * map), surface (instance, triangle) and film sample, and independent across
+ * surfaces, so a stack of layers converges to the product of their (1 - a).
+ * pcg4d (Jarzynski and Olano 2020, "Hash Functions for GPU Rendering"). */
+float transparency_random(uvec2 pixel, uint instance, uint triangle) {
+    uvec4 v = uvec4(pixel, instance * 0x9E3779B9u ^ triangle, uint(frame.sample_shift.w));
+    v = v * 1664525u + 1013904223u;
+    v.x += v.y * v.w; v.y += v.z * v.x; v.z += v.x * v.y; v.w += v.y * v.z;
+    v ^= v >> 16u;
+    v.x += v.y * v.w; v.y += v.z * v.x; v.z += v.x * v.y; v.w += v.y * v.z;
+    return float(v.x >> 8u) * (1.0 / 16777216.0);
+}

@@ -1,4 +1,7 @@
-/* Geometry pass, fragment stage: fills the G-buffer (layout in gbuffer_lib.glsl). */
+/* Geometry pass, fragment stage: fills the G-buffer (layout in gbuffer_lib.glsl).
+ * SHADOW_PASS (node materials that drive alpha only): a shadow-map caster
+ * instead, evaluating the graph for its alpha and writing what
+ * shadow_frag.glsl writes. */
 #include "frame_lib.glsl"
 #include "octahedral_lib.glsl"
 
@@ -10,11 +13,25 @@ in vec2 v_uv;
 flat in uint v_material;
 flat in uint v_object_index;
 flat in uint v_mirrored;
+flat in uint v_instance;
+flat in uint v_triangle;
 
+#ifdef SHADOW_PASS
+/* As shadow_frag.glsl's shadow_origin and shadow_axis (other locations: 3..12
+ * are the node material's). */
+layout(location = 20) uniform vec4 caster_origin;
+layout(location = 21) uniform vec3 caster_axis;
+#ifdef WORLD_MAP
+layout(location = 0) out vec2 out_depths;
+#else
+layout(location = 0) out float out_distance;
+#endif
+#else
 layout(location = OUT_EMISSION) out vec4 out_emission;
 layout(location = OUT_BASE) out vec4 out_base;
 layout(location = OUT_PARAMS0) out vec4 out_params0;
 layout(location = OUT_NORMAL) out vec2 out_normal;
+#endif
 #ifdef GBUF_PARAMS1
 layout(location = OUT_PARAMS1) out vec4 out_params1;
 #endif
@@ -27,14 +44,16 @@ layout(location = OUT_UV) out vec2 out_uv;
 
 #ifdef MATERIAL_GRAPH
 /* A node material (material_lib.glsl, nodes/, the generated graph). Depth
- * was laid down by the pre-pass: test before shading (no discard, no depth
- * write here), so hidden fragments cost nothing. */
+ * was laid down by the pre-pass: test before shading (no depth write here),
+ * so hidden fragments cost nothing. A graph that drives alpha
+ * (MATERIAL_ALPHA) discards, and draws the pre-pass itself: late tests. */
+#ifndef MATERIAL_ALPHA
 layout(early_fragment_tests) in;
+#endif
 in vec3 v_object_position;
 in vec3 v_object_normal;
 flat in vec3 v_true_normal;
 in vec2 v_barycentric;
-flat in uint v_instance;
 #if MATERIAL_ATTRIBUTE_COUNT > 0
 in vec4 v_attr[MATERIAL_ATTRIBUTE_COUNT];
 #endif
@@ -151,6 +170,10 @@ vec3 finite_or(vec3 v, vec3 fallback) {
 void main() {
 #ifndef MATERIAL_GRAPH
     GpuMaterial m = pick_material(v_material);
+#ifdef SCENE_ALPHA
+    /* Partly transparent (mix.w: alpha): kept with probability alpha. */
+    if (transparency_random(uvec2(gl_FragCoord.xy), v_instance, v_triangle) >= m.mix.w) discard;
+#endif
 #endif
 
     /* Geometric normal from the triangle's winding, in world space. Cycles
@@ -180,6 +203,19 @@ void main() {
     g_mix_u = fract(pixel_hash(uvec2(gl_FragCoord.xy)) + frame.sample_shift.z);
     Closure c;
     material_graph_eval(c);
+#ifdef MATERIAL_ALPHA
+    if (transparency_random(uvec2(gl_FragCoord.xy), v_instance, v_triangle) >= clamp(finite_or(c.alpha, 1.0), 0.0, 1.0))
+        discard;
+#endif
+#ifdef SHADOW_PASS
+    vec3 v = v_position - caster_origin.xyz;
+#ifdef WORLD_MAP
+    float d = dot(v, caster_axis);
+    out_depths = vec2(-d, d);
+#else
+    out_distance = int(caster_origin.w) == SHADOW_CASCADES ? dot(v, caster_axis) : length(v);
+#endif
+#else
     vec3 shading_normal = finite_or(c.N, N);
     shading_normal = dot(shading_normal, shading_normal) > 0.0 ? normalize(shading_normal) : N;
     out_emission = vec4(clamp(finite_or(c.emission, vec3(0.0)), vec3(-65504.0), vec3(65504.0)), 1.0);
@@ -196,6 +232,7 @@ void main() {
 #ifdef GBUF_IDS
     out_ids = uvec2(v_object_index, uint(materials[v_material].emission.w));
 #endif
+#endif  /* SHADOW_PASS */
 #else
     out_emission = vec4(min(m.emission.rgb, vec3(65504.0)), 1.0);
     out_base = m.base_diffuse;

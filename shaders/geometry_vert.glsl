@@ -34,7 +34,6 @@ out vec3 v_object_position;
 out vec3 v_object_normal;
 flat out vec3 v_true_normal;  /* world, from the triangle's three vertices (Cycles' Ng) */
 out vec2 v_barycentric;       /* weights of the triangle's corners 0 and 1 */
-flat out uint v_instance;
 #if MATERIAL_ATTRIBUTE_COUNT > 0
 out vec4 v_attr[MATERIAL_ATTRIBUTE_COUNT];
 #endif
@@ -50,6 +49,8 @@ out vec2 v_uv;
 flat out uint v_material;
 flat out uint v_object_index;
 flat out uint v_mirrored;
+flat out uint v_instance;  /* the instance drawn (transparency_random, node materials) */
+flat out uint v_triangle;  /* the triangle of the mesh (transparency_random) */
 
 void main() {
     const uint corner = uint(gl_VertexID);
@@ -91,7 +92,6 @@ void main() {
     v_barycentric = vec2(corner % 3u == 0u ? 1.0 : 0.0, corner % 3u == 1u ? 1.0 : 0.0);
     v_object_position = p;
     v_object_normal = n;
-    v_instance = instance;
 #if MATERIAL_ATTRIBUTE_COUNT > 0
     for (int k = 0; k < MATERIAL_ATTRIBUTE_COUNT; ++k) {
         const ivec4 layout_k = attribute_layout[k];
@@ -115,4 +115,6 @@ void main() {
     v_material = material_slots[inst.ids.y + s];
     v_object_index = inst.ids.x;
     v_mirrored = inst.ids.w;
+    v_instance = instance;
+    v_triangle = triangle;
 }

@@ -57,7 +57,7 @@ SHARED_ASSERT_SIZE(GpuLight, 96);
  *   emission   : rgb emission colour x strength, w = material pass index
  *   mix        : x material id taken instead with probability y (stochastic Mix Shader),
  *                x < 0: none; z offset of a node material's constants in the constants
- *                buffer; w unused */
+ *                buffer; w alpha (coverage: transparency_random) */
 SHARED_STRUCT(GpuMaterial) {
     vec4 base_diffuse;
     vec4 params0;
@@ -95,7 +95,7 @@ SHARED_ASSERT_SIZE(GpuInstance, 176);
  *   sample_shift    : xy this sample's point in [0,1)^2 inside every cell of the light-shape
  *                     grid and on the sun's disk (0.5: the centre, sample 0), z the
  *                     sample's point of the 1D golden-ratio sequence (stochastic material
- *                     mixes, rotated per pixel), w unused
+ *                     mixes, rotated per pixel), w the sample's index (transparency_random)
  *   tiles           : x tiles per row, y tile rows, z 1 if light culling is on, w the pixel
  *                     filter's reach in whole pixels (tile frusta are widened by it)
  *   world_occlusion : x index (GpuShadow) of this sample's world-occlusion map, < 0 without

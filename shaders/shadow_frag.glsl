@@ -5,10 +5,35 @@
  * distances in metres.
  * WORLD_MAP: the world's occlusion map stores (-min, max) of the depth along
  * its axis through MAX blending (no depth test), so one map answers for the
- * direction it looks along and for the opposite one. */
+ * direction it looks along and for the opposite one.
+ * SCENE_ALPHA: partly transparent casters are kept with probability alpha
+ * (transparency_random), so the maps of many samples converge to Cycles'
+ * transparent shadows. */
 #include "frame_lib.glsl"
 
 in vec3 v_position;
+#ifdef SCENE_ALPHA
+flat in uint v_material;
+flat in uint v_instance;
+flat in uint v_triangle;
+layout(std430, binding = SSBO_MATERIALS) readonly buffer Materials { GpuMaterial materials[]; };
+
+/* Alpha of a material, a stochastic mix chain averaged (the chain's
+ * components are picked with their weights in the geometry pass; coverage
+ * is linear in them, as Cycles' transparent closure weight). */
+float material_alpha(uint id) {
+    float alpha = 0.0, weight = 1.0;
+    GpuMaterial m = materials[id];
+    for (int k = 0; k < 16; ++k) {
+        float p = m.mix.x >= 0.0 ? m.mix.y : 0.0;
+        alpha += weight * (1.0 - p) * m.mix.w;
+        weight *= p;
+        if (m.mix.x < 0.0) break;
+        m = materials[uint(m.mix.x)];
+    }
+    return alpha + weight * m.mix.w;
+}
+#endif
 layout(location = 3) uniform vec4 shadow_origin; /* xyz: light point (cube) or a point up-sun (cascades); w: kind */
 layout(location = 4) uniform vec3 shadow_axis;   /* sun direction (cascades) */
 #ifdef WORLD_MAP
@@ -18,6 +43,9 @@ layout(location = 0) out float out_distance;
 #endif
 
 void main() {
+#ifdef SCENE_ALPHA
+    if (transparency_random(uvec2(gl_FragCoord.xy), v_instance, v_triangle) >= material_alpha(v_material)) discard;
+#endif
     vec3 v = v_position - shadow_origin.xyz;
 #ifdef WORLD_MAP
     float d = dot(v, shadow_axis);

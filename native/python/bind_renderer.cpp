@@ -101,6 +101,7 @@ int int_from(const py::handle& obj, const std::string& what) {
 MaterialGraph graph_from_python(const py::dict& d) {
     MaterialGraph g;
     if (d.contains("name")) g.name = d["name"].cast<std::string>();
+    if (d.contains("alpha")) g.alpha = d["alpha"].cast<bool>();
     const py::list nodes = d["nodes"].cast<py::list>();
     for (std::size_t i = 0; i < nodes.size(); ++i) {
         const py::dict n = nodes[i].cast<py::dict>();

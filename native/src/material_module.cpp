@@ -140,7 +140,10 @@ void MaterialModule::bind_constants() const {
 GLuint MaterialModule::program(ShaderLibrary& shaders, std::uint32_t graph, const ShaderVariant& base) {
     const StoredGraph& g = graphs_.at(graph);
     ShaderVariant v = base;
+    // The constant program's transparency switch is not this program's.
+    v.defines.erase(std::remove(v.defines.begin(), v.defines.end(), std::string("SCENE_ALPHA")), v.defines.end());
     v.defines.push_back("MATERIAL_GRAPH");
+    if (g.graph.alpha) v.defines.push_back("MATERIAL_ALPHA");
     v.defines.push_back("MATERIAL_ATTRIBUTE_COUNT " + std::to_string(g.graph.attributes.size()));
     v.defines.push_back("MATERIAL_IMAGE_COUNT " + std::to_string(g.graph.images.size()));
     // The node library files the graph calls into (and theirs), then the graph.
@@ -152,6 +155,13 @@ GLuint MaterialModule::program(ShaderLibrary& shaders, std::uint32_t graph, cons
     for (const std::string& file : shaders.node_files_for(functions)) source += "#include \"" + file + "\"\n";
     source += g.glsl;
     return shaders.graphics_program("geometry_vert.glsl", "geometry_frag.glsl", v, {{kMaterialGraphFile, source}});
+}
+
+GLuint MaterialModule::caster_program(ShaderLibrary& shaders, std::uint32_t graph, bool world_map) {
+    ShaderVariant v;
+    v.defines.push_back("SHADOW_PASS");
+    if (world_map) v.defines.push_back("WORLD_MAP");
+    return program(shaders, graph, v);
 }
 
 void MaterialModule::bind_for_draw(std::uint32_t graph, const GpuMesh& mesh) const {

@@ -44,6 +44,7 @@ public:
     std::size_t image_bytes() const { return image_bytes_; }
     std::uint32_t constants_offset(std::uint32_t graph) const { return graphs_[graph].constants_offset; }
     const std::string& name(std::uint32_t graph) const { return graphs_[graph].graph.name; }
+    bool alpha(std::uint32_t graph) const { return graphs_[graph].graph.alpha; }
     // True if some graph can produce sheen or clearcoat (the G-buffer's params1).
     bool uses_params1() const;
 
@@ -54,6 +55,10 @@ public:
     // The geometry-pass program of a graph, compiled on first use (cached by
     // its GLSL in the ShaderLibrary, so graphs of one structure share it).
     GLuint program(ShaderLibrary& shaders, std::uint32_t graph, const ShaderVariant& base);
+    // The shadow-map caster program of a graph that drives alpha (SHADOW_PASS;
+    // world_map: the world's occlusion map). Uniforms: the map's view-projection
+    // at location 2, origin at 20, axis at 21 (shadow_frag.glsl's 2, 3, 4).
+    GLuint caster_program(ShaderLibrary& shaders, std::uint32_t graph, bool world_map);
     // Per draw: the graph's images and the mesh's attribute slots and texture space.
     void bind_for_draw(std::uint32_t graph, const GpuMesh& mesh) const;
 

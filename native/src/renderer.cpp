@@ -285,7 +285,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         g.emission = {m.emission[0] * m.emission_strength, m.emission[1] * m.emission_strength,
                       m.emission[2] * m.emission_strength, float(m.pass_index)};
         const float constants = m.graph >= 0 ? float(materials.constants_offset(std::uint32_t(m.graph))) : 0.0f;
-        g.mix = {float(m.mix_with), m.mix_probability, constants, 0.0f};
+        g.mix = {float(m.mix_with), m.mix_probability, constants, m.alpha};
         gpu_materials.push_back(g);
     }
     Buffer instance_buffer = make_storage_buffer(instances.data(), instances.size() * sizeof(gpu::GpuInstance), "instances");
@@ -349,6 +349,13 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     if (features.params1) base_variant.defines.push_back("GBUF_PARAMS1");
     if (features.ids) base_variant.defines.push_back("GBUF_IDS");
     if (features.uv) base_variant.defines.push_back("GBUF_UV");
+    // Stochastic transparency, only when some constant material is partly
+    // transparent (node materials carry their own switch, MATERIAL_ALPHA).
+    bool scene_alpha = false;
+    for (const Material& m : scene.materials())
+        if (m.graph < 0 && m.alpha < 1.0f) scene_alpha = true;
+    std::vector<std::string> caster_defines;
+    if (scene_alpha) caster_defines.push_back("SCENE_ALPHA");
     ShaderVariant lighting_variant = base_variant;
     lights.add_defines(lighting_variant);
     if (light_split) lighting_variant.defines.push_back("OUT_LIGHT_SPLIT");
@@ -357,7 +364,9 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     if (shadows.world_index() >= 0) lighting_variant.defines.push_back("HAS_WORLD_OCCLUSION");
     if (ao_pass) lighting_variant.defines.push_back("OUT_AO");
     if (shadow_pass) lighting_variant.defines.push_back("OUT_SHADOW");
-    const GLuint geometry = shaders->graphics_program("geometry_vert.glsl", "geometry_frag.glsl", base_variant);
+    ShaderVariant geometry_variant = base_variant;
+    if (scene_alpha) geometry_variant.defines.push_back("SCENE_ALPHA");
+    const GLuint geometry = shaders->graphics_program("geometry_vert.glsl", "geometry_frag.glsl", geometry_variant);
     const GLuint lighting = shaders->compute_program("lighting_comp.glsl", lighting_variant);
     auto pass_program = [&](Pass p, const char* mode) {
         ShaderVariant v = base_variant;
@@ -466,6 +475,31 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         result.timings.material_programs = distinct.size();
     }
     result.timings.upload_ms += timer.lap_ms();  // compiling stays out of the geometry pass's time
+    // Node materials whose alpha can be below 1 (their program discards).
+    auto is_alpha_graph = [&](std::uint32_t id) {
+        const Material& m = scene.materials()[id];
+        return m.graph >= 0 && !graph_failed[id] && this->materials.alpha(std::uint32_t(m.graph));
+    };
+    bool alpha_graphs = false;
+    for (auto& [id, program] : graph_programs)
+        if (is_alpha_graph(id)) alpha_graphs = true;
+    // Draws the slot ranges of the visible instances that use node material `id`.
+    auto draw_graph_material = [&](std::uint32_t id, GLuint program) {
+        const Material& material = scene.materials()[id];
+        bool bound = false;
+        for (const Culled& c : visible) {
+            const GpuMesh& mesh = scene.meshes()[c.draw->mesh];
+            for (std::size_t s = 0; s < mesh.slot_ranges.size(); ++s) {
+                if (&slot_material(*c.draw, s) != &material || mesh.slot_ranges[s].second == 0) continue;
+                if (!bound) glUseProgram(program);
+                bound = true;
+                this->materials.bind_for_draw(std::uint32_t(material.graph), mesh);
+                glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_ATTRIBUTES,
+                                 mesh.attributes ? mesh.attributes.get() : dummy_ssbo.get());
+                draw_range(c, mesh.slot_ranges[s].first, mesh.slot_ranges[s].second);
+            }
+        }
+    };
     // The geometry pass: constant materials with the shared program, then
     // each node material with its own over the slot ranges that use it.
     auto draw_geometry = [&](const ShadowModule::CasterTest& keep) -> std::uint64_t {
@@ -475,8 +509,25 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
             // Depth first, so node materials (the expensive fragments) shade
             // each pixel once: the colour pass then tests for equal depth
             // (gl_Position is invariant across the programs).
+            // Node materials that drive alpha lay down their own depth (their
+            // program discards what is transparent this sample).
             glColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
-            for (const Culled& c : visible) draw_range(c, 0, scene.meshes()[c.draw->mesh].triangle_count);
+            for (const Culled& c : visible) {
+                const GpuMesh& mesh = scene.meshes()[c.draw->mesh];
+                if (!alpha_graphs) {
+                    draw_range(c, 0, mesh.triangle_count);
+                    continue;
+                }
+                for (std::size_t s = 0; s < mesh.slot_ranges.size(); ++s)
+                    if (!is_alpha_graph(slot_material_id(*c.draw, s)))
+                        draw_range(c, mesh.slot_ranges[s].first, mesh.slot_ranges[s].second);
+            }
+            if (alpha_graphs) {
+                this->materials.bind_constants();
+                for (auto& [id, program] : graph_programs)
+                    if (is_alpha_graph(id)) draw_graph_material(id, program);
+                glUseProgram(geometry);
+            }
             glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
             glDepthMask(GL_FALSE);
             glDepthFunc(GL_EQUAL);
@@ -493,22 +544,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         }
         if (graph_programs.empty()) return n;
         this->materials.bind_constants();
-        for (auto& [id, program] : graph_programs) {
-            const Material& material = scene.materials()[id];
-            bool bound = false;
-            for (const Culled& c : visible) {
-                const GpuMesh& mesh = scene.meshes()[c.draw->mesh];
-                for (std::size_t s = 0; s < mesh.slot_ranges.size(); ++s) {
-                    if (&slot_material(*c.draw, s) != &material || mesh.slot_ranges[s].second == 0) continue;
-                    if (!bound) glUseProgram(program);
-                    bound = true;
-                    this->materials.bind_for_draw(std::uint32_t(material.graph), mesh);
-                    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_ATTRIBUTES,
-                                     mesh.attributes ? mesh.attributes.get() : dummy_ssbo.get());
-                    draw_range(c, mesh.slot_ranges[s].first, mesh.slot_ranges[s].second);
-                }
-            }
-        }
+        for (auto& [id, program] : graph_programs) draw_graph_material(id, program);
         glDepthMask(GL_TRUE);
         glDepthFunc(GL_GREATER);  // reversed Z
         return n;
@@ -532,8 +568,44 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         return inside(v.x, left, right) && inside(v.y, bottom, top);
     };
     auto draw_scene = [&]() { camera_instances_drawn += draw_geometry(in_view); };
+    // Shadow casters: everything with the shadow module's program, except
+    // node materials that drive alpha, drawn with their caster programs
+    // (which evaluate the graph for alpha) and the map's uniforms.
+    ShaderVariant world_caster_variant;
+    world_caster_variant.defines = caster_defines;
+    world_caster_variant.defines.push_back("SHADOW_PASS");
+    world_caster_variant.defines.push_back("WORLD_MAP");
     auto draw_shadow_casters = [&](const ShadowModule::CasterTest& casts) {
-        shadow_instances_drawn += draw_culled(casts, true);
+        if (!alpha_graphs) {
+            shadow_instances_drawn += draw_culled(casts, true);
+            return;
+        }
+        GLint caster = 0;
+        glGetIntegerv(GL_CURRENT_PROGRAM, &caster);
+        shadow_instances_drawn += cull(casts, true);
+        for (const Culled& c : visible) {
+            const GpuMesh& mesh = scene.meshes()[c.draw->mesh];
+            for (std::size_t s = 0; s < mesh.slot_ranges.size(); ++s)
+                if (!is_alpha_graph(slot_material_id(*c.draw, s)))
+                    draw_range(c, mesh.slot_ranges[s].first, mesh.slot_ranges[s].second);
+        }
+        float view_projection[16], origin[4], axis[4] = {0, 0, 0, 0};
+        glGetUniformfv(GLuint(caster), 2, view_projection);
+        glGetUniformfv(GLuint(caster), 3, origin);
+        glGetUniformfv(GLuint(caster), 4, axis);
+        const bool world_map =
+            GLuint(caster) == shaders->graphics_program("geometry_vert.glsl", "shadow_frag.glsl", world_caster_variant);
+        this->materials.bind_constants();
+        for (auto& [id, program] : graph_programs) {
+            if (!is_alpha_graph(id)) continue;
+            const GLuint p = this->materials.caster_program(*shaders, std::uint32_t(scene.materials()[id].graph),
+                                                            world_map);
+            glProgramUniformMatrix4fv(p, 2, 1, GL_FALSE, view_projection);
+            glProgramUniform4fv(p, 20, 1, origin);
+            glProgramUniform3fv(p, 21, 1, axis);
+            draw_graph_material(id, p);
+        }
+        glUseProgram(GLuint(caster));
     };
 
 
@@ -551,7 +623,8 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         fc.jitter = {float(jitter[3][0]), float(jitter[3][1]), float(cam.clip_start), 0.0f};
         fc.inv_projection = to_gpu(glm::inverse(projection));
         // Where in each light-shape cell (and on the sun's disk) this sample looks.
-        fc.sample_shift = {u[2], u[3], float(std::fmod(0.5 + sample * 0.6180339887498949, 1.0)), 0.0f};
+        fc.sample_shift = {u[2], u[3], float(std::fmod(0.5 + sample * 0.6180339887498949, 1.0)),
+                           float(sample)};
         glNamedBufferSubData(frame_buffer.get(), 0, sizeof(fc), &fc);
         glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
 
@@ -571,7 +644,8 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         // at sample 0 from what the visible surfaces need.
         if (!shadows.empty()) {
             if (sample == 0) shadows.fit(visible_receivers(cam, settings.width, settings.height));
-            shadows.render_sample(*shaders, {u[2], u[3]}, world_sample_point(sample), draw_shadow_casters);
+            shadows.render_sample(*shaders, {u[2], u[3]}, world_sample_point(sample), draw_shadow_casters,
+                                  caster_defines);
             shadow_ms += timer.lap_ms();
         }
 

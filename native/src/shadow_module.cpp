@@ -327,9 +327,11 @@ std::vector<int> ShadowModule::resolutions() const {
 }
 
 void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float, 2>& u,
-                                 const std::array<float, 2>& u_world, const DrawCasters& draw_casters) {
+                                 const std::array<float, 2>& u_world, const DrawCasters& draw_casters,
+                                 const std::vector<std::string>& caster_defines) {
     if (entries_.empty()) return;
     ShaderVariant variant;
+    variant.defines = caster_defines;
     variant.defines.push_back("SHADOW_PASS");
     const GLuint program = shaders.graphics_program("geometry_vert.glsl", "shadow_frag.glsl", variant);
     glUseProgram(program);

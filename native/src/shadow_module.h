@@ -41,6 +41,7 @@
 #include <array>
 #include <functional>
 #include <vector>
+#include <string>
 
 namespace deferred {
 
@@ -78,9 +79,10 @@ public:
     using DrawCasters = std::function<void(const CasterTest&)>;
     // Renders every kept light's maps (and the world's) for one film sample.
     // `u`: the sample's point on the light shapes; `u_world`: its direction
-    // of the world (uniform on the sphere).
+    // of the world (uniform on the sphere). `caster_defines` go into the
+    // casters' program (SCENE_ALPHA: partly transparent constant materials).
     void render_sample(ShaderLibrary& shaders, const std::array<float, 2>& u, const std::array<float, 2>& u_world,
-                       const DrawCasters& draw_casters);
+                       const DrawCasters& draw_casters, const std::vector<std::string>& caster_defines = {});
     int world_index() const { return world_index_; }  // shadow index of the world's map, -1: none
     void bind() const;
     bool empty() const { return entries_.empty(); }

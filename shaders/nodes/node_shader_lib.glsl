@@ -74,67 +74,90 @@ void node_emission(vec3 color, float strength, out Closure c) {
     c.emission = color * strength;
 }
 
-/* Transparent BSDF: coverage 0 (its colour is not used until transparency is
- * rendered; the add-on warns). */
+/* Transparent BSDF: Cycles passes its colour's fraction of the light behind
+ * (camera and shadow rays). Coverage (alpha) is what it does not pass:
+ * 1 - the colour's average; a tinted colour is rendered as that grey (the
+ * add-on notes it). It reflects and emits nothing. */
 void node_bsdf_transparent(vec3 color, out Closure c) {
     c = closure_none();
-    c.alpha = 0.0;
+    c.alpha = clamp01(1.0 - (color.r + color.g + color.b) * (1.0 / 3.0));
 }
 
-/* Mix Shader: closure weights (1 - fac) and fac. Emission and alpha are
- * linear in the weights and mix exactly; the BSDF is one side, picked with
- * its weight's probability from g_mix_u, which is then rescaled so nested
- * mixes stay uniform and stratified. A side that reflects nothing keeps the
- * other side's lobes scaled by the reflecting weight: exact for the diffuse
- * and metallic lobes (linear in the base colour); the dielectric specular
- * weight scales F0, which leaves the grazing-angle Fresnel rise unscaled. */
+/* A closure is the opaque part of the surface, with coverage `alpha`: the
+ * surface contributes alpha x (its lobes and emission) and lets 1 - alpha of
+ * what is behind through (the geometry pass keeps it with probability alpha).
+ *
+ * Mix Shader: closure weights (1 - fac) and fac, so the sides cover
+ * wa = (1 - fac) a.alpha and wb = fac b.alpha; the mix covers wa + wb and its
+ * opaque part is (wa A + wb B) / (wa + wb). Emission is linear and mixes
+ * exactly; the BSDF is one side, picked with probability wb / (wa + wb) from
+ * g_mix_u, which is then rescaled so nested mixes stay uniform and
+ * stratified. A side that reflects nothing (emission, a Transparent BSDF,
+ * none) keeps the other side's lobes scaled by its share: exact for the
+ * diffuse and metallic lobes (linear in the base colour); the dielectric
+ * specular weight scales F0, which leaves the grazing-angle Fresnel rise
+ * unscaled. */
 void node_mix_shader(float fac, Closure a, Closure b, out Closure c) {
     fac = clamp01(fac);
-    vec3 emission = mix(a.emission, b.emission, fac);
-    float alpha = mix(a.alpha, b.alpha, fac);
+    float wa = (1.0 - fac) * a.alpha, wb = fac * b.alpha;
+    float coverage = wa + wb;
+    float inv = coverage > 0.0 ? 1.0 / coverage : 0.0;
+    vec3 emission = (wa * a.emission + wb * b.emission) * inv;
     if (a.reflects == 0.0 || b.reflects == 0.0) {
-        /* Only one side has lobes: they scale by its weight (radiance is
-         * linear in base colour; the specular weight scales F0 and the
-         * sheen/clearcoat weights scale their lobes). */
-        float w = a.reflects != 0.0 ? 1.0 - fac : fac;
+        float w = (a.reflects != 0.0 ? wa : wb) * inv;
         c = a.reflects != 0.0 ? a : b;
         c.base_color *= w;
         c.specular *= w;
         c.sheen *= w;
         c.clearcoat *= w;
         c.reflects = (a.reflects != 0.0 || b.reflects != 0.0) ? 1.0 : 0.0;
-    } else if (g_mix_u < fac) {
-        c = b;
-        g_mix_u = g_mix_u / fac;
     } else {
-        c = a;
-        g_mix_u = (g_mix_u - fac) / max(1.0 - fac, 1e-30);
-    }
-    c.emission = emission;
-    c.alpha = alpha;
-}
-
-/* Add Shader: emission and alpha add; when both sides reflect, one is drawn
- * with probability 1/2 at twice its colour weight (exact for the diffuse and
- * metallic parts, which are linear in the base colour; the add-on warns). */
-void node_add_shader(Closure a, Closure b, out Closure c) {
-    vec3 emission = a.emission + b.emission;
-    float alpha = clamp01(a.alpha + b.alpha);
-    if (a.reflects == 0.0) {
-        c = b;
-    } else if (b.reflects == 0.0) {
-        c = a;
-    } else {
-        if (g_mix_u < 0.5) {
+        float pb = wb * inv;
+        if (g_mix_u < pb) {
             c = b;
-            g_mix_u = g_mix_u * 2.0;
+            g_mix_u = g_mix_u / pb;
         } else {
             c = a;
-            g_mix_u = g_mix_u * 2.0 - 1.0;
+            g_mix_u = (g_mix_u - pb) / max(1.0 - pb, 1e-30);
         }
-        c.base_color *= 2.0;
-        c.specular = min(c.specular * 2.0, 12.0);
     }
     c.emission = emission;
-    c.alpha = alpha;
+    c.alpha = coverage;
+}
+
+/* Add Shader: the closures sum. In coverage terms (see Mix Shader) the sides
+ * weigh wa = a.alpha and wb = b.alpha, their transparencies add, so the sum
+ * covers wa + wb - 1 (clamped to [0, 1]; a surface passing more than all the
+ * light behind it is not representable) and its opaque part is
+ * (wa A + wb B) / coverage. When both sides reflect, one is drawn with
+ * probability w / (wa + wb) at (wa + wb) / coverage times its colour weight
+ * (for two opaque sides: 1/2 and twice), exact for the diffuse and metallic
+ * parts, which are linear in the base colour (the add-on warns). */
+void node_add_shader(Closure a, Closure b, out Closure c) {
+    float wa = a.alpha, wb = b.alpha;
+    float coverage = clamp01(wa + wb - 1.0);
+    float inv = coverage > 0.0 ? 1.0 / coverage : 0.0;
+    vec3 emission = (wa * a.emission + wb * b.emission) * inv;
+    if (a.reflects == 0.0 || b.reflects == 0.0) {
+        float w = (a.reflects != 0.0 ? wa : wb) * inv;
+        c = a.reflects != 0.0 ? a : b;
+        c.base_color *= w;
+        c.specular = min(c.specular * w, 12.0);
+        c.sheen *= w;
+        c.clearcoat *= w;
+    } else {
+        float pb = wb / max(wa + wb, 1e-30);
+        if (g_mix_u < pb) {
+            c = b;
+            g_mix_u = g_mix_u / max(pb, 1e-30);
+        } else {
+            c = a;
+            g_mix_u = (g_mix_u - pb) / max(1.0 - pb, 1e-30);
+        }
+        float scale = (wa + wb) * inv;
+        c.base_color *= scale;
+        c.specular = min(c.specular * scale, 12.0);
+    }
+    c.emission = emission;
+    c.alpha = coverage;
 }

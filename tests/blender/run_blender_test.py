@@ -47,6 +47,7 @@ TESTS = {
     "world_ao": (ANALYTIC, True),
     "node_materials": (ANALYTIC, True),
     "node_probes": (ANALYTIC, True),
+    "transparency": (ANALYTIC, True),
 }
 BENCHMARKS = {"bench_export": (None, True)}
 

@@ -33,6 +33,7 @@ set(DEFERRED_BLENDER_TESTS
     world_ao
     node_materials
     node_probes
+    transparency
 )
 
 foreach(_name IN LISTS DEFERRED_BLENDER_TESTS)

@@ -237,6 +237,7 @@ class GraphBuilder:
         self._emitted = {}       # (bump variant, ctx key, node pointer) -> (IR index, outputs) or None
         self._in_progress = set()
         self.variant = ()        # bump offsets entered, innermost last (nodes re-emitted per variant)
+        self.uses_alpha = False  # some closure's alpha can be below 1 (MATERIAL_ALPHA)
         self._none = None
 
     def note(self, text):
@@ -378,5 +379,5 @@ def _build(material, images):
             if s is not None and s.is_linked:
                 g.note(f"{name} (not rendered)")
     ir = {"name": material.name, "nodes": g.nodes, "surface": surface, "constants": g.constants,
-          "images": g.images, "attributes": g.attributes}
+          "images": g.images, "attributes": g.attributes, "alpha": g.uses_alpha}
     return MaterialGraph(ir, g.notes, list(g.attributes))

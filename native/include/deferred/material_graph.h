@@ -50,6 +50,10 @@ struct MaterialGraph {
     std::vector<float> constants;      // per material: values, not structure
     std::vector<std::uint32_t> images;       // image slot -> image id (Renderer::add_image)
     std::vector<std::string> attributes;     // attribute slot k (Shading "attrK") -> mesh attribute name
+    // The closure's alpha can be below 1 (Principled Alpha, a Transparent
+    // BSDF): the program discards by it (stochastic transparency), draws
+    // its own depth pre-pass and its own shadow-map casters.
+    bool alpha = false;
 };
 
 // An image for texture nodes: RGBA, row 0 at the bottom (Blender's order).

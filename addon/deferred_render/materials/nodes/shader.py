@@ -1,8 +1,8 @@
 """Shader nodes -> closures (shaders/nodes/node_shader_lib.glsl).
 
 What the G-buffer cannot hold is named in the material's warning: Principled
-subsurface, transmission, anisotropy and a clearcoat normal; alpha below 1
-(transparency is not rendered yet: surfaces are drawn opaque); Add Shader of
+subsurface, transmission, anisotropy and a clearcoat normal; a tinted
+Transparent BSDF (rendered as its grey); Add Shader of
 two reflecting BSDFs (drawn one at a time at twice the weight, exact for the
 diffuse and metallic parts only). Shader nodes without a spec fall back to a
 Diffuse BSDF of their Color input (builder.py, '#unsupported_shader').
@@ -41,7 +41,7 @@ def principled(b):
         b._graph.note(f"'{b.node.name}': 'Clearcoat Normal' (the base normal is used)")
     alpha = _value(b, "Alpha")
     if alpha is None or alpha < 1.0:
-        b._graph.note(f"'{b.node.name}': Alpha below 1 is drawn opaque (transparency is not rendered yet)")
+        b._graph.uses_alpha = True  # stochastic transparency (the program discards)
     b.call("node_bsdf_principled",
            [b.input("Base Color", "color"), b.input("Metallic", "float"), b.input("Specular", "float"),
             b.input("Specular Tint", "float"), b.input("Roughness", "float"), b.input("Sheen", "float"),
@@ -89,7 +89,14 @@ def emission(b):
 
 @register("ShaderNodeBsdfTransparent")
 def transparent(b):
-    b._graph.note(f"'{b.node.name}': Transparent BSDF is drawn opaque (transparency is not rendered yet)")
+    b._graph.uses_alpha = True
+    color = _value(b, "Color")
+    if color is None:
+        b._graph.note(f"'{b.node.name}': Transparent BSDF of a linked colour: the light it passes is "
+                      f"its colour's grey (a tint is not rendered)")
+    elif max(color[:3]) - min(color[:3]) > 1e-6:
+        b._graph.note(f"'{b.node.name}': Transparent BSDF tint rendered as its grey "
+                      f"({sum(color[:3]) / 3:.3g})")
     b.call("node_bsdf_transparent", [b.input("Color", "color")], [("BSDF", "closure")])
 
 

@@ -84,4 +84,13 @@ TEST_F(ShaderErrors, EveryShipedVariantFamilyCompiles) {
         v.defines.push_back("PASS_ID " + std::to_string(p));
         EXPECT_NE(shaders().compute_program("passes_comp.glsl", v), 0u) << pass_info(Pass(p)).name;
     }
+    // Stochastic transparency of constant materials: geometry and casters.
+    ShaderVariant alpha = full;
+    alpha.defines.push_back("SCENE_ALPHA");
+    EXPECT_NE(shaders().graphics_program("geometry_vert.glsl", "geometry_frag.glsl", alpha), 0u);
+    ShaderVariant casters;
+    casters.defines = {"SCENE_ALPHA", "SHADOW_PASS"};
+    EXPECT_NE(shaders().graphics_program("geometry_vert.glsl", "shadow_frag.glsl", casters), 0u);
+    casters.defines.push_back("WORLD_MAP");
+    EXPECT_NE(shaders().graphics_program("geometry_vert.glsl", "shadow_frag.glsl", casters), 0u);
 }

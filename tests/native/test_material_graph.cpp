@@ -344,6 +344,50 @@ MaterialGraph image_emission_graph(std::uint32_t image_id) {
     return g;
 }
 
+TEST_F(MaterialGraphRender, TransparencyCoversAsAlphaSays) {
+    // Stochastic transparency: an emitting plane of coverage 0.25 over a
+    // black world averages 0.25 of its emission, as a node material (Mix of
+    // Emission and a white Transparent BSDF at 0.75; MATERIAL_ALPHA) and as
+    // a constant material of alpha 0.25 (SCENE_ALPHA). Per pixel, 256
+    // Bernoulli(0.25) samples: the image mean's standard deviation is 0.0017.
+    set_world_color(r, 0, 0, 0);
+    MaterialGraph g;
+    g.constants = {1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 0.75f};
+    g.nodes.push_back({"node_emission", {const_arg(SocketType::Color, 1), const_arg(SocketType::Float, 0)},
+                       {SocketType::Closure}});
+    g.nodes.push_back({"node_bsdf_transparent", {const_arg(SocketType::Color, 4)}, {SocketType::Closure}});
+    g.nodes.push_back({"node_mix_shader",
+                       {const_arg(SocketType::Float, 7), link_arg(SocketType::Closure, 0, 0, SocketType::Closure),
+                        link_arg(SocketType::Closure, 1, 0, SocketType::Closure)},
+                       {SocketType::Closure}});
+    g.surface_node = 2;
+    g.alpha = true;
+    plane_with(r.add_graph_material(Material{}, g));
+    RenderSettings s = small();
+    s.samples = 256;
+    s.filter_width = 0.01f;  // every sample inside the plane, which fills the frame
+    auto mean_of = [](const FrameResult& f) {
+        const PassImage& img = *f.find(Pass::Combined);
+        double sum = 0;
+        for (int y = 0; y < img.height; ++y)
+            for (int x = 0; x < img.width; ++x) sum += pixel3(img, x, y).y;
+        return sum / (img.width * img.height);
+    };
+    const double graph_mean = mean_of(r.render(cam, s));
+
+    r.clear_scene();
+    set_world_color(r, 0, 0, 0);
+    Material m;
+    m.base_color = {0, 0, 0};
+    m.emission = {1, 1, 1};
+    m.alpha = 0.25f;
+    plane_with(r.add_material(m));
+    const double constant_mean = mean_of(r.render(cam, s));
+    std::printf("coverage 0.25: node material %.4f, constant material %.4f\n", graph_mean, constant_mean);
+    EXPECT_NEAR(graph_mean, 0.25, 0.006);
+    EXPECT_NEAR(constant_mean, 0.25, 0.006);
+}
+
 TEST_F(MaterialGraphRender, KeyedImagesOutliveTheSceneThatUsesThem) {
     // A persistent renderer (the add-on's Persistent Data) keeps an image
     // with a key across clear_scene() while each scene uses it: the next

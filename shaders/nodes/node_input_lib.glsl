@@ -118,8 +118,18 @@ void node_light_path(out float is_camera, out float is_shadow, out float is_diff
                      out float is_singular, out float is_reflection, out float is_transmission,
                      out float ray_length, out float ray_depth, out float diffuse_depth, out float glossy_depth,
                      out float transparent_depth, out float transmission_depth) {
+#ifdef SHADOW_PASS
+    /* A shadow-map caster (a node material that drives alpha) answers for
+     * Cycles' shadow rays through transparent surfaces, whose shader runs
+     * with PATH_RAY_SHADOW alone (integrate_transparent_shadow): the
+     * "Is Shadow Ray" trick of shadowless glass. Ray length stays the
+     * camera ray's (the shadow ray's receiver is not known here). */
+    is_camera = 0.0;
+    is_shadow = 1.0;
+#else
     is_camera = 1.0;
     is_shadow = 0.0;
+#endif
     is_diffuse = 0.0;
     is_glossy = 0.0;
     is_singular = 0.0;

@@ -6,7 +6,10 @@ in front of it, under a sun light (so their shadows fall on the floor):
   * a pane whose Alpha comes from a Checker texture (0.1 / 0.9; node path),
   * a sphere mixing Diffuse with a white Transparent BSDF at factor 0.35,
   * two overlapping panes of alpha 0.5 (transmittance multiplies: 0.25),
-  * a fully transparent plane (Principled Alpha 0): invisible, no shadow.
+  * a fully transparent plane (Principled Alpha 0): invisible, no shadow,
+  * a "shadowless" sphere: Diffuse mixed with a Transparent BSDF by Light
+    Path > Is Shadow Ray (opaque to the camera, casts no shadow; its caster
+    program evaluates the graph as a shadow ray).
 Both engines render Combined at the same resolution; Cycles at 1024
 samples (the reference), ours at 256. Per object (object-index pass of
 Cycles, eroded) and on the floor's shadow regions the mean of ours must be
@@ -81,6 +84,20 @@ def diffuse_transparent_mix(nodes, links, bsdf):
     links.new(mix.outputs[0], out.inputs["Surface"])
 
 
+def shadowless(nodes, links, bsdf):
+    out = nodes["Material Output"]
+    nodes.remove(bsdf)
+    diffuse = nodes.new("ShaderNodeBsdfDiffuse")
+    diffuse.inputs["Color"].default_value = (0.8, 0.3, 0.8, 1.0)
+    transparent = nodes.new("ShaderNodeBsdfTransparent")
+    path = nodes.new("ShaderNodeLightPath")
+    mix = nodes.new("ShaderNodeMixShader")
+    links.new(path.outputs["Is Shadow Ray"], mix.inputs["Fac"])
+    links.new(diffuse.outputs[0], mix.inputs[1])
+    links.new(transparent.outputs[0], mix.inputs[2])
+    links.new(mix.outputs[0], out.inputs["Surface"])
+
+
 def add(scene, name, mesh_op, location, mat, index, rotation=(0.0, 0.0, 0.0), **kwargs):
     mesh_op(location=location, rotation=rotation, **kwargs)
     ob = bpy.context.object
@@ -119,6 +136,8 @@ def build_scene():
     add(scene, "PaneB", ops.primitive_plane_add, (2.4, 0.2, 1.0), half, 6, rotation=upright, size=1.4)
     add(scene, "Invisible", ops.primitive_plane_add, (0.0, -1.2, 1.0), material("alpha 0", principled((1, 1, 1), 0.0)),
         7, rotation=upright, size=1.4)
+    add(scene, "Shadowless", ops.primitive_uv_sphere_add, (-1.6, 1.6, 0.5), material("shadowless", shadowless), 8,
+        radius=0.45)
     cam = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
     scene.collection.objects.link(cam)
     cam.location = (0.0, -9.0, 3.0)

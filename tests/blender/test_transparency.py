@@ -201,9 +201,35 @@ def main():
     diff = np.abs(ours - cycles).mean(axis=2)
     print(f"  whole image: mean |ours - Cycles| {diff.mean():.4f}, relMSE "
           f"{float(np.mean((ours - cycles) ** 2 / (cycles ** 2 + 0.01))):.2e}")
+    checks.run("film transparent", film_transparent, checks, scene)
     checks.run("bad alpha values", bad_alpha, checks, scene)
     checks.run("1000 overlapping panes", many_panes, checks, scene)
     checks.finish()
+
+
+def film_transparent(checks, scene):
+    """Film > Transparent: the alpha over the panes (no wall or floor behind
+    them: both hidden) is Cycles' 1 - transmittance, per pane."""
+    for name in ("Floor", "Back"):
+        scene.objects[name].hide_render = True
+    scene.render.film_transparent = True
+    alphas = {}
+    for engine in ("CYCLES", "DEFERRED_RENDER"):
+        scene.render.engine = engine
+        channels = U.read_exr(U.render_exr(os.path.join(OUT, "film_" + engine.lower()), scene))
+        alphas[engine] = channels["ViewLayer.Combined.A"].astype(np.float64)
+    scene.render.film_transparent = False
+    for name in ("Floor", "Back"):
+        scene.objects[name].hide_render = False
+    c, o = alphas["CYCLES"], alphas["DEFERRED_RENDER"]
+    h, w = c.shape
+    rows = slice(int(h * 0.3), int(h * 0.7))
+    for label, cols in (("alpha 0.4 pane", (0.12, 0.26)), ("checker alpha pane", (0.33, 0.45)),
+                        ("two 0.5 panes", (0.76, 0.88))):
+        block = (rows, slice(int(w * cols[0]), int(w * cols[1])))
+        print(f"  film alpha, {label}: Cycles {c[block].mean():.4f}, ours {o[block].mean():.4f}")
+        checks.check(abs(o[block].mean() - c[block].mean()) < 0.01, f"film alpha over the {label} as Cycles'",
+                     f"{o[block].mean():.4f} vs {c[block].mean():.4f}")
 
 
 def bad_alpha(checks, scene):

@@ -68,6 +68,21 @@ layout(binding = TEX_MATERIAL_IMAGE0) uniform sampler2D material_images[MATERIAL
 #endif
 
 /* A per-pixel value in [0, 1) (integer hash, Jarzynski & Olano 2020, pcg). */
+#if (defined(SCENE_ALPHA) || defined(MATERIAL_ALPHA)) && !defined(SHADOW_PASS)
+/* x = 0: stochastic transparency (the lit G-buffer); x = 1: the data passes'
+ * G-buffer, where a surface stays when its alpha reaches y, the view layer's
+ * Alpha Threshold (Cycles' film_write_data_passes). */
+layout(location = 22) uniform vec2 alpha_mode;
+bool transparent_here(float alpha) {
+    if (alpha_mode.x > 0.5) return alpha < alpha_mode.y;
+    return transparency_random(uvec2(gl_FragCoord.xy), v_instance, v_triangle) >= alpha;
+}
+#else
+bool transparent_here(float alpha) {
+    return transparency_random(uvec2(gl_FragCoord.xy), v_instance, v_triangle) >= alpha;
+}
+#endif
+
 float pixel_hash(uvec2 p) {
     uint v = p.x * 1973u + p.y * 9277u;
     v = v * 747796405u + 2891336453u;
@@ -172,7 +187,7 @@ void main() {
     GpuMaterial m = pick_material(v_material);
 #ifdef SCENE_ALPHA
     /* Partly transparent (mix.w: alpha): kept with probability alpha. */
-    if (transparency_random(uvec2(gl_FragCoord.xy), v_instance, v_triangle) >= m.mix.w) discard;
+    if (transparent_here(m.mix.w)) discard;
 #endif
 #endif
 
@@ -204,8 +219,7 @@ void main() {
     Closure c;
     material_graph_eval(c);
 #ifdef MATERIAL_ALPHA
-    if (transparency_random(uvec2(gl_FragCoord.xy), v_instance, v_triangle) >= clamp(finite_or(c.alpha, 1.0), 0.0, 1.0))
-        discard;
+    if (transparent_here(clamp(finite_or(c.alpha, 1.0), 0.0, 1.0))) discard;
 #endif
 #ifdef SHADOW_PASS
     vec3 v = v_position - caster_origin.xyz;

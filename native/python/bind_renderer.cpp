@@ -443,7 +443,7 @@ void declare_renderer(py::module_& m) {
              [](PyRenderer& self, const Camera& camera, int width, int height, const std::vector<std::string>& passes,
                 bool film_transparent, float mist_start, float mist_depth, const std::string& mist_falloff,
                 int samples, float filter_width, bool light_culling, float light_threshold, bool shadows,
-                int shadow_resolution, float shadow_quality) {
+                int shadow_resolution, float shadow_quality, float alpha_threshold) {
                  RenderSettings s;
                  s.width = width;
                  s.height = height;
@@ -466,6 +466,7 @@ void declare_renderer(py::module_& m) {
                  s.shadows = shadows;
                  s.shadow_resolution = shadow_resolution;
                  s.shadow_quality = shadow_quality;
+                 s.alpha_threshold = alpha_threshold;
                  FrameResult frame;
                  {
                      py::gil_scoped_release release;
@@ -485,7 +486,7 @@ void declare_renderer(py::module_& m) {
              py::arg("mist_start") = 5.0f, py::arg("mist_depth") = 25.0f, py::arg("mist_falloff") = "QUADRATIC",
              py::arg("samples") = 1, py::arg("filter_width") = 1.5f, py::arg("light_culling") = true,
              py::arg("light_threshold") = 1e-3f, py::arg("shadows") = true, py::arg("shadow_resolution") = 1024,
-             py::arg("shadow_quality") = 1.0f);
+             py::arg("shadow_quality") = 1.0f, py::arg("alpha_threshold") = 0.5f);
 }
 
 }  // namespace deferred::python

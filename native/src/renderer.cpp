@@ -208,6 +208,8 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         throw InvalidInput("filter_width must be in (0, 100] pixels");
     if (!(settings.light_threshold >= 0.0f) || !std::isfinite(settings.light_threshold))
         throw InvalidInput("light_threshold must be a finite number >= 0");
+    if (!(settings.alpha_threshold >= 0.0f && settings.alpha_threshold <= 1.0f))
+        throw InvalidInput("alpha_threshold must be in [0, 1]");
     if (!(settings.shadow_quality > 0.0f && settings.shadow_quality <= 16.0f))
         throw InvalidInput("shadow_quality must be in (0, 16] texels per pixel");
     if (!std::isfinite(settings.mist.start) || !std::isfinite(settings.mist.depth))
@@ -568,6 +570,39 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         return inside(v.x, left, right) && inside(v.y, bottom, top);
     };
     auto draw_scene = [&]() { camera_instances_drawn += draw_geometry(in_view); };
+    // Data passes (Depth, Position, Normal, UV, indices) follow the Alpha
+    // Threshold, not the stochastic coverage: with transparency in the scene
+    // they come from a G-buffer of their own each sample, where a surface
+    // stays when its alpha reaches the threshold.
+    auto is_data_pass = [](Pass p) {
+        return p == Pass::Depth || p == Pass::Position || p == Pass::Normal || p == Pass::UV ||
+               p == Pass::IndexOB || p == Pass::IndexMA;
+    };
+    bool data_gbuffer = false;
+    if (scene_alpha || alpha_graphs)
+        for (auto& [p, image] : pass_images)
+            if (is_data_pass(p)) data_gbuffer = true;
+    auto set_alpha_mode = [&](bool data) {
+        const float mode = data ? 1.0f : 0.0f;
+        if (scene_alpha) glProgramUniform2f(geometry, 22, mode, settings.alpha_threshold);
+        for (auto& [id, program] : graph_programs)
+            if (is_alpha_graph(id)) glProgramUniform2f(program, 22, mode, settings.alpha_threshold);
+    };
+    if (scene_alpha || alpha_graphs) set_alpha_mode(false);
+    auto run_passes = [&](int sample, bool data) {
+        // Filtered passes every sample, the rest at sample 0.
+        for (auto& [p, image] : pass_images) {
+            const bool first_only = pass_from_first_sample(p);
+            // Shadow: resolved below; AO: accumulated by the lighting pass.
+            if ((first_only && sample > 0) || p == Pass::Shadow || p == Pass::AO) continue;
+            if (data_gbuffer && is_data_pass(p) != data) continue;
+            glUseProgram(pass_program(p, first_only ? nullptr : "ACCUMULATE"));
+            gbuffer.bind_textures();
+            glBindImageTexture(IMG_PASS_OUT, image.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
+            glDispatchCompute(groups_x, groups_y, 1);
+        }
+        glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+    };
     // Shadow casters: everything with the shadow module's program, except
     // node materials that drive alpha, drawn with their caster programs
     // (which evaluate the graph for alpha) and the map's uniforms.
@@ -628,6 +663,23 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         glNamedBufferSubData(frame_buffer.get(), 0, sizeof(fc), &fc);
         glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
 
+        if (data_gbuffer) {
+            set_alpha_mode(true);
+            gbuffer.bind_for_geometry();
+            glEnable(GL_DEPTH_TEST);
+            glDepthFunc(GL_GREATER);
+            glDepthMask(GL_TRUE);
+            glDisable(GL_CULL_FACE);
+            glDisable(GL_BLEND);
+            draw_scene();
+            glBindFramebuffer(GL_FRAMEBUFFER, 0);
+            glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+            geometry_ms += timer.lap_ms();
+            run_passes(sample, true);
+            set_alpha_mode(false);
+            passes_ms += timer.lap_ms();
+        }
+
         // Geometry pass.
         gbuffer.bind_for_geometry();
         glEnable(GL_DEPTH_TEST);
@@ -681,17 +733,8 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         check_gl("lighting pass");
         lighting_ms += timer.lap_ms();
 
-        // Other passes: filtered ones every sample, the rest at sample 0.
-        for (auto& [p, image] : pass_images) {
-            const bool first_only = pass_from_first_sample(p);
-            // Shadow: resolved below; AO: accumulated by the lighting pass.
-            if ((first_only && sample > 0) || p == Pass::Shadow || p == Pass::AO) continue;
-            glUseProgram(pass_program(p, first_only ? nullptr : "ACCUMULATE"));
-            gbuffer.bind_textures();
-            glBindImageTexture(IMG_PASS_OUT, image.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
-            glDispatchCompute(groups_x, groups_y, 1);
-        }
-        glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+        // Other passes (the data passes came from their own G-buffer above).
+        run_passes(sample, false);
         check_gl("passes");
         passes_ms += timer.lap_ms();
     }

@@ -177,7 +177,21 @@ def main():
         checks.finish()
     scene = build_scene()
     cycles, index = render(scene, "CYCLES")
-    ours, _ = render(scene, "DEFERRED_RENDER")
+    ours, our_index = render(scene, "DEFERRED_RENDER")
+    # Object Index follows the view layer's Alpha Threshold (0.5), as in
+    # Cycles: the alpha 0.4 pane and the 0.1 checker squares are not in it,
+    # the two 0.5 panes and 0.9 squares are. Edges may differ (filter).
+    inner = U.interior_mask(index >= 0, radius=1)
+    same = float((our_index[inner] == index[inner]).mean())
+    print(f"  Object Index equal to Cycles' on {same:.4f} of the pixels")
+    checks.check(same > 0.98, "Object Index follows the Alpha Threshold as in Cycles", f"{same:.4f}")
+    h, w = index.shape
+    block = (slice(int(h * 0.3), int(h * 0.6)), slice(int(w * 0.12), int(w * 0.26)))  # behind the 0.4 pane
+    behind = float((our_index[block] == index[block]).mean())
+    # Measured 0.948: Cycles itself keeps the pane's index on ~5 % of these
+    # pixels (scattered, at sample 0); without the rule ours would on ~40 %.
+    print(f"  ... behind the alpha 0.4 pane: {behind:.4f} (the pane's own index on 40 % without the rule)")
+    checks.check(behind > 0.9, "behind the alpha 0.4 pane the index is mostly what is behind it", f"{behind:.4f}")
     checks.check(np.isfinite(ours).all(), "the image is finite")
     # Regions by what Cycles' first opaque-enough hit is (its Index pass
     # follows the alpha threshold), eroded so filtered edges do not count.

@@ -265,6 +265,7 @@ class FinalRender:
         t_render = time.perf_counter()
         kwargs = dict(passes=requested, film_transparent=bool(scene.render.film_transparent),
                       samples=samples, filter_width=_filter_width(scene),
+                      alpha_threshold=min(max(float(getattr(self.view_layer, "pass_alpha_threshold", 0.5)), 0.0), 1.0),
                       **_light_settings(scene), **mist)
         try:
             images = self._render_cancellable(renderer, mod, camera, frame, kwargs)

@@ -80,6 +80,10 @@ struct RenderSettings {
     bool shadows = true;
     int shadow_resolution = 1024;
     float shadow_quality = 1.0f;
+    // The view layer's Alpha Threshold: Depth, Position, Normal, UV and the
+    // indices come from the first surface whose alpha reaches it (Cycles'
+    // film_write_data_passes; 0: the first surface whatever its alpha).
+    float alpha_threshold = 0.5f;
 };
 
 // One pass of a finished frame: rows bottom-up (row 0 is the bottom of the

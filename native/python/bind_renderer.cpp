@@ -19,7 +19,8 @@ const T* borrow(const py::handle& obj, const char* name, std::initializer_list<p
         throw py::value_error(std::string(name) + ": expected a numpy array, got " +
                               std::string(py::str(py::type::of(obj).attr("__name__"))));
     py::array a = py::reinterpret_borrow<py::array>(obj);
-    if (!a.dtype().is(py::dtype::of<T>()))
+    // equal(), not is(): a dtype that came through pickle is an equal, distinct object.
+    if (!a.dtype().equal(py::dtype::of<T>()))
         throw py::value_error(std::string(name) + ": expected dtype " + std::string(py::str(py::dtype::of<T>())) +
                               ", got " + std::string(py::str(a.dtype())));
     if (!(a.flags() & py::array::c_style))

@@ -54,11 +54,21 @@ class BadInput(unittest.TestCase):
             self.assertIn(needle, message, f"message was: {message}")
         return message
 
+    def test_arrays_through_pickle(self):
+        """An array that came through pickle (another process, a capture)
+        has a dtype equal to float32 but not the same object: accepted."""
+        import pickle
+        p, i, n, uv, m = plane()
+        p2, i2 = pickle.loads(pickle.dumps((p, i)))
+        self.assertIsNot(p2.dtype, np.dtype(np.float32))
+        self.assertEqual(self.r.add_mesh(p2, i2), 0)
+
     def test_mesh_arrays(self):
         p, i, n, uv, m = plane()
         r = self.r
         cases = [
             (lambda: r.add_mesh(p.astype(np.float64), i), "positions", "dtype float32"),
+            (lambda: r.add_mesh(p.astype(">f4"), i), "positions", "dtype float32"),  # big-endian
             (lambda: r.add_mesh(p.tolist(), i), "positions", "numpy array"),
             (lambda: r.add_mesh(None, i), "positions", "numpy array"),
             (lambda: r.add_mesh(p[:, :2].copy(), i), "positions", "dimension 1 must be 3"),

@@ -238,13 +238,42 @@ float diffuse_lobe_albedo(SurfaceParams s, float mu_v) {
     return s.diffuse_sigma >= 0.0 ? oren_nayar_albedo(mu_v, s.diffuse_sigma) : principled_diffuse_albedo(mu_v, s.roughness);
 }
 
-/* The diffuse group alone (Burley + sheen), f cos for unit radiance. */
-vec3 principled_eval_diffuse(SurfaceParams s, PrincipledWeights w, vec3 N, vec3 V, vec3 L) {
+/* Cycles 3.4 evaluates a light sample as a transmission when it lies below
+ * the smooth normal sd->N (shader_bsdf_is_transmission), where reflection
+ * closures give nothing, whatever normal Bump or a Normal Map gave them.
+ * BSDF-sampled glossy directions are not tested against sd->N (only against
+ * Ng), so this applies to the glossy lobes' light samples: 1 above the
+ * smooth normal's horizon, else 0. (Diffuse lobes get bump_shadowing_term,
+ * which includes it, for both techniques.) */
+float smooth_side(SurfaceParams s, vec3 L) { return dot(s.Ns, L) < 0.0 ? 0.0 : 1.0; }
+
+/* Diffuse closures whose normal N is not the smooth one Ns (Bump, Normal
+ * Map) are darkened towards the smooth normal's terminator: Chiang, Li and
+ * Burley 2019, "Taming the Shadow Terminator", as Cycles 3.4's bsdf_eval and
+ * bsdf_sample apply it (bump_shadowing_term(sd->N, sc->N, L)). */
+float bump_shadowing_term(vec3 Ns, vec3 N, vec3 L) {
+    if (Ns == N) return 1.0;
+    float denom = dot(N, L) * dot(Ns, N);
+    float g = denom != 0.0 ? dot(Ns, L) / denom : 0.0;
+    if (g >= 1.0) return 1.0;
+    if (g < 0.0) return 0.0;
+    float g2 = g * g;
+    return -g2 * g + g2 + g;
+}
+
+/* The diffuse group alone (Burley or Oren-Nayar, + sheen), f cos for unit
+ * radiance, without the bump shadowing term. */
+vec3 principled_eval_diffuse_unbumped(SurfaceParams s, PrincipledWeights w, vec3 N, vec3 V, vec3 L) {
     float NdotL = dot(N, L), NdotV = dot(N, V), LdotV = dot(L, V);
     vec3 d = w.diffuse * (s.diffuse_sigma >= 0.0 ? oren_nayar_factor(NdotL, NdotV, LdotV, s.diffuse_sigma)
                                                  : principled_diffuse_factor(NdotL, NdotV, LdotV, s.roughness));
     if (w.sheen != vec3(0.0)) d += w.sheen * principled_sheen_factor(N, V, L);
     return d;
+}
+
+/* ... and with it: what a light (or world) direction gives the diffuse group. */
+vec3 principled_eval_diffuse(SurfaceParams s, PrincipledWeights w, vec3 N, vec3 V, vec3 L) {
+    return principled_eval_diffuse_unbumped(s, w, N, V, L) * bump_shadowing_term(s.Ns, N, L);
 }
 
 LobeEval principled_eval(SurfaceParams s, PrincipledWeights w, vec3 N, vec3 V, vec3 L) {

@@ -18,6 +18,9 @@
  *  params1       RGBA16F       sheen, sheen tint, clearcoat, clearcoat rough.     scene has sheen/clearcoat (GBUF_PARAMS1)
  *  ids           RG32UI        object pass index, material pass index             IndexOB/IndexMA (GBUF_IDS)
  *  uv            RG32F         active UV map                                      UV pass (GBUF_UV)
+ *  smooth normal RG16 unorm    the interpolated (smooth) normal, octahedral,      a node material bends its
+ *                              when closures take another (Bump, Normal Map):     closure normals
+ *                              light samples below its horizon give nothing       (GBUF_SMOOTH_NORMAL)
  *
  * Half floats keep 11 significant bits (2.4e-4 relative), well inside the
  * lighting's accuracy budget; emission is float so node outputs reach the
@@ -34,6 +37,7 @@ struct SurfaceParams {
     float metallic, roughness, specular, specular_tint;
     float sheen, sheen_tint, clearcoat, clearcoat_roughness;
     vec3 N;
+    vec3 Ns; /* the smooth normal (Cycles' sd->N); N where closures keep it */
 };
 
 SurfaceParams gbuffer_unpack(vec4 base, vec4 params0, vec4 params1, vec2 normal_enc) {
@@ -50,5 +54,6 @@ SurfaceParams gbuffer_unpack(vec4 base, vec4 params0, vec4 params1, vec2 normal_
     s.clearcoat = params1.z;
     s.clearcoat_roughness = params1.w;
     s.N = octahedral_decode(normal_enc);
+    s.Ns = s.N;
     return s;
 }

@@ -31,6 +31,9 @@ layout(location = OUT_EMISSION) out vec4 out_emission;
 layout(location = OUT_BASE) out vec4 out_base;
 layout(location = OUT_PARAMS0) out vec4 out_params0;
 layout(location = OUT_NORMAL) out vec2 out_normal;
+#ifdef GBUF_SMOOTH_NORMAL
+layout(location = OUT_SMOOTH_NORMAL) out vec2 out_smooth_normal;
+#endif
 #endif
 #ifdef GBUF_PARAMS1
 layout(location = OUT_PARAMS1) out vec4 out_params1;
@@ -258,6 +261,9 @@ void main() {
 #ifdef GBUF_IDS
     out_ids = uvec2(v_object_index, uint(m.emission.w));
 #endif
+#endif
+#if defined(GBUF_SMOOTH_NORMAL) && !defined(SHADOW_PASS)
+    out_smooth_normal = octahedral_encode(N);
 #endif
 #ifdef GBUF_UV
     out_uv = v_uv;

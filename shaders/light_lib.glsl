@@ -216,9 +216,10 @@ LightContribution shade_planar_light(vec3 c, vec3 a, vec3 b, bool ellipse, bool 
             if (cos_l <= 0.0) continue;
             float geom = cos_l / t2 * weight;
             float att = spot ? spot_attenuation(light, -L) : 1.0;
+            float side = smooth_side(s, L);
             vec3 diff = principled_eval_diffuse(s, w, N, V, L);
-            vec3 spec = principled_specular(w, N, V, L);
-            float cc = principled_clearcoat(w, N, V, L);
+            vec3 spec = principled_specular(w, N, V, L) * side;
+            float cc = principled_clearcoat(w, N, V, L) * side;
             if (bsdf_sampling) {
                 /* Power heuristic pl^2 / (pl^2 + pb^2), as a ratio: pl alone
                  * overflows float for tiny lights (1 / area). */
@@ -289,7 +290,7 @@ LightContribution shade_light_unshadowed(GpuLight light, SurfaceParams s, Princi
             LobeEval e = principled_eval(s, w, N, V, L);
             vec3 scale = S * (att / (4.0 * M_PI_F * d2));
             r.diffuse = e.diffuse * scale;
-            r.glossy = e.glossy * scale;
+            r.glossy = e.glossy * (scale * smooth_side(s, L));
             return r;
         }
         vec3 a, b;
@@ -314,7 +315,7 @@ LightContribution shade_light_unshadowed(GpuLight light, SurfaceParams s, Princi
         }
         LobeEval e = principled_eval(s, w, N, V, L);
         r.diffuse = e.diffuse * S;
-        r.glossy = e.glossy * S;
+        r.glossy = e.glossy * (S * smooth_side(s, L));
         /* A mirror sees the sun's disk where R falls inside it, with the
          * radiance Cycles gives it: S / (pi tan^2 r) (distant.invarea). */
         vec3 mirror = principled_mirror_weight(w, N, V);

@@ -32,6 +32,9 @@ layout(binding = TEX_GBUF_PARAMS0) uniform sampler2D gbuf_params0;
 layout(binding = TEX_GBUF_NORMAL) uniform sampler2D gbuf_normal;
 #ifdef GBUF_PARAMS1
 layout(binding = TEX_GBUF_PARAMS1) uniform sampler2D gbuf_params1;
+#ifdef GBUF_SMOOTH_NORMAL
+layout(binding = TEX_GBUF_SMOOTH_NORMAL) uniform sampler2D gbuf_smooth_normal;
+#endif
 #endif
 
 layout(binding = IMG_FILM, rgba32f) uniform image2D film;
@@ -125,7 +128,12 @@ LightContribution world_light(PrincipledWeights w, SurfaceParams s, vec3 P, vec3
     float cos_u = abs(c);
     if (cos_u > 0.0) {
         float blocked = 1.0 - world_visibility(sh, P, N, side);
-        r.diffuse -= Lw * (2.0 * M_PI_F) * principled_eval_diffuse(s, w, N, V, u) * blocked;
+        /* The analytic albedo above has no bump shadowing term: the sampled
+         * direction removes what the term takes, 1 - t, with what is blocked:
+         * f (1 - (1 - blocked) t) (exact in expectation; t = 1 without bump). */
+        float t = bump_shadowing_term(s.Ns, N, u);
+        r.diffuse -= Lw * (2.0 * M_PI_F) * principled_eval_diffuse_unbumped(s, w, N, V, u) *
+                     (1.0 - (1.0 - blocked) * t);
         ao = 1.0 - 2.0 * cos_u * blocked;
         if (w.alpha2 >= GLOSSY_OCCLUSION_MIN_ALPHA2) {
             /* A rough lobe: the same control variate (its f stays small). */
@@ -164,6 +172,9 @@ void main() {
 #endif
     SurfaceParams s = gbuffer_unpack(texelFetch(gbuf_base, pixel, 0), texelFetch(gbuf_params0, pixel, 0), params1,
                                      texelFetch(gbuf_normal, pixel, 0).rg);
+#ifdef GBUF_SMOOTH_NORMAL
+    s.Ns = octahedral_decode(texelFetch(gbuf_smooth_normal, pixel, 0).rg);
+#endif
     PrincipledWeights w = principled_weights(s);
     vec3 P = frame_position_from_depth(pixel, depth);
     vec3 V = frame_view_vector(P);

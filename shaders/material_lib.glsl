@@ -99,4 +99,42 @@ vec3 safe_normalize(vec3 v) {
     return len != 0.0 ? v / len : vec3(0.0);
 }
 
+/* Cycles kernel/closure/bsdf_util.h ensure_valid_reflection: rotate N towards
+ * Ng just enough that the reflection of I stays above the surface. */
+vec3 ensure_valid_reflection(vec3 Ng, vec3 I, vec3 N) {
+    vec3 R = 2.0 * dot(N, I) * N - I;
+    float threshold = min(0.9 * dot(Ng, I), 0.01);
+    if (dot(Ng, R) >= threshold) return N;
+    float NdotNg = dot(N, Ng);
+    vec3 X = normalize(N - NdotNg * Ng);
+    float Ix = dot(I, X), Iz = dot(I, Ng);
+    float Ix2 = Ix * Ix, Iz2 = Iz * Iz;
+    float a = Ix2 + Iz2;
+    float b = sqrt(max(Ix2 * (a - threshold * threshold), 0.0));
+    float c = Iz * threshold + a;
+    float fac = 0.5 / a;
+    float N1_z2 = fac * (b + c), N2_z2 = fac * (-b + c);
+    bool valid1 = (N1_z2 > 1e-5) && (N1_z2 <= 1.0 + 1e-5);
+    bool valid2 = (N2_z2 > 1e-5) && (N2_z2 <= 1.0 + 1e-5);
+    vec2 N_new;
+    if (valid1 && valid2) {
+        vec2 N1 = vec2(sqrt(max(1.0 - N1_z2, 0.0)), sqrt(max(N1_z2, 0.0)));
+        vec2 N2 = vec2(sqrt(max(1.0 - N2_z2, 0.0)), sqrt(max(N2_z2, 0.0)));
+        float R1 = 2.0 * (N1.x * Ix + N1.y * Iz) * N1.y - Iz;
+        float R2 = 2.0 * (N2.x * Ix + N2.y * Iz) * N2.y - Iz;
+        valid1 = R1 >= 1e-5;
+        valid2 = R2 >= 1e-5;
+        if (valid1 && valid2)
+            N_new = R1 < R2 ? N1 : N2;
+        else
+            N_new = R1 > R2 ? N1 : N2;
+    } else if (valid1 || valid2) {
+        float Nz2 = valid1 ? N1_z2 : N2_z2;
+        N_new = vec2(sqrt(max(1.0 - Nz2, 0.0)), sqrt(max(Nz2, 0.0)));
+    } else {
+        return Ng;
+    }
+    return N_new.x * X + N_new.y * Ng;
+}
+
 #endif

@@ -38,6 +38,7 @@
 #define TEX_SHADOW_MAPS 10
 #define TEX_SHADOW_LIGHT 11
 #define TEX_WORLD_MAP 12    /* RG32F: (-nearest, farthest) depth along the world direction */
+#define TEX_GBUF_SMOOTH_NORMAL 13
 /* Node materials: image slot k of the drawn material at unit TEX_MATERIAL_IMAGE0 + k */
 #define TEX_MATERIAL_IMAGE0 16
 
@@ -57,6 +58,7 @@
 #define OUT_PARAMS1 4
 #define OUT_IDS 5
 #define OUT_UV 6
+#define OUT_SMOOTH_NORMAL 7
 
 /* Pass ids (deferred::Pass; static_assert'ed in native/src/passes.cpp) */
 #define PASS_COMBINED 0

@@ -17,6 +17,7 @@ void main() {
     if (i >= uint(cases.length())) return;
     BsdfCase c = cases[i];
     SurfaceParams s = gbuffer_unpack(c.base_diffuse, c.params0, c.params1, vec2(0.5));
+    s.N = s.Ns = c.N.xyz; /* the case's normal; no bump */
     PrincipledWeights w = principled_weights(s);
     LobeEval e = principled_eval(s, w, c.N.xyz, c.V.xyz, c.L.xyz);
     results[2u * i] = vec4(e.diffuse, 0.0);

@@ -103,6 +103,7 @@ MaterialGraph graph_from_python(const py::dict& d) {
     MaterialGraph g;
     if (d.contains("name")) g.name = d["name"].cast<std::string>();
     if (d.contains("alpha")) g.alpha = d["alpha"].cast<bool>();
+    if (d.contains("closure_normal")) g.closure_normal = d["closure_normal"].cast<bool>();
     const py::list nodes = d["nodes"].cast<py::list>();
     for (std::size_t i = 0; i < nodes.size(); ++i) {
         const py::dict n = nodes[i].cast<py::dict>();

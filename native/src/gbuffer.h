@@ -1,6 +1,7 @@
 // G-buffer targets and their framebuffer (layout: shaders/gbuffer_lib.glsl).
 // Only the targets a frame needs are allocated: params1 when a material uses
-// sheen or clearcoat, ids for IndexOB/IndexMA, uv for UV. The G-buffer holds
+// sheen or clearcoat, ids for IndexOB/IndexMA, uv for UV, smooth_normal when a
+// node material bends its closures' normal (Bump, Normal Map). The G-buffer holds
 // one film sample; the accumulations live in the Film's targets.
 #pragma once
 
@@ -11,9 +12,9 @@
 namespace deferred {
 
 struct GBufferFeatures {
-    bool params1 = false, ids = false, uv = false;
+    bool params1 = false, ids = false, uv = false, smooth_normal = false;
     bool operator==(const GBufferFeatures& o) const {
-        return params1 == o.params1 && ids == o.ids && uv == o.uv;
+        return params1 == o.params1 && ids == o.ids && uv == o.uv && smooth_normal == o.smooth_normal;
     }
 };
 
@@ -35,7 +36,7 @@ private:
     GBufferFeatures features_;
     bool allocated_ = false;
     std::size_t bytes_ = 0;
-    Texture depth_, emission_, base_, params0_, normal_, params1_, ids_, uv_;
+    Texture depth_, emission_, base_, params0_, normal_, params1_, ids_, uv_, smooth_normal_;
     Framebuffer fbo_;
 };
 

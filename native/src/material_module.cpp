@@ -129,6 +129,12 @@ bool MaterialModule::uses_params1() const {
     return false;
 }
 
+bool MaterialModule::uses_smooth_normal() const {
+    for (const StoredGraph& g : graphs_)
+        if (g.graph.closure_normal) return true;
+    return false;
+}
+
 void MaterialModule::upload_constants() {
     constants_buffer_ = make_storage_buffer(constants_.data(), constants_.size() * sizeof(float), "material constants");
 }

@@ -47,6 +47,9 @@ public:
     bool alpha(std::uint32_t graph) const { return graphs_[graph].graph.alpha; }
     // True if some graph can produce sheen or clearcoat (the G-buffer's params1).
     bool uses_params1() const;
+    // True if some graph gives a closure another normal than the smooth one
+    // (the G-buffer's smooth normal).
+    bool uses_smooth_normal() const;
 
     // Per frame: the constants buffer (bound while the geometry pass runs).
     void upload_constants();

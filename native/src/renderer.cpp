@@ -198,6 +198,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     for (const Material& m : scene.materials())
         if (m.graph < 0 && (m.sheen > 1e-5f || m.clearcoat > 1e-5f)) features.params1 = true;
     if (materials.uses_params1()) features.params1 = true;
+    features.smooth_normal = materials.uses_smooth_normal();
     features.ids = wanted.contains(Pass::IndexOB) || wanted.contains(Pass::IndexMA);
     features.uv = wanted.contains(Pass::UV);
     const bool light_split = wanted.contains(Pass::DiffDir) || wanted.contains(Pass::GlossDir);
@@ -222,7 +223,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     const std::size_t pixels = std::size_t(settings.width > 0 ? settings.width : 0) *
                                std::size_t(settings.height > 0 ? settings.height : 0);
     std::size_t per_pixel = 4 + 16 + 8 + 8 + 4 + (features.params1 ? 8 : 0) + (features.ids ? 8 : 0) +
-                            (features.uv ? 8 : 0) + 16 + (light_split ? 32 : 0) + (shadow_pass ? 16 : 0);
+                            (features.uv ? 8 : 0) + (features.smooth_normal ? 4 : 0) + 16 + (light_split ? 32 : 0) + (shadow_pass ? 16 : 0);
     for (Pass p : wanted.list()) per_pixel += (p == Pass::Combined ? 0 : 16) + 4 * std::size_t(pass_info(p).channels);
     check_settings(settings, pixels * per_pixel);
 
@@ -351,6 +352,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     if (features.params1) base_variant.defines.push_back("GBUF_PARAMS1");
     if (features.ids) base_variant.defines.push_back("GBUF_IDS");
     if (features.uv) base_variant.defines.push_back("GBUF_UV");
+    if (features.smooth_normal) base_variant.defines.push_back("GBUF_SMOOTH_NORMAL");
     // Stochastic transparency, only when some constant material is partly
     // transparent (node materials carry their own switch, MATERIAL_ALPHA).
     bool scene_alpha = false;

@@ -4,10 +4,13 @@
 
 float clamp01(float x) { return clamp(x, 0.0, 1.0); }
 
-/* A normal input: unit length, or the shading normal where it degenerates. */
+/* A closure's normal input: unit length (the shading normal where it
+ * degenerates), then bent so the reflection of I stays above the surface, as
+ * svm_node_closure_bsdf does for every BSDF closure (3.4). */
 vec3 closure_normal(vec3 n) {
     vec3 m = safe_normalize(n);
-    return (dot(m, m) > 0.0 && !any(isnan(m))) ? m : g_sd.N;
+    m = (dot(m, m) > 0.0 && !any(isnan(m))) ? m : g_sd.N;
+    return ensure_valid_reflection(g_sd.Ng, g_sd.I, m);
 }
 
 /* Principled BSDF (3.4 inputs). The ranges are those of the G-buffer and of

@@ -48,6 +48,7 @@ TESTS = {
     "node_materials": (ANALYTIC, True),
     "node_probes": (ANALYTIC, True),
     "transparency": (ANALYTIC, True),
+    "bump_lighting": (ANALYTIC, True),
 }
 BENCHMARKS = {"bench_export": (None, True)}
 

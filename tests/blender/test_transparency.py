@@ -181,7 +181,7 @@ def main():
     # Object Index follows the view layer's Alpha Threshold (0.5), as in
     # Cycles: the alpha 0.4 pane and the 0.1 checker squares are not in it,
     # the two 0.5 panes and 0.9 squares are. Edges may differ (filter).
-    inner = U.interior_mask(index >= 0, radius=1)
+    inner = U.interior_mask(index, radius=1)
     same = float((our_index[inner] == index[inner]).mean())
     print(f"  Object Index equal to Cycles' on {same:.4f} of the pixels")
     checks.check(same > 0.98, "Object Index follows the Alpha Threshold as in Cycles", f"{same:.4f}")
@@ -197,7 +197,7 @@ def main():
     # follows the alpha threshold), eroded so filtered edges do not count.
     names = {1: "floor (incl. partial shadows)", 2: "red back wall (seen through panes)"}
     for k, name in names.items():
-        mask = U.interior_mask(index == k, radius=2)
+        mask = (index == k) & U.interior_mask(index, radius=2)
         c, o = cycles[mask].mean(), ours[mask].mean()
         print(f"  {name}: {mask.sum()} px, Cycles {c:.4f}, ours {o:.4f}, ratio {o / c:.4f}")
         checks.check(mask.sum() > 200 and abs(o / c - 1.0) < MEAN_LIMIT, f"{name}: mean within {MEAN_LIMIT:.0%}",

@@ -34,6 +34,7 @@ set(DEFERRED_BLENDER_TESTS
     node_materials
     node_probes
     transparency
+    bump_lighting
 )
 
 foreach(_name IN LISTS DEFERRED_BLENDER_TESTS)

@@ -238,6 +238,7 @@ class GraphBuilder:
         self._in_progress = set()
         self.variant = ()        # bump offsets entered, innermost last (nodes re-emitted per variant)
         self.uses_alpha = False  # some closure's alpha can be below 1 (MATERIAL_ALPHA)
+        self.closure_normal = False  # some closure's normal is not the smooth one
         self._none = None
 
     def note(self, text):
@@ -379,5 +380,6 @@ def _build(material, images):
             if s is not None and s.is_linked:
                 g.note(f"{name} (not rendered)")
     ir = {"name": material.name, "nodes": g.nodes, "surface": surface, "constants": g.constants,
-          "images": g.images, "attributes": g.attributes, "alpha": g.uses_alpha}
+          "images": g.images, "attributes": g.attributes, "alpha": g.uses_alpha,
+          "closure_normal": g.closure_normal}
     return MaterialGraph(ir, g.notes, list(g.attributes))

@@ -54,6 +54,9 @@ struct MaterialGraph {
     // BSDF): the program discards by it (stochastic transparency), draws
     // its own depth pre-pass and its own shadow-map casters.
     bool alpha = false;
+    // Some closure's normal is not the smooth normal (Bump, Normal Map, any
+    // vector): the lighting then also needs the smooth one (G-buffer).
+    bool closure_normal = false;
 };
 
 // An image for texture nodes: RGBA, row 0 at the bottom (Blender's order).

@@ -15,6 +15,16 @@ from .. import graph as graph_walk
 _NOT_REFLECTING = {"ShaderNodeEmission", "ShaderNodeBackground", "ShaderNodeBsdfTransparent", "ShaderNodeHoldout"}
 
 
+def _closure_normal(b):
+    """The closure's Normal input; a normal other than the smooth one (Bump,
+    Normal Map, any vector) marks the graph (the lighting then needs the
+    smooth normal too: Cycles drops light samples below it)."""
+    arg = b.input("Normal", "vector", implicit="N")
+    if arg != ("shading", "N"):
+        b._graph.closure_normal = True
+    return arg
+
+
 def _value(b, identifier):
     """The socket's constant value when unlinked (None if linked)."""
     if b.is_linked(identifier):
@@ -47,14 +57,14 @@ def principled(b):
             b.input("Specular Tint", "float"), b.input("Roughness", "float"), b.input("Sheen", "float"),
             b.input("Sheen Tint", "float"), b.input("Clearcoat", "float"), b.input("Clearcoat Roughness", "float"),
             b.input("Emission", "color"), b.input("Emission Strength", "float"), b.input("Alpha", "float"),
-            b.input("Normal", "vector", implicit="N")],
+            _closure_normal(b)],
            [("BSDF", "closure")])
 
 
 @register("ShaderNodeBsdfDiffuse")
 def diffuse(b):
     b.call("node_bsdf_diffuse",
-           [b.input("Color", "color"), b.input("Roughness", "float"), b.input("Normal", "vector", implicit="N")],
+           [b.input("Color", "color"), b.input("Roughness", "float"), _closure_normal(b)],
            [("BSDF", "closure")])
 
 
@@ -78,7 +88,7 @@ def glossy(b):
             b._graph.note(f"'{b.node.name}': anisotropy is not rendered (isotropic)")
     model = GLOSSY_MODEL_BECKMANN if distribution == "BECKMANN" else GLOSSY_MODEL_GGX
     b.call("node_bsdf_glossy",
-           [b.int(model), b.input("Color", "color"), roughness, b.input("Normal", "vector", implicit="N")],
+           [b.int(model), b.input("Color", "color"), roughness, _closure_normal(b)],
            [("BSDF", "closure")])
 
 
@@ -128,6 +138,6 @@ def unsupported_shader(b):
     has_color = any(s.identifier == "Color" for s in b.node.inputs)
     color = b.input("Color", "color") if has_color else b.const((0.8, 0.8, 0.8), "color")
     has_normal = any(s.identifier == "Normal" for s in b.node.inputs)
-    normal = b.input("Normal", "vector", implicit="N") if has_normal else b.shading("N")
+    normal = _closure_normal(b) if has_normal else b.shading("N")
     out = next(o for o in b.node.outputs if o.type == "SHADER")
     b.call("node_bsdf_diffuse", [color, b.const(1.0, "float"), normal], [(out.identifier, "closure")])

@@ -315,7 +315,32 @@ LightContribution shade_light_unshadowed(GpuLight light, SurfaceParams s, Princi
         }
         LobeEval e = principled_eval(s, w, N, V, L);
         r.diffuse = e.diffuse * S;
-        r.glossy = e.glossy * (S * smooth_side(s, L));
+        /* A sharp specular lobe also samples its own direction, combined with
+         * the disk point by the power heuristic, as Cycles' MIS of light and
+         * BSDF rays for a sun with an angle: the point alone makes fireflies
+         * where the lobe is narrower than the disk. Solid-angle pdfs: the
+         * disk point invarea / cos^3 (distant_light_sample), the BSDF
+         * direction principled_specular_pdf; a BSDF direction inside the disk
+         * sees radiance S invarea. */
+        const bool sun_mis = tan_r > 0.0 && w.specular != 0.0 && w.alpha2 > 1e-7 && w.alpha2 < 0.0625;
+        if (sun_mis) {
+            float invarea = 1.0 / (M_PI_F * tan_r * tan_r);
+            float cos_l = dot(L, -light.direction.xyz);
+            float ratio = min(principled_specular_pdf(w, N, V, L) * cos_l * cos_l * cos_l / invarea, 1e18);
+            vec3 spec = principled_specular(w, N, V, L) * (smooth_side(s, L) / (1.0 + ratio * ratio));
+            r.glossy = (spec + vec3(principled_clearcoat(w, N, V, L) * smooth_side(s, L))) * S;
+            vec3 Lb = sample_ggx_vndf(N, V, sqrt(w.alpha2), fract(frame.sample_shift.yx + vec2(0.5, 0.25)));
+            float cos_b = dot(Lb, -light.direction.xyz);
+            if (cos_b >= cos(light.strength.w)) {
+                float pb = principled_specular_pdf(w, N, V, Lb);
+                if (pb > 1e-30) {
+                    float rb = min(invarea / (cos_b * cos_b * cos_b * pb), 1e18);
+                    r.glossy += principled_specular(w, N, V, Lb) * (S * invarea / pb / (1.0 + rb * rb));
+                }
+            }
+        } else {
+            r.glossy = e.glossy * (S * smooth_side(s, L));
+        }
         /* A mirror sees the sun's disk where R falls inside it, with the
          * radiance Cycles gives it: S / (pi tan^2 r) (distant.invarea). */
         vec3 mirror = principled_mirror_weight(w, N, V);

@@ -306,7 +306,7 @@ LightContribution shade_light_unshadowed(GpuLight light, SurfaceParams s, Princi
          * strength.w), uniform over the tangent disk as Cycles'
          * distant_light_sample; sample 0 looks at the centre. */
         vec3 L = -light.direction.xyz;
-        float tan_r = tan(light.strength.w);
+        float tan_r = light.axis_x.w;
         if (tan_r > 0.0) {
             vec3 t, bt;
             make_basis(L, t, bt);
@@ -331,7 +331,7 @@ LightContribution shade_light_unshadowed(GpuLight light, SurfaceParams s, Princi
             r.glossy = (spec + vec3(principled_clearcoat(w, N, V, L) * smooth_side(s, L))) * S;
             vec3 Lb = sample_ggx_vndf(N, V, sqrt(w.alpha2), fract(frame.sample_shift.yx + vec2(0.5, 0.25)));
             float cos_b = dot(Lb, -light.direction.xyz);
-            if (cos_b >= cos(light.strength.w)) {
+            if (cos_b >= light.axis_y.w) {
                 float pb = principled_specular_pdf(w, N, V, Lb);
                 if (pb > 1e-30) {
                     float rb = min(invarea / (cos_b * cos_b * cos_b * pb), 1e18);
@@ -344,7 +344,7 @@ LightContribution shade_light_unshadowed(GpuLight light, SurfaceParams s, Princi
         /* A mirror sees the sun's disk where R falls inside it, with the
          * radiance Cycles gives it: S / (pi tan^2 r) (distant.invarea). */
         vec3 mirror = principled_mirror_weight(w, N, V);
-        if (tan_r > 0.0 && mirror != vec3(0.0) && dot(reflect(-V, N), -light.direction.xyz) >= cos(light.strength.w))
+        if (tan_r > 0.0 && mirror != vec3(0.0) && dot(reflect(-V, N), -light.direction.xyz) >= light.axis_y.w)
             r.glossy += mirror * S / (M_PI_F * tan_r * tan_r);
         return r;
     }

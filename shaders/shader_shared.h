@@ -34,8 +34,10 @@ struct alignas(16) mat4 { vec4 cols[4]; };
  *   strength      : rgb = colour x energy (S, Watts; sun W/m^2), w = sphere radius R (point/spot)
  *                   or the sun's angular radius (angle/2)
  *   direction     : xyz = the light's -Z axis (unit), w = cos(spot_size/2)
- *   axis_x        : xyz = area half-extent along the light's X axis (size/2 x X scale), w = spot blend width (1-cs)*blend
- *   axis_y        : xyz = area half-extent along the light's Y axis, w = AREA_* shape
+ *   axis_x        : xyz = area half-extent along the light's X axis (size/2 x X scale), w = spot blend width (1-cs)*blend;
+ *                   sun: w = tan of the angular radius (computed in double, capped at 1e7)
+ *   axis_y        : xyz = area half-extent along the light's Y axis, w = AREA_* shape; sun: w = cos of the
+ *                   angular radius
  *   params        : x = area A (m^2, pi/4 factor for ellipses), y = cast shadow (0/1),
  *                   z = influence radius (m) beyond which the light is culled, < 0: infinite
  *                   (sun), w = index of its GpuShadow, or -1 without shadow maps this frame */

@@ -51,6 +51,14 @@ gpu::GpuLight pack_light(const Light& l, const glm::dvec3& camera_position, doub
     const bool ellipse = l.shape == AreaShape::Disk || l.shape == AreaShape::Ellipse;
     g.axis_x = v4(half_x, (1.0 - cs) * double(l.spot_blend));
     g.axis_y = v4(half_y, ellipse ? AREA_ELLIPSE : AREA_RECT);
+    if (l.type == LightType::Sun) {
+        // The disk's tangent radius and the cone's cosine, in double here:
+        // a GPU's fast tan() near 90 degrees (a 180-degree sun) gave inf and
+        // a whole image of NaN on NVIDIA. Capped as float tanf(pi/2) is in
+        // Cycles (light.cpp: radius = tanf(angle / 2)).
+        g.axis_x.w = float(std::min(std::tan(radius), 1e7));
+        g.axis_y.w = float(std::cos(radius));
+    }
     const double area = 4.0 * glm::length(half_x) * glm::length(half_y) * (ellipse ? M_PI / 4.0 : 1.0);
     g.params = {float(area), l.cast_shadow ? 1.0f : 0.0f, float(influence_radius(l, threshold)), -1.0f};
     return g;

@@ -32,9 +32,9 @@ layout(binding = TEX_GBUF_PARAMS0) uniform sampler2D gbuf_params0;
 layout(binding = TEX_GBUF_NORMAL) uniform sampler2D gbuf_normal;
 #ifdef GBUF_PARAMS1
 layout(binding = TEX_GBUF_PARAMS1) uniform sampler2D gbuf_params1;
+#endif
 #ifdef GBUF_SMOOTH_NORMAL
 layout(binding = TEX_GBUF_SMOOTH_NORMAL) uniform sampler2D gbuf_smooth_normal;
-#endif
 #endif
 
 layout(binding = IMG_FILM, rgba32f) uniform image2D film;

@@ -72,7 +72,7 @@ TEST_F(ShaderErrors, EveryShipedVariantFamilyCompiles) {
     // Geometry with every optional target, lighting with every light type and
     // the light split, and every pass.
     ShaderVariant full;
-    full.defines = {"GBUF_PARAMS1", "GBUF_IDS", "GBUF_UV", "GBUF_EMIT"};
+    full.defines = {"GBUF_PARAMS1", "GBUF_IDS", "GBUF_UV", "GBUF_SMOOTH_NORMAL", "GBUF_EMIT"};
     EXPECT_NE(shaders().graphics_program("geometry_vert.glsl", "geometry_frag.glsl", full), 0u);
     ShaderVariant lighting = full;
     lighting.defines.insert(lighting.defines.end(), {"HAS_POINT_LIGHTS", "HAS_SPOT_LIGHTS", "HAS_SUN_LIGHTS",
@@ -83,6 +83,16 @@ TEST_F(ShaderErrors, EveryShipedVariantFamilyCompiles) {
         v.defines.push_back("OUT_LIGHT_SPLIT");
         v.defines.push_back("PASS_ID " + std::to_string(p));
         EXPECT_NE(shaders().compute_program("passes_comp.glsl", v), 0u) << pass_info(Pass(p)).name;
+    }
+    // Each optional G-buffer target alone (a target's declaration must not
+    // hide inside another's block), with every light type.
+    for (const char* target : {"GBUF_PARAMS1", "GBUF_IDS", "GBUF_UV", "GBUF_SMOOTH_NORMAL"}) {
+        ShaderVariant one;
+        one.defines = {target, "HAS_POINT_LIGHTS", "HAS_SPOT_LIGHTS", "HAS_SUN_LIGHTS", "HAS_AREA_LIGHTS",
+                       "HAS_SHADOWS", "OUT_LIGHT_SPLIT"};
+        EXPECT_NE(shaders().compute_program("lighting_comp.glsl", one), 0u) << target;
+        one.defines.resize(1);
+        EXPECT_NE(shaders().graphics_program("geometry_vert.glsl", "geometry_frag.glsl", one), 0u) << target;
     }
     // Stochastic transparency of constant materials: geometry and casters.
     ShaderVariant alpha = full;

@@ -580,10 +580,15 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         return p == Pass::Depth || p == Pass::Position || p == Pass::Normal || p == Pass::UV ||
                p == Pass::IndexOB || p == Pass::IndexMA;
     };
-    bool data_gbuffer = false;
+    bool data_gbuffer = false, data_every_sample = false;
     if (scene_alpha || alpha_graphs)
         for (auto& [p, image] : pass_images)
-            if (is_data_pass(p)) data_gbuffer = true;
+            if (is_data_pass(p)) {
+                data_gbuffer = true;
+                // Depth, Position and the indices come from sample 0 only;
+                // Normal and UV are averaged over the samples.
+                if (!pass_from_first_sample(p)) data_every_sample = true;
+            }
     auto set_alpha_mode = [&](bool data) {
         const float mode = data ? 1.0f : 0.0f;
         if (scene_alpha) glProgramUniform2f(geometry, 22, mode, settings.alpha_threshold);
@@ -665,7 +670,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         glNamedBufferSubData(frame_buffer.get(), 0, sizeof(fc), &fc);
         glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
 
-        if (data_gbuffer) {
+        if (data_gbuffer && (sample == 0 || data_every_sample)) {
             set_alpha_mode(true);
             gbuffer.bind_for_geometry();
             glEnable(GL_DEPTH_TEST);

@@ -125,6 +125,14 @@ def add_shader(b):
         source = graph_walk.resolve_input(socket, b.ctx)  # through reroutes, groups, mutes
         if isinstance(source, graph_walk.Output) and source.node.bl_idname not in _NOT_REFLECTING:
             reflecting += 1
+        if isinstance(source, graph_walk.Output) and source.node.bl_idname == "ShaderNodeBsdfTransparent":
+            # A white Transparent BSDF added to a closure passes all the light
+            # behind *and* shows the other side (Cycles): coverage 0 cannot
+            # (node_add_shader); a grey one is exact in expectation.
+            color = source.node.inputs["Color"]
+            if color.is_linked or min(color.default_value[:3]) >= 1.0:
+                b._graph.note(f"'{b.node.name}': Add Shader with a white (or linked) Transparent BSDF: the other "
+                              "side's light is dropped where the surface passes all the light behind it")
     if reflecting == 2:
         b._graph.note(f"'{b.node.name}': Add Shader of two BSDFs is drawn one at a time at twice the weight "
                       "(exact for diffuse and metallic lobes only)")

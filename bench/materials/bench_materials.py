@@ -16,7 +16,7 @@
 
 Environment: BENCH_SAMPLES (default 4), BENCH_SIZE ("1920x1080"), BENCH_PARTS
 (the textured material's parts, default "image,noise,normal"), BENCH_ONLY_GEOMETRY=1
-(the first table only).
+(the first table only), BENCH_ONLY_EXPORT=1 (the export table only).
 """
 
 import os
@@ -180,7 +180,17 @@ def export_attributes():
     return arrays.triangle_count, t1 - t0, t2 - t1
 
 
+def print_export():
+    tris, t_numpy, t_native = export_attributes()
+    print("| export | triangles | Blender -> numpy s | numpy -> native s | total s |")
+    print("| --- | --- | --- | --- | --- |")
+    print(f"| 2 UV maps + tangents + colour | {tris} | {t_numpy:.2f} | {t_native:.2f} | {t_numpy + t_native:.2f} |")
+
+
 def main():
+    if os.environ.get("BENCH_ONLY_EXPORT"):
+        print_export()
+        return
     print(f"BENCH node materials at {WIDTH}x{HEIGHT}, {SAMPLES} samples")
     rows = geometry_cost()
     if os.environ.get("BENCH_ONLY_GEOMETRY"):
@@ -200,10 +210,7 @@ def main():
           f"{warm['wall_s']:.2f} |")
     print(f"| kept renderer (Persistent Data) | {kept['programs_compiled'] + kept['programs_loaded']} | 0 | "
           f"{kept['wall_s']:.2f} |")
-    tris, t_numpy, t_native = export_attributes()
-    print("| export | triangles | Blender -> numpy s | numpy -> native s | total s |")
-    print("| --- | --- | --- | --- | --- |")
-    print(f"| 2 UV maps + tangents + colour | {tris} | {t_numpy:.2f} | {t_native:.2f} | {t_numpy + t_native:.2f} |")
+    print_export()
     sys.stdout.flush()
 
 

@@ -48,7 +48,8 @@ class CornerGather:
     def __init__(self, tri_verts, tri_loops, poly_index):
         self.verts = tri_verts.reshape(-1)
         self.loops = tri_loops.reshape(-1)
-        self.faces = np.repeat(poly_index, 3)
+        self._poly_index = poly_index
+        self._faces = None  # made on first use: most attributes live on corners or points
 
     def __call__(self, data, domain):
         if domain == "POINT":
@@ -56,7 +57,9 @@ class CornerGather:
         if domain == "CORNER":
             return data[self.loops]
         if domain == "FACE":
-            return data[self.faces]
+            if self._faces is None:
+                self._faces = np.repeat(self._poly_index, 3)
+            return data[self._faces]
         return None
 
 
@@ -132,6 +135,8 @@ def corner_attributes(mesh, keys, gather, warn):
             warn(f"mesh '{mesh.name}' has no {kind.replace('attr', 'attribute')} '{name or '(active)'}'; "
                  "the material reads 0")
             continue
-        data = np.nan_to_num(np.ascontiguousarray(data, dtype=np.float32), nan=0.0, posinf=0.0, neginf=0.0)
+        data = np.ascontiguousarray(data, dtype=np.float32)
+        if not np.isfinite(data).all():  # the common case skips nan_to_num's three passes
+            data = np.nan_to_num(data, nan=0.0, posinf=0.0, neginf=0.0)
         out.append((key, data))
     return out

@@ -71,6 +71,9 @@ layout(binding = TEX_MATERIAL_IMAGE0) uniform sampler2D material_images[MATERIAL
 #endif
 
 /* A per-pixel value in [0, 1) (integer hash, Jarzynski & Olano 2020, pcg). */
+#ifdef SCENE_ALPHA
+#include "material_alpha_lib.glsl"
+#endif
 #if (defined(SCENE_ALPHA) || defined(MATERIAL_ALPHA)) && !defined(SHADOW_PASS)
 /* x = 0: stochastic transparency (the lit G-buffer); x = 1: the data passes'
  * G-buffer, where a surface stays when its alpha reaches y, the view layer's
@@ -190,7 +193,9 @@ void main() {
     GpuMaterial m = pick_material(v_material);
 #ifdef SCENE_ALPHA
     /* Partly transparent (mix.w: alpha): kept with probability alpha. */
-    if (transparent_here(m.mix.w)) discard;
+    /* The Alpha Threshold judges the material's whole alpha (a mix chain
+     * averaged), the stochastic pass the picked component's. */
+    if (transparent_here(alpha_mode.x > 0.5 ? material_chain_alpha(v_material) : m.mix.w)) discard;
 #endif
 #endif
 

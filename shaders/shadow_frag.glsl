@@ -18,21 +18,7 @@ flat in uint v_instance;
 flat in uint v_triangle;
 layout(std430, binding = SSBO_MATERIALS) readonly buffer Materials { GpuMaterial materials[]; };
 
-/* Alpha of a material, a stochastic mix chain averaged (the chain's
- * components are picked with their weights in the geometry pass; coverage
- * is linear in them, as Cycles' transparent closure weight). */
-float material_alpha(uint id) {
-    float alpha = 0.0, weight = 1.0;
-    GpuMaterial m = materials[id];
-    for (int k = 0; k < 16; ++k) {
-        float p = m.mix.x >= 0.0 ? m.mix.y : 0.0;
-        alpha += weight * (1.0 - p) * m.mix.w;
-        weight *= p;
-        if (m.mix.x < 0.0) break;
-        m = materials[uint(m.mix.x)];
-    }
-    return alpha + weight * m.mix.w;
-}
+#include "material_alpha_lib.glsl"
 #endif
 layout(location = 3) uniform vec4 shadow_origin; /* xyz: light point (cube) or a point up-sun (cascades); w: kind */
 layout(location = 4) uniform vec3 shadow_axis;   /* sun direction (cascades) */
@@ -44,7 +30,7 @@ layout(location = 0) out float out_distance;
 
 void main() {
 #ifdef SCENE_ALPHA
-    if (transparency_random(uvec2(gl_FragCoord.xy), v_instance, v_triangle) >= material_alpha(v_material)) discard;
+    if (transparency_random(uvec2(gl_FragCoord.xy), v_instance, v_triangle) >= material_chain_alpha(v_material)) discard;
 #endif
     vec3 v = v_position - shadow_origin.xyz;
 #ifdef WORLD_MAP

@@ -16,6 +16,7 @@ render when Persistent Data is on and the render succeeded).
 """
 
 import collections
+import math
 import sys
 import threading
 import time
@@ -74,6 +75,12 @@ def _light_settings(scene):
     shadow_quality = float(getattr(settings, "shadow_quality", 1.0)) if settings is not None else 1.0
     return {"light_culling": culling, "light_threshold": threshold / (2.0 ** exposure),
             "shadow_resolution": shadow_resolution, "shadow_quality": shadow_quality}
+
+
+def _alpha_threshold(view_layer):
+    """The view layer's Alpha Threshold in [0, 1] (Blender's default 0.5 if not finite)."""
+    value = float(getattr(view_layer, "pass_alpha_threshold", 0.5))
+    return min(max(value, 0.0), 1.0) if math.isfinite(value) else 0.5
 
 
 def _format_timings(timings):
@@ -265,7 +272,7 @@ class FinalRender:
         t_render = time.perf_counter()
         kwargs = dict(passes=requested, film_transparent=bool(scene.render.film_transparent),
                       samples=samples, filter_width=_filter_width(scene),
-                      alpha_threshold=min(max(float(getattr(self.view_layer, "pass_alpha_threshold", 0.5)), 0.0), 1.0),
+                      alpha_threshold=_alpha_threshold(self.view_layer),
                       **_light_settings(scene), **mist)
         try:
             images = self._render_cancellable(renderer, mod, camera, frame, kwargs)

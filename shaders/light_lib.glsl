@@ -321,7 +321,8 @@ LightContribution shade_light_unshadowed(GpuLight light, SurfaceParams s, Princi
          * where the lobe is narrower than the disk. Solid-angle pdfs: the
          * disk point invarea / cos^3 (distant_light_sample), the BSDF
          * direction principled_specular_pdf; a BSDF direction inside the disk
-         * sees radiance S invarea. */
+         * sees radiance S invarea / cos^3 (distant_light_sample_from_
+         * intersection: eval_fac = pdf). */
         const bool sun_mis = tan_r > 0.0 && w.specular != 0.0 && w.alpha2 > 1e-7 && w.alpha2 < 0.0625;
         if (sun_mis) {
             float invarea = 1.0 / (M_PI_F * tan_r * tan_r);
@@ -335,17 +336,21 @@ LightContribution shade_light_unshadowed(GpuLight light, SurfaceParams s, Princi
                 float pb = principled_specular_pdf(w, N, V, Lb);
                 if (pb > 1e-30) {
                     float rb = min(invarea / (cos_b * cos_b * cos_b * pb), 1e18);
-                    r.glossy += principled_specular(w, N, V, Lb) * (S * invarea / pb / (1.0 + rb * rb));
+                    r.glossy += principled_specular(w, N, V, Lb) *
+                                (S * invarea / (cos_b * cos_b * cos_b) / pb / (1.0 + rb * rb));
                 }
             }
         } else {
             r.glossy = e.glossy * (S * smooth_side(s, L));
         }
         /* A mirror sees the sun's disk where R falls inside it, with the
-         * radiance Cycles gives it: S / (pi tan^2 r) (distant.invarea). */
+         * radiance Cycles gives a ray that hits it: S invarea / cos^3 of its
+         * angle to the sun's axis, invarea = 1 / (pi tan^2 r)
+         * (distant_light_sample_from_intersection). */
         vec3 mirror = principled_mirror_weight(w, N, V);
-        if (tan_r > 0.0 && mirror != vec3(0.0) && dot(reflect(-V, N), -light.direction.xyz) >= light.axis_y.w)
-            r.glossy += mirror * S / (M_PI_F * tan_r * tan_r);
+        float cos_r = dot(reflect(-V, N), -light.direction.xyz);
+        if (tan_r > 0.0 && mirror != vec3(0.0) && cos_r >= light.axis_y.w)
+            r.glossy += mirror * S / (M_PI_F * tan_r * tan_r * cos_r * cos_r * cos_r);
         return r;
     }
 #endif

@@ -24,6 +24,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdlib>
+#include <map>
 #include <memory>
 #include <optional>
 
@@ -617,6 +618,26 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     world_caster_variant.defines = caster_defines;
     world_caster_variant.defines.push_back("SHADOW_PASS");
     world_caster_variant.defines.push_back("WORLD_MAP");
+    // Caster programs of the alpha graphs, compiled before the first sample
+    // like the graphs' own; one that fails casts an opaque shadow, warned.
+    std::map<std::uint32_t, GLuint> light_casters, world_casters;
+    auto compile_casters = [&](std::map<std::uint32_t, GLuint>& out, bool world_map) {
+        for (auto& [id, program] : graph_programs) {
+            if (!is_alpha_graph(id)) continue;
+            try {
+                out[id] = this->materials.caster_program(*shaders, std::uint32_t(scene.materials()[id].graph),
+                                                         world_map);
+            } catch (const Error& e) {
+                const std::string& name = this->materials.name(std::uint32_t(scene.materials()[id].graph));
+                result.warnings.push_back("Material '" + (name.empty() ? std::to_string(id) : name) +
+                                          "': its shadow caster did not compile (opaque shadow): " + e.what());
+            }
+        }
+    };
+    if (alpha_graphs && !shadows.empty()) {
+        compile_casters(light_casters, false);
+        if (shadows.world_index() >= 0) compile_casters(world_casters, true);
+    }
     auto draw_shadow_casters = [&](const ShadowModule::CasterTest& casts) {
         if (!alpha_graphs) {
             shadow_instances_drawn += draw_culled(casts, true);
@@ -624,24 +645,23 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         }
         GLint caster = 0;
         glGetIntegerv(GL_CURRENT_PROGRAM, &caster);
+        // (The world map's program is the shadow module's, already compiled.)
+        const bool world_map = shadows.world_index() >= 0 &&
+            GLuint(caster) == shaders->graphics_program("geometry_vert.glsl", "shadow_frag.glsl", world_caster_variant);
+        const std::map<std::uint32_t, GLuint>& own = world_map ? world_casters : light_casters;
         shadow_instances_drawn += cull(casts, true);
         for (const Culled& c : visible) {
             const GpuMesh& mesh = scene.meshes()[c.draw->mesh];
             for (std::size_t s = 0; s < mesh.slot_ranges.size(); ++s)
-                if (!is_alpha_graph(slot_material_id(*c.draw, s)))
+                if (!own.count(slot_material_id(*c.draw, s)))
                     draw_range(c, mesh.slot_ranges[s].first, mesh.slot_ranges[s].second);
         }
         float view_projection[16], origin[4], axis[4] = {0, 0, 0, 0};
         glGetUniformfv(GLuint(caster), 2, view_projection);
         glGetUniformfv(GLuint(caster), 3, origin);
         glGetUniformfv(GLuint(caster), 4, axis);
-        const bool world_map =
-            GLuint(caster) == shaders->graphics_program("geometry_vert.glsl", "shadow_frag.glsl", world_caster_variant);
         this->materials.bind_constants();
-        for (auto& [id, program] : graph_programs) {
-            if (!is_alpha_graph(id)) continue;
-            const GLuint p = this->materials.caster_program(*shaders, std::uint32_t(scene.materials()[id].graph),
-                                                            world_map);
+        for (auto& [id, p] : own) {
             glProgramUniformMatrix4fv(p, 2, 1, GL_FALSE, view_projection);
             glProgramUniform4fv(p, 20, 1, origin);
             glProgramUniform3fv(p, 21, 1, axis);
@@ -704,7 +724,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         if (!shadows.empty()) {
             if (sample == 0) shadows.fit(visible_receivers(cam, settings.width, settings.height));
             shadows.render_sample(*shaders, {u[2], u[3]}, world_sample_point(sample), draw_shadow_casters,
-                                  caster_defines);
+                                  caster_defines, scene_alpha || alpha_graphs);
             shadow_ms += timer.lap_ms();
         }
 

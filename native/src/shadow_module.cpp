@@ -328,7 +328,7 @@ std::vector<int> ShadowModule::resolutions() const {
 
 void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float, 2>& u,
                                  const std::array<float, 2>& u_world, const DrawCasters& draw_casters,
-                                 const std::vector<std::string>& caster_defines) {
+                                 const std::vector<std::string>& caster_defines, bool casters_vary) {
     if (entries_.empty()) return;
     ShaderVariant variant;
     variant.defines = caster_defines;
@@ -367,8 +367,9 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
         Entry& e = entries_[i];
         gpu::GpuShadow& g = shadows[i];
         const gpu::GpuLight& l = e.light;
-        // Maps of a light without size are the same every sample: keep them.
-        const bool draw = !(e.fixed_point && e.rendered);
+        // Maps of a light without size are the same every sample (unless
+        // transparent casters are drawn stochastically): keep them.
+        const bool draw = !(e.fixed_point && e.rendered && !casters_vary);
         e.rendered = true;
         glViewport(0, 0, e.resolution, e.resolution);
         glScissor(0, 0, e.resolution, e.resolution);  // clears too: only the corner in use

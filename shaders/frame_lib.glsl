@@ -41,6 +41,15 @@ uint depth_bin(float d, float dmin, float dmax) {
     return uint(clamp(t * float(DEPTH_BINS), 0.0, float(DEPTH_BINS - 1)));
 }
 
+/* What a shadow-map caster stores for camera-relative position P: the
+ * distance from the light's point (cube maps) or the depth along the sun's
+ * axis (cascades, and the world's map, whose origin.w is SHADOW_CASCADES).
+ * shadow_frag.glsl and the node-material casters (geometry_frag.glsl). */
+float caster_depth(vec3 P, vec4 origin, vec3 axis) {
+    vec3 v = P - origin.xyz;
+    return int(origin.w) == SHADOW_CASCADES ? dot(v, axis) : length(v);
+}
+
 /* Stochastic transparency: Cycles renders a surface of alpha a (Principled
  * Alpha, a Transparent BSDF mixed in) as covering a fraction a of what is
  * behind it, for camera and shadow rays alike. A fragment is kept when this

@@ -230,12 +230,11 @@ void main() {
     if (transparent_here(clamp(finite_or(c.alpha, 1.0), 0.0, 1.0))) discard;
 #endif
 #ifdef SHADOW_PASS
-    vec3 v = v_position - caster_origin.xyz;
+    float d = caster_depth(v_position, caster_origin, caster_axis);
 #ifdef WORLD_MAP
-    float d = dot(v, caster_axis);
     out_depths = vec2(-d, d);
 #else
-    out_distance = int(caster_origin.w) == SHADOW_CASCADES ? dot(v, caster_axis) : length(v);
+    out_distance = d;
 #endif
 #else
     vec3 shading_normal = finite_or(c.N, N);

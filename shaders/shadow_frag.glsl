@@ -32,11 +32,10 @@ void main() {
 #ifdef SCENE_ALPHA
     if (transparency_random(uvec2(gl_FragCoord.xy), v_instance, v_triangle) >= material_chain_alpha(v_material)) discard;
 #endif
-    vec3 v = v_position - shadow_origin.xyz;
+    float d = caster_depth(v_position, shadow_origin, shadow_axis);
 #ifdef WORLD_MAP
-    float d = dot(v, shadow_axis);
     out_depths = vec2(-d, d);
 #else
-    out_distance = int(shadow_origin.w) == SHADOW_CASCADES ? dot(v, shadow_axis) : length(v);
+    out_distance = d;
 #endif
 }

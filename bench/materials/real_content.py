@@ -838,24 +838,11 @@ def render_deferred(scene, samples, path, retries=3):
 # ---------------------------------------------------------------------------
 
 def read_exr(path):
-    """{channel: (H, W) float32}, row 0 = TOP (file order)."""
-    import OpenImageIO as oiio
-    inp = oiio.ImageInput.open(path)
-    if inp is None:
-        raise RuntimeError(f"cannot open {path}: {oiio.geterror()}")
-    channels = {}
-    try:
-        sub = 0
-        while inp.seek_subimage(sub, 0):
-            spec = inp.spec()
-            px = np.asarray(inp.read_image(0, spec.nchannels, oiio.FLOAT), np.float32)
-            px = px.reshape(spec.height, spec.width, spec.nchannels)
-            for c, name in enumerate(spec.channelnames):
-                channels[name] = px[:, :, c]
-            sub += 1
-    finally:
-        inp.close()
-    return channels
+    """{channel: (H, W) float32}, row 0 = top (file order): the tests'
+    reader (bottom row first, Blender's order), flipped."""
+    sys.path.insert(0, os.path.join(REPO, "tests", "blender"))
+    import blender_test_utils
+    return {k: v[::-1] for k, v in blender_test_utils.read_exr(path).items()}
 
 
 def combined(channels):

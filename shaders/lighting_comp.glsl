@@ -8,6 +8,9 @@
 #include "frame_lib.glsl"
 #include "gbuffer_lib.glsl"
 #include "light_lib.glsl"
+#ifdef HAS_WORLD_MAP
+#include "world_lib.glsl"
+#endif
 
 layout(local_size_x = LIGHTING_GROUP_SIZE, local_size_y = LIGHTING_GROUP_SIZE) in;
 
@@ -58,35 +61,54 @@ vec2 karis_env_brdf(float roughness, float NdotV) {
     return vec2(-1.04, 1.04) * a004 + k.zw;
 }
 
-/* World light at max_bounces 0: the constant world colour Lw through the
- * rays that reach it.
- *  Unoccluded part: Lw times each lobe's directional albedo. Burley diffuse:
- *  closed form (principled_diffuse_albedo). Specular: E[F G1(L)] over GGX
- *  visible normals (f cos / pdf = F G1(L)), and sheen: E[pi (1 - L.H)^5]
- *  over cosine-distributed directions, 2 x 2 stratified points per film
- *  sample placed at frame.sample_shift, so they converge over the samples to
- *  the integrals Cycles computes. A mirror lobe reflects the world with its
- *  Fresnel weight. Clearcoat: the split-sum fit of Karis 2014 ("Physically
- *  Based Shading on Mobile") at IOR 1.5, an approximation.
- *  Occlusion, Monte Carlo over the film's samples (HAS_WORLD_OCCLUSION): each
- *  sample has one direction w of the sphere (uniform) and an orthographic
- *  map along it holding the nearest and farthest geometry, which gives the
- *  visibility of the world along w and along -w; the one of the pair above
- *  the horizon, u, is a uniform sample of the hemisphere (pdf 1/(2 pi)).
- *  The diffuse light blocked is subtracted as a control variate:
- *  Lw [A - 2 pi f(u) cos (1 - V(u))] has the expectation
- *  Lw [A - integral f cos (1 - V)] = Lw integral f cos V where A is the
- *  unoccluded albedo above, and no noise where nothing occludes. Ambient occlusion
- *  AO = 1 - 2 cos(u) (1 - V(u)) (expectation: the cosine-weighted visible
- *  fraction, Cycles' AO pass). The glossy part of rough lobes takes the same
- *  control variate; for sharp lobes (alpha < 0.2) uniform directions would
- *  be fireflies, so AO scales them: specular occlusion from AO, an
- *  approximation (Cycles traces the lobe's own directions). */
+/* World light at max_bounces 0: the world's radiance through the rays that
+ * reach it, as the unoccluded integral minus what the scene blocks.
+ *
+ * Unoccluded part, a constant world Lw (no map): Lw times each lobe's
+ *  directional albedo. Burley diffuse: closed form (principled_diffuse_albedo).
+ *  Specular: E[F G1(L)] over GGX visible normals (f cos / pdf = F G1(L)), and
+ *  sheen: E[pi (1 - L.H)^5] over cosine-distributed directions, 2 x 2
+ *  stratified points per film sample placed at frame.sample_shift, so they
+ *  converge over the samples to the integrals Cycles computes. A mirror lobe
+ *  reflects the world with its Fresnel weight. Clearcoat: the split-sum fit
+ *  of Karis 2014 ("Physically Based Shading on Mobile") at IOR 1.5, an
+ *  approximation.
+ * Unoccluded part, a world map (HAS_WORLD_MAP, world_map_unoccluded): Monte
+ *  Carlo per pixel and film sample, WORLD_LIGHT_SAMPLES directions drawn from
+ *  the map's density and as many from the BSDF, combined by the balance
+ *  heuristic (Veach 1997) as Cycles combines its background light sample
+ *  with its BSDF ray; mirror lobes look the map up along the reflection.
+ *
+ * Occlusion, Monte Carlo over the film's samples (HAS_WORLD_OCCLUSION): each
+ *  sample has one direction w of the world (uniform on the sphere for a
+ *  constant world; drawn by the map's density otherwise: WorldModule) and an
+ *  orthographic map along it holding the nearest and farthest geometry,
+ *  which gives the visibility along w and along -w; the one of the pair
+ *  above the horizon, u, was drawn with density q = p(w) + p(-w)
+ *  (frame.world_occlusion.y; 1 / (2 pi) when uniform). The light blocked is
+ *  subtracted as a control variate: L(u) f(u) cos (1 - V(u)) / q has the
+ *  expectation integral L f cos (1 - V), so the result's expectation is
+ *  integral L f cos V, with no noise where nothing occludes. Ambient
+ *  occlusion AO = 1 - cos(u) (1 - V(u)) / (pi q) (expectation: the
+ *  cosine-weighted visible fraction, Cycles' AO pass). The glossy part of
+ *  rough lobes takes the same control variate; for sharp lobes (alpha < 0.2)
+ *  the occlusion direction would be fireflies, so AO scales them: specular
+ *  occlusion from AO, an approximation (Cycles traces the lobe's own
+ *  directions). */
 /* Lobes at least this rough (alpha >= 0.2, roughness >= 0.45) take their
  * world occlusion from the sampled direction; sharper ones from AO. */
 #define GLOSSY_OCCLUSION_MIN_ALPHA2 0.04
 
-LightContribution world_light(PrincipledWeights w, SurfaceParams s, vec3 P, vec3 N, vec3 V, out float ao) {
+/* The world's radiance for light arriving from direction d. */
+vec3 world_radiance_from(vec3 d) {
+#ifdef HAS_WORLD_MAP
+    return world_light_radiance(d);
+#else
+    return frame.world_color.rgb;
+#endif
+}
+
+LightContribution world_constant_unoccluded(PrincipledWeights w, SurfaceParams s, vec3 N, vec3 V) {
     LightContribution r;
     vec3 Lw = frame.world_color.rgb;
     float NdotV = dot(N, V);
@@ -119,6 +141,139 @@ LightContribution world_light(PrincipledWeights w, SurfaceParams s, vec3 P, vec3
     }
     r.diffuse *= Lw;
     r.glossy *= Lw;
+    return r;
+}
+
+#ifdef HAS_WORLD_MAP
+/* Three numbers in [0, 1) for direction k of a strategy at this pixel and
+ * film sample: the R3 low-discrepancy sequence (Roberts 2018, the
+ * generalised golden ratio of x^4 = x + 1) over the pixel's samples,
+ * stratifying them as Cycles' sampling patterns do, shifted per pixel and
+ * strategy by a pcg4d hash (Cranley-Patterson rotation; see
+ * transparency_random). In 32-bit fixed point, so the sequence stays exact
+ * at any sample count. */
+vec3 world_sequence(ivec2 pixel, uint strategy, uint k) {
+    uvec4 v = uvec4(uvec2(pixel), strategy * 0x9E3779B9u + 0x85EBCA6Bu, 0x27d4eb2du);
+    v = v * 1664525u + 1013904223u;
+    v.x += v.y * v.w; v.y += v.z * v.x; v.z += v.x * v.y; v.w += v.y * v.z;
+    v ^= v >> 16u;
+    v.x += v.y * v.w; v.y += v.z * v.x; v.z += v.x * v.y; v.w += v.y * v.z;
+    uint n = uint(frame.sample_shift.w) * uint(WORLD_LIGHT_SAMPLES) + k;
+    uvec3 x = v.xyz + n * uvec3(0xd1b54a32u, 0xabc98388u, 0x8cb92ba7u);
+    return vec3(x >> 8u) * (1.0 / 16777216.0);
+}
+
+/* The BSDF's sampling strategies for the world's light: cosine-weighted
+ * (diffuse and sheen), GGX visible normals (specular), GTR1 half vectors
+ * (clearcoat, as Cycles samples it), chosen with probabilities by each
+ * lobe's weight; mirror lobes are not sampled (looked up along R). */
+struct BsdfChoice {
+    float diffuse, specular, clearcoat;
+};
+
+BsdfChoice world_bsdf_choice(PrincipledWeights w) {
+    const vec3 lum = vec3(0.2126729, 0.7151522, 0.0721750);
+    BsdfChoice c;
+    c.diffuse = dot(principled_diffuse_color(w), lum);
+    c.specular = (w.specular != 0.0 && w.alpha2 > 1e-7) ? max(dot(w.cspec0, lum), 0.1) : 0.0;
+    c.clearcoat = (w.clearcoat > 0.0 && w.cc_alpha * w.cc_alpha > 1e-7) ? 0.25 * w.clearcoat : 0.0;
+    float total = c.diffuse + c.specular + c.clearcoat;
+    if (total <= 0.0) {
+        c.diffuse = c.specular = c.clearcoat = 0.0;
+        return c;
+    }
+    c.diffuse /= total;
+    c.specular /= total;
+    c.clearcoat /= total;
+    return c;
+}
+
+/* GTR1 (Burley 2012): cos(theta_h)^2 = (1 - a^(2(1 - u))) / (1 - a^2),
+ * pdf(h) = D(h) cos(theta_h), per incident direction / (4 L.H). */
+float gtr1_D(float a, float cosH) {
+    if (a >= 1.0) return M_1_PI_F;
+    float a2 = a * a;
+    return (a2 - 1.0) / (M_PI_F * log(a2) * (1.0 + (a2 - 1.0) * cosH * cosH));
+}
+
+vec3 sample_gtr1(vec3 N, vec3 V, float a, vec2 u) {
+    float a2 = min(a * a, 0.9999);
+    float cos2 = (1.0 - pow(a2, 1.0 - u.x)) / (1.0 - a2);
+    float cos_h = sqrt(clamp(cos2, 0.0, 1.0)), sin_h = sqrt(max(1.0 - cos2, 0.0));
+    float phi = 2.0 * M_PI_F * u.y;
+    vec3 T, B;
+    make_basis(N, T, B);
+    vec3 H = T * (sin_h * cos(phi)) + B * (sin_h * sin(phi)) + N * cos_h;
+    return reflect(-V, H);
+}
+
+float gtr1_pdf(vec3 N, vec3 V, float a, vec3 L) {
+    vec3 H = normalize(L + V);
+    float cosH = dot(N, H), LdotH = dot(L, H);
+    if (cosH <= 0.0 || LdotH <= 0.0) return 0.0;
+    return gtr1_D(a, cosH) * cosH / (4.0 * LdotH);
+}
+
+float world_bsdf_pdf(BsdfChoice c, PrincipledWeights w, vec3 N, vec3 V, vec3 L) {
+    float NdotL = dot(N, L);
+    if (NdotL <= 0.0) return 0.0;
+    float p = c.diffuse * NdotL * M_1_PI_F;
+    if (c.specular > 0.0) p += c.specular * principled_specular_pdf(w, N, V, L);
+    if (c.clearcoat > 0.0) p += c.clearcoat * gtr1_pdf(N, V, w.cc_alpha, L);
+    return p;
+}
+
+vec3 world_bsdf_sample(BsdfChoice c, PrincipledWeights w, vec3 N, vec3 V, vec3 r) {
+    if (r.z < c.diffuse) {
+        vec3 T, B;
+        make_basis(N, T, B);
+        vec2 d = concentric_disk(r.xy);
+        return T * d.x + B * d.y + N * sqrt(max(1.0 - dot(d, d), 0.0));
+    }
+    if (r.z < c.diffuse + c.specular) return sample_ggx_vndf(N, V, sqrt(w.alpha2), r.xy);
+    return sample_gtr1(N, V, w.cc_alpha, r.xy);
+}
+
+/* f cos L / (p_map + p_bsdf) for one direction (the balance heuristic's
+ * share of either strategy's sample). */
+void world_map_add(inout LightContribution r, PrincipledWeights w, SurfaceParams s, vec3 N, vec3 V, vec3 L,
+                   float p_sum) {
+    if (dot(N, L) <= 0.0 || !(p_sum > 0.0)) return;
+    vec3 Le = world_light_radiance(L) / p_sum;
+    LobeEval e = principled_eval(s, w, N, V, L);
+    r.diffuse += e.diffuse * Le;
+    r.glossy += e.glossy * (Le * smooth_side(s, L));
+}
+
+LightContribution world_map_unoccluded(PrincipledWeights w, SurfaceParams s, vec3 N, vec3 V, ivec2 pixel) {
+    LightContribution r;
+    r.diffuse = vec3(0.0);
+    r.glossy = vec3(0.0);
+    BsdfChoice c = world_bsdf_choice(w);
+    bool sample_bsdf = c.diffuse + c.specular + c.clearcoat > 0.0;
+    for (int k = 0; k < WORLD_LIGHT_SAMPLES; ++k) {
+        float p_map;
+        vec3 L = world_sample(world_sequence(pixel, 0u, uint(k)), p_map);
+        world_map_add(r, w, s, N, V, L, p_map + world_bsdf_pdf(c, w, N, V, L));
+        if (sample_bsdf) {
+            vec3 Lb = world_bsdf_sample(c, w, N, V, world_sequence(pixel, 1u, uint(k)));
+            world_map_add(r, w, s, N, V, Lb, world_pdf(Lb) + world_bsdf_pdf(c, w, N, V, Lb));
+        }
+    }
+    r.diffuse *= 1.0 / float(WORLD_LIGHT_SAMPLES);
+    r.glossy *= 1.0 / float(WORLD_LIGHT_SAMPLES);
+    r.glossy += principled_mirror_weight(w, N, V) * world_light_radiance(reflect(-V, N));
+    return r;
+}
+#endif
+
+LightContribution world_light(PrincipledWeights w, SurfaceParams s, vec3 P, vec3 N, vec3 V, ivec2 pixel,
+                              out float ao) {
+#ifdef HAS_WORLD_MAP
+    LightContribution r = world_map_unoccluded(w, s, N, V, pixel);
+#else
+    LightContribution r = world_constant_unoccluded(w, s, N, V);
+#endif
     ao = 1.0;
 #ifdef HAS_WORLD_OCCLUSION
     GpuShadow sh = shadows[int(frame.world_occlusion.x)];
@@ -126,23 +281,32 @@ LightContribution world_light(PrincipledWeights w, SurfaceParams s, vec3 P, vec3
     float side = c >= 0.0 ? 1.0 : -1.0;
     vec3 u = -sh.point.xyz * side; /* whichever of the pair is above the horizon */
     float cos_u = abs(c);
+    float inv_q = 1.0 / frame.world_occlusion.y; /* 1 / the pair's density */
     if (cos_u > 0.0) {
         float blocked = 1.0 - world_visibility(sh, P, N, side);
+        vec3 Lu = world_radiance_from(u) * inv_q;
+#ifdef HAS_WORLD_MAP
+        r.diffuse -= Lu * principled_eval_diffuse(s, w, N, V, u) * blocked;
+#else
         /* The analytic albedo above has no bump shadowing term: the sampled
          * direction removes what the term takes, 1 - t, with what is blocked:
          * f (1 - (1 - blocked) t) (exact in expectation; t = 1 without bump). */
         float t = bump_shadowing_term(s.Ns, N, u);
-        r.diffuse -= Lw * (2.0 * M_PI_F) * principled_eval_diffuse_unbumped(s, w, N, V, u) *
-                     (1.0 - (1.0 - blocked) * t);
-        ao = 1.0 - 2.0 * cos_u * blocked;
+        r.diffuse -= Lu * principled_eval_diffuse_unbumped(s, w, N, V, u) * (1.0 - (1.0 - blocked) * t);
+#endif
+        ao = 1.0 - cos_u * blocked * inv_q * M_1_PI_F;
         if (w.alpha2 >= GLOSSY_OCCLUSION_MIN_ALPHA2) {
             /* A rough lobe: the same control variate (its f stays small). */
             vec3 f = principled_specular(w, N, V, u) + vec3(principled_clearcoat(w, N, V, u));
-            r.glossy -= Lw * (2.0 * M_PI_F) * f * blocked;
+#ifdef HAS_WORLD_MAP
+            f *= smooth_side(s, u);
+#endif
+            r.glossy -= Lu * f * blocked;
         } else {
-            /* A sharp lobe would make uniform directions fireflies: AO as
-             * its occlusion. */
-            r.glossy *= ao;
+            /* A sharp lobe would make the occlusion direction fireflies: AO
+             * as its occlusion (clamped to [0, 1]: with an importance-sampled
+             * direction one sample's AO can fall below 0). */
+            r.glossy *= clamp(ao, 0.0, 1.0);
         }
     }
 #endif
@@ -159,9 +323,16 @@ void main() {
     const bool first_batch = light_batch.x == 0u;
     if (depth <= 0.0) {
         if (!first_batch) return;
-        /* Background: the world colour, or transparent (Cycles film_transparent). */
+        /* Background: the world along this sample's ray through the pixel
+         * (the pixel filter's jitter is in the projection), or transparent
+         * (Cycles film_transparent). */
         bool transparent = frame.world_color.w > 0.5;
-        vec4 bg = transparent ? vec4(0.0) : vec4(frame.world_color.rgb, 1.0);
+#ifdef HAS_WORLD_MAP
+        vec3 world = world_camera_radiance(-frame_view_vector(frame_position_from_depth(pixel, 0.5)));
+#else
+        vec3 world = frame.world_color.rgb;
+#endif
+        vec4 bg = transparent ? vec4(0.0) : vec4(world, 1.0);
         imageStore(film, pixel, imageLoad(film, pixel) + bg * share);
         return;
     }
@@ -184,7 +355,7 @@ void main() {
     total.diffuse = vec3(0.0);
     total.glossy = vec3(0.0);
     float ao = 1.0;
-    if (first_batch) total = world_light(w, s, P, N, V, ao);
+    if (first_batch) total = world_light(w, s, P, N, V, pixel, ao);
 #ifdef OUT_AO
     if (first_batch) imageStore(ao_image, pixel, imageLoad(ao_image, pixel) + vec4(vec3(ao), 0.0) * share);
 #endif

@@ -15,6 +15,9 @@
 #include "frame_lib.glsl"
 #include "gbuffer_lib.glsl"
 #include "bsdf_lib.glsl"
+#ifdef HAS_WORLD_MAP
+#include "world_lib.glsl"
+#endif
 
 layout(local_size_x = LIGHTING_GROUP_SIZE, local_size_y = LIGHTING_GROUP_SIZE) in;
 
@@ -104,7 +107,13 @@ void main() {
 #elif PASS_ID == PASS_EMIT
     value = background ? vec4(0.0) : vec4(texelFetch(gbuf_emission, pixel, 0).rgb, 0.0);
 #elif PASS_ID == PASS_ENV
+#ifdef HAS_WORLD_MAP
+    /* The world map along this sample's ray through the pixel (as camera rays see it). */
+    value = background ? vec4(world_camera_radiance(-frame_view_vector(frame_position_from_depth(pixel, 0.5))), 0.0)
+                       : vec4(0.0);
+#else
     value = background ? vec4(frame.world_color.rgb, 0.0) : vec4(0.0);
+#endif
 #elif PASS_ID == PASS_SHADOW
     value = vec4(1.0); /* written by the RESOLVE_SHADOW variant */
 #elif PASS_ID == PASS_AO

@@ -23,6 +23,7 @@
 #define SSBO_INSTANCE_REMAP 13 /* shadow maps: the instances left after culling, per draw */
 #define SSBO_MATERIAL_CONSTANTS 14 /* node materials: per-material constants (material_lib.glsl) */
 #define SSBO_ATTRIBUTES 15     /* node materials: the mesh's named per-corner attributes */
+#define SSBO_WORLD_CDF 16      /* the world map's sampling CDFs (world_lib.glsl) */
 
 /* Textures sampled by compute passes (G-buffer inputs) */
 #define TEX_DEPTH 0
@@ -39,6 +40,8 @@
 #define TEX_SHADOW_LIGHT 11
 #define TEX_WORLD_MAP 12    /* RG32F: (-nearest, farthest) depth along the world direction */
 #define TEX_GBUF_SMOOTH_NORMAL 13
+#define TEX_WORLD_RADIANCE 14 /* RGBA32F equirectangular: the world's radiance for light (world_lib.glsl) */
+#define TEX_WORLD_CAMERA 15   /* ... as camera rays see it (differs with Light Path Is Camera Ray) */
 /* Node materials: image slot k of the drawn material at unit TEX_MATERIAL_IMAGE0 + k */
 #define TEX_MATERIAL_IMAGE0 16
 
@@ -49,6 +52,15 @@
 #define IMG_PASS_OUT 3
 #define IMG_SHADOW 4      /* x shadowed, y unshadowed direct-light luminance (Shadow pass) */
 #define IMG_AO 5          /* AO pass accumulation (lighting pass, first batch) */
+#define IMG_WORLD_BAKE 6  /* the world map being baked (world_bake_comp.glsl) */
+
+/* The world map's sampling density: this fraction uniform on the sphere, the
+ * rest by luminance (defensive importance sampling: every direction keeps a
+ * density, which bounds the occlusion estimate where the map is dark). */
+#define WORLD_UNIFORM_FRACTION 0.2
+/* Directions per pixel and film sample for the world's unoccluded light:
+ * this many from the map and as many from the BSDF (multiple importance). */
+#define WORLD_LIGHT_SAMPLES 2
 
 /* Fragment outputs of the geometry pass (G-buffer MRT) */
 #define OUT_EMISSION 0

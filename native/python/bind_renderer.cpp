@@ -229,6 +229,8 @@ void declare_renderer(py::module_& m) {
             d["material_programs"] = self.last.material_programs;
             d["images_uploaded"] = self.last.images_uploaded;
             d["images_reused"] = self.last.images_reused;
+            d["world_bake_ms"] = self.last.world_bake_ms;
+            d["world_map_width"] = self.last.world_map_width;
             return d;
         })
         .def_property_readonly("last_warnings", [](PyRenderer& self) { return self.last_warnings; },
@@ -436,11 +438,20 @@ void declare_renderer(py::module_& m) {
              py::arg("spot_size") = 0.785398f, py::arg("spot_blend") = 0.15f, py::arg("angle") = 0.00918043f,
              py::arg("shape") = "SQUARE", py::arg("size") = 0.25f, py::arg("size_y") = 0.25f,
              py::arg("cast_shadow") = true)
-        .def("set_world", [](PyRenderer& self, const py::object& color) {
+        .def("set_world", [](PyRenderer& self, const py::object& color, const py::object& graph) {
             World w;
             w.color = vec3_from(color, "set_world: color");
-            self.get().set_world(w);
-        }, py::kw_only(), py::arg("color"))
+            if (graph.is_none()) {
+                self.get().set_world(w);
+                return;
+            }
+            if (!py::isinstance<py::dict>(graph)) throw py::value_error("set_world: graph must be a dict or None");
+            MaterialGraph g = graph_from_python(graph.cast<py::dict>());
+            py::gil_scoped_release release;
+            self.get().set_world(w, &g);
+        }, py::kw_only(), py::arg("color"), py::arg("graph") = py::none(),
+        "The world: a constant colour, or (graph) a world node tree's graph dict "
+        "(materials/builder.py build_world_graph), baked into an environment map.")
         .def("render",
              [](PyRenderer& self, const Camera& camera, int width, int height, const std::vector<std::string>& passes,
                 bool film_transparent, float mist_start, float mist_depth, const std::string& mist_falloff,

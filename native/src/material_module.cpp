@@ -152,15 +152,40 @@ GLuint MaterialModule::program(ShaderLibrary& shaders, std::uint32_t graph, cons
     if (g.graph.alpha) v.defines.push_back("MATERIAL_ALPHA");
     v.defines.push_back("MATERIAL_ATTRIBUTE_COUNT " + std::to_string(g.graph.attributes.size()));
     v.defines.push_back("MATERIAL_IMAGE_COUNT " + std::to_string(g.graph.images.size()));
+    if (calls(graph, "node_bump_offset")) v.defines.push_back("MATERIAL_BUMP");
+    return shaders.graphics_program("geometry_vert.glsl", "geometry_frag.glsl", v,
+                                    {{kMaterialGraphFile, graph_source(shaders, graph)}});
+}
+
+std::string MaterialModule::graph_source(ShaderLibrary& shaders, std::uint32_t graph) const {
+    const StoredGraph& g = graphs_.at(graph);
     // The node library files the graph calls into (and theirs), then the graph.
     std::vector<std::string> functions = material_graph_functions(g.graph);
     functions.push_back("node_closure_none");
-    if (std::find(functions.begin(), functions.end(), "node_bump_offset") != functions.end())
-        v.defines.push_back("MATERIAL_BUMP");
     std::string source = "#include \"material_lib.glsl\"\n";
     for (const std::string& file : shaders.node_files_for(functions)) source += "#include \"" + file + "\"\n";
-    source += g.glsl;
-    return shaders.graphics_program("geometry_vert.glsl", "geometry_frag.glsl", v, {{kMaterialGraphFile, source}});
+    return source + g.glsl;
+}
+
+bool MaterialModule::calls(std::uint32_t graph, const std::string& function) const {
+    for (const GraphNode& n : graphs_.at(graph).graph.nodes)
+        if (n.func == function) return true;
+    return false;
+}
+
+void MaterialModule::bind_images(std::uint32_t graph) const {
+    const StoredGraph& g = graphs_.at(graph);
+    for (std::size_t k = 0; k < g.graph.images.size(); ++k)
+        glBindTextureUnit(GLuint(TEX_MATERIAL_IMAGE0 + k), images_[g.graph.images[k]].texture.get());
+}
+
+std::array<int, 2> MaterialModule::largest_image(std::uint32_t graph) const {
+    std::array<int, 2> size{0, 0};
+    for (std::uint32_t id : graphs_.at(graph).graph.images) {
+        size[0] = std::max(size[0], images_[id].width);
+        size[1] = std::max(size[1], images_[id].height);
+    }
+    return size;
 }
 
 GLuint MaterialModule::caster_program(ShaderLibrary& shaders, std::uint32_t graph, bool world_map) {
@@ -172,8 +197,7 @@ GLuint MaterialModule::caster_program(ShaderLibrary& shaders, std::uint32_t grap
 
 void MaterialModule::bind_for_draw(std::uint32_t graph, const GpuMesh& mesh) const {
     const StoredGraph& g = graphs_.at(graph);
-    for (std::size_t k = 0; k < g.graph.images.size(); ++k)
-        glBindTextureUnit(GLuint(TEX_MATERIAL_IMAGE0 + k), images_[g.graph.images[k]].texture.get());
+    bind_images(graph);
     GLint layout[4 * kMaxGraphAttributes];
     for (int k = 0; k < kMaxGraphAttributes; ++k) {
         layout[4 * k] = -1;

@@ -10,6 +10,7 @@
 
 #include <deferred/material_graph.h>
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -62,6 +63,17 @@ public:
     // world_map: the world's occlusion map). Uniforms: the map's view-projection
     // at location 2, origin at 20, axis at 21 (shadow_frag.glsl's 2, 3, 4).
     GLuint caster_program(ShaderLibrary& shaders, std::uint32_t graph, bool world_map);
+    // The generated file (kMaterialGraphFile) a graph's programs include:
+    // material_lib.glsl, the node-library files the graph calls, the graph.
+    std::string graph_source(ShaderLibrary& shaders, std::uint32_t graph) const;
+    // True if the graph calls the node-library function `function`.
+    bool calls(std::uint32_t graph, const std::string& function) const;
+    std::size_t image_count(std::uint32_t graph) const { return graphs_[graph].graph.images.size(); }
+    // Largest width and height among the graph's images (0, 0 without images).
+    std::array<int, 2> largest_image(std::uint32_t graph) const;
+    std::uint32_t graph_count() const { return std::uint32_t(graphs_.size()); }
+    // The graph's images at TEX_MATERIAL_IMAGE0 + slot.
+    void bind_images(std::uint32_t graph) const;
     // Per draw: the graph's images and the mesh's attribute slots and texture space.
     void bind_for_draw(std::uint32_t graph, const GpuMesh& mesh) const;
 

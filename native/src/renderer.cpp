@@ -15,6 +15,7 @@
 #include "scene_store.h"
 #include "shader_library.h"
 #include "shadow_module.h"
+#include "world_module.h"
 
 #include "../../shaders/shader_defines.h"
 #include "../../shaders/shader_shared.h"
@@ -89,6 +90,8 @@ struct Renderer::Impl {
     LightModule lights;
     LightCulling culling;
     ShadowModule shadows;
+    WorldModule world_module;
+    std::int32_t world_graph = -1;  // the world's node graph in `materials`, -1: a constant colour
     VertexArray empty_vao;
     Buffer dummy_ssbo;
     GLint max_texture_size = 0, max_fb_width = 0, max_fb_height = 0;
@@ -108,6 +111,7 @@ struct Renderer::Impl {
             lights = LightModule();
             culling = LightCulling();
             shadows = ShadowModule();
+            world_module.release();
             scene.clear();
             materials.release_all();
             shaders.reset();
@@ -297,10 +301,29 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     Buffer material_buffer = make_storage_buffer(gpu_materials.data(), gpu_materials.size() * sizeof(gpu::GpuMaterial), "materials");
     this->materials.upload_constants();
     shadows.begin_frame(cam, settings.shadow_resolution, settings.shadow_quality, memory_budget_bytes() / 4);
+    // A world node tree: baked into its environment map (with the sampling
+    // distribution) before anything asks whether the world lights the scene.
+    // The bake reads the camera (Camera texture coordinates) from the frame block.
+    {
+        gpu::FrameConstants bake_frame{};
+        bake_frame.view = to_gpu(cam.view);
+        Buffer bake_buffer = make_storage_buffer(&bake_frame, sizeof(bake_frame), "world bake frame");
+        glBindBufferBase(GL_UNIFORM_BUFFER, UBO_FRAME, bake_buffer.get());
+        try {
+            result.timings.world_bake_ms = world_module.prepare(*shaders, materials, world_graph);
+        } catch (const Error& e) {
+            // A world graph that does not compile: the world's fallback colour, warned.
+            world_module.release();
+            result.warnings.push_back("World: its node tree could not be baked (" + std::string(e.what()) +
+                                      "); rendered with the viewport colour");
+        }
+        result.timings.world_map_width = world_module.width();
+    }
     // The world's occlusion map, when the world lights anything or the AO
     // pass is asked for.
     const World& world = scene.world();
-    const bool world_lights = world.color[0] > 0.0f || world.color[1] > 0.0f || world.color[2] > 0.0f;
+    const bool world_lights = world_module.has_map() ? world_module.lights()
+        : world.color[0] > 0.0f || world.color[1] > 0.0f || world.color[2] > 0.0f;
     const bool ao_pass = wanted.contains(Pass::AO);
     if (settings.shadows && (world_lights || ao_pass) && scene.instance_count() > 0) shadows.offer_world();
     lights.sync(scene.lights(), cam.position, settings.light_threshold, settings.shadows ? &shadows : nullptr);
@@ -323,7 +346,8 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     // How far (whole pixels) a jittered sample can look from its pixel centre.
     const std::uint32_t reach = settings.samples > 1 ? std::uint32_t(std::ceil(filter.support())) : 0u;
     fc.tiles = {tiles_x, tiles_y, culled ? 1u : 0u, reach};
-    fc.world_occlusion = {float(shadows.world_index()), 0.0f, 0.0f, 0.0f};
+    fc.world_occlusion = {float(shadows.world_index()), 0.0f, float(world_module.width()),
+                          float(world_module.height())};
     Buffer frame_buffer = make_storage_buffer(nullptr, sizeof(fc), "frame constants");
     glBindBufferBase(GL_UNIFORM_BUFFER, UBO_FRAME, frame_buffer.get());
 
@@ -367,6 +391,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     if (culled) lighting_variant.defines.push_back("LIGHT_CULLING");
     if (!shadows.empty()) lighting_variant.defines.push_back("HAS_SHADOWS");
     if (shadows.world_index() >= 0) lighting_variant.defines.push_back("HAS_WORLD_OCCLUSION");
+    world_module.add_defines(lighting_variant);
     if (ao_pass) lighting_variant.defines.push_back("OUT_AO");
     if (shadow_pass) lighting_variant.defines.push_back("OUT_SHADOW");
     ShaderVariant geometry_variant = base_variant;
@@ -377,6 +402,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         ShaderVariant v = base_variant;
         v.defines.push_back("PASS_ID " + std::to_string(static_cast<int>(p)));
         if (mode) v.defines.push_back(mode);
+        if (p == Pass::Env) world_module.add_defines(v);
         return shaders->compute_program("passes_comp.glsl", v);
     };
     check_gl("frame sync");
@@ -606,6 +632,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
             if (data_gbuffer && is_data_pass(p) != data) continue;
             glUseProgram(pass_program(p, first_only ? nullptr : "ACCUMULATE"));
             gbuffer.bind_textures();
+            if (p == Pass::Env) world_module.bind();
             glBindImageTexture(IMG_PASS_OUT, image.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
             glDispatchCompute(groups_x, groups_y, 1);
         }
@@ -687,6 +714,10 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         // Where in each light-shape cell (and on the sun's disk) this sample looks.
         fc.sample_shift = {u[2], u[3], float(std::fmod(0.5 + sample * 0.6180339887498949, 1.0)),
                            float(sample)};
+        // This sample's direction of the world's occlusion map and the density
+        // its pair (it answers for the opposite direction too) was drawn with.
+        const WorldDirection world_dir = world_module.occlusion_direction(world_sample_point(sample));
+        fc.world_occlusion.y = float(world_dir.pair_pdf);
         glNamedBufferSubData(frame_buffer.get(), 0, sizeof(fc), &fc);
         glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
 
@@ -723,7 +754,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         // at sample 0 from what the visible surfaces need.
         if (!shadows.empty()) {
             if (sample == 0) shadows.fit(visible_receivers(cam, settings.width, settings.height));
-            shadows.render_sample(*shaders, {u[2], u[3]}, world_sample_point(sample), draw_shadow_casters,
+            shadows.render_sample(*shaders, {u[2], u[3]}, world_dir.dir, draw_shadow_casters,
                                   caster_defines, scene_alpha || alpha_graphs);
             shadow_ms += timer.lap_ms();
         }
@@ -742,6 +773,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         glUseProgram(lighting);
         if (culled) culling.bind();
         shadows.bind();
+        world_module.bind();
         glBindImageTexture(IMG_FILM, film.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
         if (shadow_pass)
             glBindImageTexture(IMG_SHADOW, shadow_light.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
@@ -840,6 +872,7 @@ void Renderer::clear_scene() {
     impl_->thread.run([&] {
         impl_->scene.clear();
         impl_->materials.clear();
+        impl_->world_graph = -1;
     });
 }
 
@@ -897,8 +930,11 @@ void Renderer::add_light(const Light& light) {
     impl_->thread.run([&] { impl_->scene.add_light(light); });
 }
 
-void Renderer::set_world(const World& world) {
-    impl_->thread.run([&] { impl_->scene.set_world(world); });
+void Renderer::set_world(const World& world, const MaterialGraph* graph) {
+    impl_->thread.run([&] {
+        impl_->scene.set_world(world);
+        impl_->world_graph = graph ? std::int32_t(impl_->materials.add_graph(*graph)) : -1;
+    });
 }
 
 FrameResult Renderer::render(const Camera& camera, const RenderSettings& settings) {

@@ -334,10 +334,17 @@ void ShaderLibrary::prune_disk_cache() const {
     for (std::size_t i = 0; i + kMaxCachedPrograms < files.size(); ++i) std::filesystem::remove(files[i].second, ec);
 }
 
-GLuint ShaderLibrary::compute_program(const std::string& comp_file, const ShaderVariant& variant) {
-    const std::string key = comp_file + "|" + variant.key();
+GLuint ShaderLibrary::compute_program(const std::string& comp_file, const ShaderVariant& variant,
+                                      const std::map<std::string, std::string>& generated) {
+    std::string key = comp_file + "|" + variant.key();
+    for (const auto& [name, text] : generated) key += "|" + name + ":" + text;
     if (auto it = programs_.find(key); it != programs_.end()) return it->second.get();
-    return build(key, {{GL_COMPUTE_SHADER, expand(comp_file, variant)}}, key);
+    struct Scope {
+        const std::map<std::string, std::string>*& slot;
+        ~Scope() { slot = nullptr; }
+    } scope{generated_};
+    generated_ = &generated;
+    return build(key, {{GL_COMPUTE_SHADER, expand(comp_file, variant)}}, comp_file + "|" + variant.key());
 }
 
 GLuint ShaderLibrary::graphics_program(const std::string& vert_file, const std::string& frag_file,

@@ -36,9 +36,10 @@ public:
     // Expanded source of one file (for tests and error messages).
     std::string expand(const std::string& file, const ShaderVariant& variant) const;
 
-    GLuint compute_program(const std::string& comp_file, const ShaderVariant& variant);
     // `generated`: extra files (name -> source) the expansion may include,
     // e.g. a node material's "material_graph.glsl"; part of the cache key.
+    GLuint compute_program(const std::string& comp_file, const ShaderVariant& variant,
+                           const std::map<std::string, std::string>& generated = {});
     GLuint graphics_program(const std::string& vert_file, const std::string& frag_file,
                             const ShaderVariant& variant,
                             const std::map<std::string, std::string>& generated = {});
@@ -69,7 +70,7 @@ private:
     std::map<std::string, std::string> sources_;
     std::vector<std::string> file_ids_;  // #line source-string number -> file name
     std::map<std::string, Program> programs_;
-    const std::map<std::string, std::string>* generated_ = nullptr;  // during one graphics_program()
+    const std::map<std::string, std::string>* generated_ = nullptr;  // during one program's expansion
     std::size_t compile_count_ = 0, disk_loads_ = 0;
     double compile_ms_ = 0.0, load_ms_ = 0.0;
     std::string driver_;     // GL vendor/renderer/version: part of every disk-cache key

@@ -327,7 +327,7 @@ std::vector<int> ShadowModule::resolutions() const {
 }
 
 void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float, 2>& u,
-                                 const std::array<float, 2>& u_world, const DrawCasters& draw_casters,
+                                 const glm::dvec3& world_dir, const DrawCasters& draw_casters,
                                  const std::vector<std::string>& caster_defines, bool casters_vary) {
     if (entries_.empty()) return;
     ShaderVariant variant;
@@ -375,12 +375,9 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
         glScissor(0, 0, e.resolution, e.resolution);  // clears too: only the corner in use
         const float uv_scale = float(e.resolution) / float(resolution_);
         if (e.world) {
-            // This sample's direction of the world, uniform on the sphere
-            // (the map also answers for the opposite one); light from it
-            // travels along `axis`.
-            const double z = 1.0 - 2.0 * u_world[0], phi = 2.0 * M_PI * u_world[1];
-            const double rxy = std::sqrt(std::max(0.0, 1.0 - z * z));
-            const glm::dvec3 axis = -glm::dvec3(rxy * std::cos(phi), rxy * std::sin(phi), z);
+            // This sample's direction of the world (the map also answers
+            // for the opposite one); light from it travels along `axis`.
+            const glm::dvec3 axis = -world_dir;
             const glm::dmat4 m = ortho_map(axis, receivers_center_, receivers_radius_, camera_.clip_end);
             g.cascade[0] = to_gpu_mat(m);
             g.point = {float(axis.x), float(axis.y), float(axis.z), 0.0f};

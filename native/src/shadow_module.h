@@ -78,12 +78,13 @@ public:
     // currently bound program.
     using DrawCasters = std::function<void(const CasterTest&)>;
     // Renders every kept light's maps (and the world's) for one film sample.
-    // `u`: the sample's point on the light shapes; `u_world`: its direction
-    // of the world (uniform on the sphere). `caster_defines` go into the
+    // `u`: the sample's point on the light shapes; `world_dir`: its
+    // direction of the world (unit, towards the world: WorldModule's
+    // occlusion_direction). `caster_defines` go into the
     // casters' program (SCENE_ALPHA: partly transparent constant materials).
     // `casters_vary`: some caster is drawn stochastically (transparency), so
     // even the maps of lights without size are drawn again every sample.
-    void render_sample(ShaderLibrary& shaders, const std::array<float, 2>& u, const std::array<float, 2>& u_world,
+    void render_sample(ShaderLibrary& shaders, const std::array<float, 2>& u, const glm::dvec3& world_dir,
                        const DrawCasters& draw_casters, const std::vector<std::string>& caster_defines = {},
                        bool casters_vary = false);
     int world_index() const { return world_index_; }  // shadow index of the world's map, -1: none

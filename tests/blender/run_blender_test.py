@@ -49,6 +49,7 @@ TESTS = {
     "node_probes": (ANALYTIC, True),
     "transparency": (ANALYTIC, True),
     "bump_lighting": (ANALYTIC, True),
+    "world_map": (ANALYTIC, True),
 }
 BENCHMARKS = {"bench_export": (None, True)}
 

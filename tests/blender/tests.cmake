@@ -35,6 +35,7 @@ set(DEFERRED_BLENDER_TESTS
     node_probes
     transparency
     bump_lighting
+    world_map
 )
 
 foreach(_name IN LISTS DEFERRED_BLENDER_TESTS)

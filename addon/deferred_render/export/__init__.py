@@ -20,9 +20,5 @@ def export_scene(depsgraph, renderer, warn=None, test_break=None):
     exporter = SceneExporter(renderer, warn=warn, test_break=test_break)
     completed = exporter.sync(depsgraph)
     if completed:
-        color, warnings = world.world_color(depsgraph.scene.world)
-        for message in warnings:
-            if warn:
-                warn(message)
-        renderer.set_world(color=color)
+        world.export_world(depsgraph.scene.world, renderer, exporter.image_registry, warn)
     return exporter.stats, not completed

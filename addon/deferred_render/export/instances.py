@@ -164,10 +164,17 @@ class SceneExporter:
             except ValueError as ex:  # refused by the native validation: default surface
                 name = material.name if material is not None else "<default>"
                 self._warn_once(("material-refused", key), f"Material '{name}': {ex} (rendered with the default surface)")
-                mat_id = self.renderer.add_material(**material_export.DEFAULT_PARAMS)
+                mat_id = self.renderer.add_material(**material_export.DEFAULT_SURFACE)
             self._material_ids[key] = mat_id
             self.stats.materials += 1
         return mat_id
+
+    def image_registry(self):
+        """The export's ImageRegistry (one upload per image for materials and world)."""
+        if self._images is None:
+            self._images = graph_builder.ImageRegistry(self.renderer.add_image, self.warn,
+                                                     getattr(self.renderer, "find_image", None))
+        return self._images
 
     def _graph_material_id(self, material, key):
         """A node material when the tree does not reduce to one constant
@@ -179,11 +186,8 @@ class SceneExporter:
         _, notes = material_export.material_params(material)
         if all(material_export.is_clamp_note(n) for n in notes):
             return None  # the constant parameter set represents it: no program needed
-        if self._images is None:
-            self._images = graph_builder.ImageRegistry(self.renderer.add_image, self.warn,
-                                                     getattr(self.renderer, "find_image", None))
         try:
-            graph = graph_builder.build_material_graph(material, self._images)
+            graph = graph_builder.build_material_graph(material, self.image_registry())
         except (graph_builder.GraphCycle, graph_builder.SpecError, RecursionError) as ex:
             self._warn_once(("material-graph", key), f"Material '{material.name}': {ex} "
                                                      "(rendered with its viewport display colour)")

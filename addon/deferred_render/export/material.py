@@ -380,14 +380,20 @@ def _linked_node(socket):
     return node
 
 
+# Cycles' default surface (scene.cpp Scene::default_surface: a Diffuse BSDF
+# of colour 0.8, roughness 0 = Lambert) for objects without a material.
+DEFAULT_SURFACE = dict(DEFAULT_PARAMS, specular=0.0, diffuse_roughness=0.0)
+
+
 def viewport_params(material):
-    """The material's viewport display settings as a parameter set."""
+    """A material without nodes as Cycles renders it (blender/shader.cpp:
+    a Diffuse BSDF of the viewport colour), or the default surface."""
     if material is None:
-        return dict(DEFAULT_PARAMS)
+        return dict(DEFAULT_SURFACE)
     params = _full({
         "base_color": _color(material.diffuse_color, (0.8, 0.8, 0.8)),
-        "metallic": _clamp01(material.metallic),
-        "roughness": _clamp01(material.roughness),
+        "specular": 0.0,
+        "diffuse_roughness": 0.0,
     })
     params["pass_index"] = int(material.pass_index)
     return params
@@ -438,7 +444,7 @@ def material_params(material):
     the material is rendered as Blender describes it).
     """
     if material is None:
-        return dict(DEFAULT_PARAMS), []
+        return dict(DEFAULT_SURFACE), []
     notes = []
     if not material.use_nodes or material.node_tree is None:
         return viewport_params(material), notes

@@ -1,10 +1,13 @@
-"""The scene world -> a constant background colour and the mist settings.
+"""The scene world -> the background and world light, and the mist settings.
 
-World colour = Background node Color x Strength (the node linked to the
-active world output). A world without nodes uses World.color, as Cycles
-does; no world is black. Anything else driving the background (sky or
-environment textures, mixes) is not understood: World.color (the viewport
-colour) is used with one warning.
+A world whose Background colour and strength are constants (unlinked, or an
+RGB / Value node) is a constant colour: Color x Strength, with no map (the
+lighting integrates it analytically). A world without nodes uses
+World.color, as Cycles does; no world is black. Any other tree (Environment
+Texture, Mapping, gradients, mixes of backgrounds, Light Path tricks) goes
+through the material graph compiler (materials/builder.py) and is baked by
+the native world module into an environment map the lighting importance
+samples (native/src/world_module.h).
 """
 
 import math
@@ -33,6 +36,70 @@ def _linked(socket):
             return None
         node = node.inputs[0].links[0].from_node
     return None if node.mute else node
+
+
+def export_world(world, renderer, image_registry, warn=None):
+    """Hand the world to ``renderer``: set_world(color=..., graph=IR or None).
+
+    ``image_registry()`` gives the export's ImageRegistry (texture uploads).
+    A graph the compiler cannot take falls back to the viewport colour with
+    a warning naming why."""
+    def note(message):
+        if warn:
+            warn(message)
+
+    if world is not None and _needs_graph(world) and hasattr(renderer, "set_world"):
+        from ..materials import builder as graph_builder
+        try:
+            graph = graph_builder.build_world_graph(world, image_registry())
+        except (graph_builder.GraphCycle, graph_builder.SpecError, RecursionError) as ex:
+            note(f"World '{world.name}': {ex} (rendered with the viewport colour)")
+        else:
+            if graph.notes:
+                note(f"World '{world.name}': " + "; ".join(graph.notes))
+            try:
+                # The colour is the fallback if the native bake fails (warned).
+                renderer.set_world(color=_finite_color(world.color), graph=graph.ir)
+                return
+            except ValueError as ex:  # refused by the native validation
+                note(f"World '{world.name}': {ex} (rendered with the viewport colour)")
+        renderer.set_world(color=_finite_color(world.color))
+        return
+    color, warnings = world_color(world)
+    for message in warnings:
+        note(message)
+    renderer.set_world(color=color)
+
+
+def _finite_color(value):
+    return tuple(min(max(c, 0.0), MAX_WORLD) for c in _color3(value))
+
+
+def _needs_graph(world):
+    """True if the world's tree is more than a constant background."""
+    if not world.use_nodes or world.node_tree is None:
+        return False
+    tree = world.node_tree
+    try:
+        output = tree.get_output_node("CYCLES")
+    except (AttributeError, TypeError):
+        output = None
+    if output is None:
+        output = next((n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputWorld"), None)
+    if output is None:
+        return False
+    node = _linked(output.inputs.get("Surface"))
+    if node is None:
+        return False
+    if node.bl_idname != "ShaderNodeBackground":
+        return True
+    for name, constant in (("Color", "ShaderNodeRGB"), ("Strength", "ShaderNodeValue")):
+        socket = node.inputs[name]
+        if socket.is_linked:
+            src = _linked(socket)
+            if src is not None and src.bl_idname != constant:
+                return True
+    return False
 
 
 def world_color(world):

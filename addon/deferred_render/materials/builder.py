@@ -239,6 +239,7 @@ class GraphBuilder:
         self.variant = ()        # bump offsets entered, innermost last (nodes re-emitted per variant)
         self.uses_alpha = False  # some closure's alpha can be below 1 (MATERIAL_ALPHA)
         self.closure_normal = False  # some closure's normal is not the smooth one
+        self.world = False       # a world's tree (its shading point is a direction)
         self._none = None
 
     def note(self, text):
@@ -327,15 +328,16 @@ class GraphBuilder:
         return None
 
 
-def material_output(tree):
-    """The output Cycles renders: get_output_node('CYCLES'), else any Material Output."""
+def material_output(tree, kind="ShaderNodeOutputMaterial"):
+    """The output Cycles renders: get_output_node('CYCLES'), else any output
+    node of ``kind`` (Material Output, or World Output for a world)."""
     output = None
     try:
         output = tree.get_output_node("CYCLES")
     except (AttributeError, TypeError):
         pass
     if output is None:
-        output = next((n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial"), None)
+        output = next((n for n in tree.nodes if n.bl_idname == kind), None)
     return output
 
 
@@ -358,13 +360,29 @@ def build_material_graph(material, images=None):
         raise GraphCycle(str(ex)) from ex
 
 
-def _build(material, images):
+def build_world_graph(world, images=None):
+    """MaterialGraph of a world's node tree: its surface closure's emission is
+    the background radiance along each direction (the world module bakes it,
+    native/src/world_module.h). Raises GraphCycle/SpecError like materials."""
+    try:
+        return _build(world, images, world=True)
+    except graph_walk.GraphError as ex:
+        raise GraphCycle(str(ex)) from ex
+
+
+# Nodes a world graph cannot evaluate: they need a surface (screen
+# derivatives, mesh attributes); Cycles gives them nothing useful there either.
+WORLD_UNSUPPORTED = {"node_bump_offset"}
+
+
+def _build(material, images, world=False):
     tree = material.node_tree
     g = GraphBuilder(images)
-    output = material_output(tree)
+    g.world = world
+    output = material_output(tree, "ShaderNodeOutputWorld" if world else "ShaderNodeOutputMaterial")
     surface = None
     if output is None:
-        g.note("no Material Output node (rendered black, as Cycles does)")
+        g.note(f"no {'World' if world else 'Material'} Output node (rendered black, as Cycles does)")
     else:
         socket = output.inputs.get("Surface")
         try:
@@ -379,6 +397,12 @@ def _build(material, images):
             s = output.inputs.get(name)
             if s is not None and s.is_linked:
                 g.note(f"{name} (not rendered)")
+    if world:
+        used = {n["func"] for n in g.nodes} & WORLD_UNSUPPORTED
+        if used:
+            raise SpecError("Bump in a world node tree is not supported")
+        if g.attributes:
+            g.note("mesh attributes read in the world (" + ", ".join(g.attributes) + ") are 0")
     ir = {"name": material.name, "nodes": g.nodes, "surface": surface, "constants": g.constants,
           "images": g.images, "attributes": g.attributes, "alpha": g.uses_alpha,
           "closure_normal": g.closure_normal}

@@ -116,6 +116,8 @@ struct FrameTimings {
     std::size_t material_programs = 0;  // distinct node-material programs the frame drew with
     std::size_t images_uploaded = 0;    // images uploaded for this scene (since clear_scene)
     std::size_t images_reused = 0;      // images kept from the previous scene and found by key
+    double world_bake_ms = 0;           // baking the world's node tree and its sampling CDF
+    int world_map_width = 0;            // the baked world map's width (0: a constant world)
 };
 
 struct FrameResult {
@@ -164,7 +166,11 @@ public:
     std::int64_t find_image(const std::string& key);
     std::uint32_t add_graph_material(const Material& base, const MaterialGraph& graph);
     void add_light(const Light& light);
-    void set_world(const World& world);
+    // `graph` (optional): the world's node tree, whose surface closure's
+    // emission is the radiance along each direction (Background nodes); it
+    // is baked into an environment map the lighting importance-samples, and
+    // `world.color` is then unused. Without it the world is `world.color`.
+    void set_world(const World& world, const MaterialGraph* graph = nullptr);
 
     FrameResult render(const Camera& camera, const RenderSettings& settings);
     // Thread-safe, callable while render() runs on another thread: the

@@ -97,6 +97,18 @@ def emission(b):
     b.call("node_emission", [b.input("Color", "color"), b.input("Strength", "float")], [("Emission", "closure")])
 
 
+@register("ShaderNodeBackground")
+def background(b):
+    # A world's shader: the radiance along the ray, colour x strength
+    # (svm_node_emission_weight, then closure_background_setup). In a
+    # material's surface it adds nothing a surface shows.
+    if not b._graph.world:
+        b._graph.note(f"'{b.node.name}': a Background shader in a material (black)")
+        b.call("node_closure_none", [], [("Background", "closure")])
+        return
+    b.call("node_emission", [b.input("Color", "color"), b.input("Strength", "float")], [("Background", "closure")])
+
+
 @register("ShaderNodeBsdfTransparent")
 def transparent(b):
     b._graph.uses_alpha = True

@@ -2,7 +2,7 @@
 
     blender -b --factory-startup --python blend_samples/generate_samples.py [-- NAME ...]
 
-writes blend_samples/{showcase,box_room,many_lights,instancing,analytic}.blend
+writes blend_samples/{showcase,box_room,many_lights,instancing,analytic,materials,hdri_studio}.blend
 (all of them, or the NAMEs given after "--").
 
 The files do not select the Deferred engine (the add-on need not be loaded
@@ -674,7 +674,43 @@ def build_materials():
     save(scene, "materials")
 
 
+def build_hdri_studio():
+    """Lit only by one of Blender's bundled studio HDRIs (Environment
+    Texture, rotated 60 degrees by a Mapping node): a floor, a diffuse and a
+    rough metal sphere, a glossy Suzanne. The image is referenced from
+    Blender's datafiles (Debian: /usr/share/blender), not packed."""
+    scene = new_scene("HdriStudio")
+    world = set_world(scene, (0.3, 0.3, 0.3))
+    nt = world.node_tree
+    env = nt.nodes.new("ShaderNodeTexEnvironment")
+    env.image = bpy.data.images.load(
+        os.path.join(bpy.utils.system_resource('DATAFILES'), "studiolights", "world", "forest.exr"))
+    coords = nt.nodes.new("ShaderNodeTexCoord")
+    mapping = nt.nodes.new("ShaderNodeMapping")
+    mapping.inputs["Rotation"].default_value = (0.0, 0.0, math.radians(60))
+    nt.links.new(coords.outputs["Generated"], mapping.inputs["Vector"])
+    nt.links.new(mapping.outputs["Vector"], env.inputs["Vector"])
+    nt.links.new(env.outputs["Color"], nt.nodes["Background"].inputs["Color"])
+    mesh_object("Floor", plane_mesh("Floor", 12.0, 12.0), material=principled("Floor", (0.6, 0.6, 0.6),
+                                                                               roughness=0.7), pass_index=1)
+    primitive(bpy.ops.mesh.primitive_uv_sphere_add, "Diffuse", material=principled(
+        "Clay", (0.75, 0.55, 0.4), roughness=1.0, specular=0.0), pass_index=2, smooth=True,
+        radius=0.8, location=(-1.8, 0.0, 0.8), segments=64, ring_count=32)
+    primitive(bpy.ops.mesh.primitive_uv_sphere_add, "Metal", material=principled(
+        "Brushed", (0.9, 0.65, 0.35), metallic=1.0, roughness=0.5), pass_index=3, smooth=True,
+        radius=0.8, location=(1.8, 0.0, 0.8), segments=64, ring_count=32)
+    suzanne = primitive(bpy.ops.mesh.primitive_monkey_add, "Suzanne", material=principled(
+        "Glaze", (0.1, 0.25, 0.6), roughness=0.25), pass_index=4, smooth=True, size=1.2,
+        location=(0.0, 1.2, 0.75))
+    suzanne.rotation_euler = (0.0, 0.0, math.radians(-20))
+    modifier = suzanne.modifiers.new("Subdivision", 'SUBSURF')
+    modifier.levels = modifier.render_levels = 1
+    add_camera(scene, location=(0, -7.5, 2.6), target=(0, 0, 0.8), lens=40.0)
+    save(scene, "hdri_studio")
+
+
 BUILDERS = {
+    "hdri_studio": build_hdri_studio,
     "materials": build_materials,
     "showcase": build_showcase,
     "box_room": build_box_room,

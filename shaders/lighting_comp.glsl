@@ -99,52 +99,6 @@ vec2 karis_env_brdf(float roughness, float NdotV) {
  * world occlusion from the sampled direction; sharper ones from AO. */
 #define GLOSSY_OCCLUSION_MIN_ALPHA2 0.04
 
-/* The world's radiance for light arriving from direction d. */
-vec3 world_radiance_from(vec3 d) {
-#ifdef HAS_WORLD_MAP
-    return world_light_radiance(d);
-#else
-    return frame.world_color.rgb;
-#endif
-}
-
-LightContribution world_constant_unoccluded(PrincipledWeights w, SurfaceParams s, vec3 N, vec3 V) {
-    LightContribution r;
-    vec3 Lw = frame.world_color.rgb;
-    float NdotV = dot(N, V);
-    r.diffuse = w.diffuse * diffuse_lobe_albedo(s, NdotV);
-    r.glossy = principled_mirror_weight(w, N, V);
-    bool spec_lobe = w.specular != 0.0 && w.alpha2 > 1e-7;
-    if (spec_lobe || w.sheen != vec3(0.0)) {
-        vec3 T, B;
-        make_basis(N, T, B);
-        float alpha = sqrt(w.alpha2);
-        for (int j = 0; j < 2; ++j)
-            for (int i = 0; i < 2; ++i) {
-                vec2 u = (vec2(i, j) + frame.sample_shift.xy) * 0.5;
-                if (spec_lobe) {
-                    vec3 L = sample_ggx_vndf(N, V, alpha, u);
-                    float pdf = principled_specular_pdf(w, N, V, L);
-                    if (pdf > 0.0) r.glossy += principled_specular(w, N, V, L) * (0.25 / pdf);
-                }
-                if (w.sheen != vec3(0.0)) {
-                    /* Cosine-distributed: f cos / pdf = pi (1 - L.H)^5. */
-                    vec2 d = concentric_disk(u);
-                    vec3 L = T * d.x + B * d.y + N * sqrt(max(1.0 - dot(d, d), 0.0));
-                    r.diffuse += w.sheen * (0.25 * M_PI_F * principled_sheen_factor(N, V, L) / max(dot(N, L), 1e-8));
-                }
-            }
-    }
-    if (w.clearcoat > 0.0) {
-        vec2 AB = karis_env_brdf(sqrt(w.cc_alpha), NdotV);
-        r.glossy += vec3(0.25 * w.clearcoat * (0.04 * AB.x + AB.y));
-    }
-    r.diffuse *= Lw;
-    r.glossy *= Lw;
-    return r;
-}
-
-#ifdef HAS_WORLD_MAP
 /* Three numbers in [0, 1) for direction k of a strategy at this pixel and
  * film sample: the R3 low-discrepancy sequence (Roberts 2018, the
  * generalised golden ratio of x^4 = x + 1) over the pixel's samples,
@@ -163,6 +117,118 @@ vec3 world_sequence(ivec2 pixel, uint strategy, uint k) {
     return vec3(x >> 8u) * (1.0 / 16777216.0);
 }
 
+/* Screen-space visibility of the world along unit L from P, for sharp
+ * glossy lobes, which the occlusion map's one direction per sample cannot
+ * serve (their light comes from a narrow cone): the ray is marched through
+ * the depth buffer (SS_TRACE_STEPS points, quadratically spaced up to four
+ * times P's view depth, jittered per sample). It is blocked (0) where a
+ * step lies behind a surface the camera sees; free (1) where it runs its
+ * whole length in view and in front of what the camera sees; unknown (-1)
+ * where it leaves the view first, and the caller falls back to AO. An
+ * approximation of Cycles' ray: occluders the camera does not see are
+ * missed, and a ray passing behind an object counts as blocked. */
+#define SS_TRACE_STEPS 24
+float screen_space_visibility(vec3 P, vec3 N, vec3 L, float jitter) {
+    float view_d = max(frame_view_depth(P), 1e-4);
+    float texel = 2.0 / (abs(frame.projection[1][1]) * frame.viewport.y); /* a pixel at unit view depth */
+    float pixel = frame_is_ortho() ? texel : texel * view_d;
+    vec3 origin = P + N * (2.0 * pixel);
+    float max_t = 4.0 * view_d;
+    vec4 start = frame.projection * (frame.view * vec4(P, 1.0));
+    vec2 start_xy = (start.xy / start.w * 0.5 + 0.5) * frame.viewport.xy;
+    for (int i = 0; i < SS_TRACE_STEPS; ++i) {
+        float x = (float(i) + jitter) / float(SS_TRACE_STEPS);
+        float t = max_t * x * x + pixel;
+        vec3 X = origin + L * t;
+        vec3 view = (frame.view * vec4(X, 1.0)).xyz;
+        if (!frame_is_ortho() && view.z >= -1e-6) return -1.0; /* behind the camera */
+        vec4 clip = frame.projection * vec4(view, 1.0);
+        vec2 ndc = clip.xy / clip.w;
+        if (any(greaterThan(abs(ndc), vec2(1.0)))) return -1.0;
+        vec2 xy = (ndc * 0.5 + 0.5) * frame.viewport.xy;
+        ivec2 px = clamp(ivec2(xy), ivec2(0), ivec2(frame.viewport.xy) - 1);
+        float ray = -view.z;
+        float d = texelFetch(gbuf_depth, px, 0).r;
+        /* Within two pixels of the start the depth buffer is the surface
+         * itself, whose slope at grazing angles outruns any bias. */
+        if (d > 0.0 && dot(xy - start_xy, xy - start_xy) > 4.0) {
+            /* Blocked where the step lies behind the surface seen at its
+             * pixel: it crossed that surface, or it passes behind an object
+             * nearer the camera, whose thickness the camera does not see:
+             * taken as hitting its hidden side (a ray passing behind it is
+             * wrongly dark; the other choice makes the reflection of the
+             * world behind an object a firefly, and AO cannot catch it). */
+            float scene = frame_view_depth_from_buffer(px, d);
+            float bias = 2.0 * (frame_is_ortho() ? texel : texel * scene);
+            if (ray > scene + bias) return 0.0;
+        }
+    }
+    return 1.0;
+}
+
+/* Sharp glossy light along L: added with its screen-space visibility where
+ * that is known, kept apart for AO otherwise. */
+void add_sharp_glossy(inout vec3 known, inout vec3 unknown, vec3 value, vec3 P, vec3 N, vec3 L, float jitter) {
+    if (value == vec3(0.0)) return;
+    float v = screen_space_visibility(P, N, L, jitter);
+    if (v < 0.0) unknown += value;
+    else known += value * v;
+}
+
+/* The world's radiance for light arriving from direction d. */
+vec3 world_radiance_from(vec3 d) {
+#ifdef HAS_WORLD_MAP
+    return world_light_radiance(d);
+#else
+    return frame.world_color.rgb;
+#endif
+}
+
+LightContribution world_constant_unoccluded(PrincipledWeights w, SurfaceParams s, vec3 P, vec3 N, vec3 V,
+                                            float jitter, inout vec3 sharp_unknown) {
+    LightContribution r;
+    vec3 Lw = frame.world_color.rgb;
+    float NdotV = dot(N, V);
+    bool sharp = w.alpha2 < GLOSSY_OCCLUSION_MIN_ALPHA2;
+    r.diffuse = w.diffuse * diffuse_lobe_albedo(s, NdotV);
+    r.glossy = vec3(0.0);
+    add_sharp_glossy(r.glossy, sharp_unknown, principled_mirror_weight(w, N, V) * Lw, P, N, reflect(-V, N), jitter);
+    bool spec_lobe = w.specular != 0.0 && w.alpha2 > 1e-7;
+    if (spec_lobe || w.sheen != vec3(0.0)) {
+        vec3 T, B;
+        make_basis(N, T, B);
+        float alpha = sqrt(w.alpha2);
+        for (int j = 0; j < 2; ++j)
+            for (int i = 0; i < 2; ++i) {
+                vec2 u = (vec2(i, j) + frame.sample_shift.xy) * 0.5;
+                if (spec_lobe) {
+                    vec3 L = sample_ggx_vndf(N, V, alpha, u);
+                    float pdf = principled_specular_pdf(w, N, V, L);
+                    vec3 value = pdf > 0.0 ? principled_specular(w, N, V, L) * (0.25 / pdf) * Lw : vec3(0.0);
+                    if (sharp) add_sharp_glossy(r.glossy, sharp_unknown, value, P, N, L, jitter);
+                    else r.glossy += value;
+                }
+                if (w.sheen != vec3(0.0)) {
+                    /* Cosine-distributed: f cos / pdf = pi (1 - L.H)^5. */
+                    vec2 d = concentric_disk(u);
+                    vec3 L = T * d.x + B * d.y + N * sqrt(max(1.0 - dot(d, d), 0.0));
+                    r.diffuse += w.sheen * (0.25 * M_PI_F * principled_sheen_factor(N, V, L) / max(dot(N, L), 1e-8));
+                }
+            }
+    }
+    vec3 clearcoat = vec3(0.0);
+    if (w.clearcoat > 0.0) {
+        vec2 AB = karis_env_brdf(sqrt(w.cc_alpha), NdotV);
+        clearcoat = vec3(0.25 * w.clearcoat * (0.04 * AB.x + AB.y)) * Lw;
+    }
+    /* The split-sum clearcoat has no direction: AO occludes it when sharp. */
+    if (sharp) sharp_unknown += clearcoat;
+    else r.glossy += clearcoat;
+    r.diffuse *= Lw;
+    return r;
+}
+
+#ifdef HAS_WORLD_MAP
 /* The BSDF's sampling strategies for the world's light: cosine-weighted
  * (diffuse and sheen), GGX visible normals (specular), GTR1 half vectors
  * (clearcoat, as Cycles samples it), chosen with probabilities by each
@@ -235,17 +301,21 @@ vec3 world_bsdf_sample(BsdfChoice c, PrincipledWeights w, vec3 N, vec3 V, vec3 r
 }
 
 /* f cos L / (p_map + p_bsdf) for one direction (the balance heuristic's
- * share of either strategy's sample). */
-void world_map_add(inout LightContribution r, PrincipledWeights w, SurfaceParams s, vec3 N, vec3 V, vec3 L,
-                   float p_sum) {
+ * share of either strategy's sample); a sharp lobe's glossy part with its
+ * screen-space visibility. */
+void world_map_add(inout LightContribution r, inout vec3 sharp_unknown, PrincipledWeights w, SurfaceParams s,
+                   vec3 P, vec3 N, vec3 V, vec3 L, float p_sum, float jitter) {
     if (dot(N, L) <= 0.0 || !(p_sum > 0.0)) return;
-    vec3 Le = world_light_radiance(L) / p_sum;
+    vec3 Le = world_light_radiance(L) * (1.0 / (p_sum * float(WORLD_LIGHT_SAMPLES)));
     LobeEval e = principled_eval(s, w, N, V, L);
     r.diffuse += e.diffuse * Le;
-    r.glossy += e.glossy * (Le * smooth_side(s, L));
+    vec3 glossy = e.glossy * (Le * smooth_side(s, L));
+    if (w.alpha2 < GLOSSY_OCCLUSION_MIN_ALPHA2) add_sharp_glossy(r.glossy, sharp_unknown, glossy, P, N, L, jitter);
+    else r.glossy += glossy;
 }
 
-LightContribution world_map_unoccluded(PrincipledWeights w, SurfaceParams s, vec3 N, vec3 V, ivec2 pixel) {
+LightContribution world_map_unoccluded(PrincipledWeights w, SurfaceParams s, vec3 P, vec3 N, vec3 V, ivec2 pixel,
+                                       float jitter, inout vec3 sharp_unknown) {
     LightContribution r;
     r.diffuse = vec3(0.0);
     r.glossy = vec3(0.0);
@@ -254,25 +324,29 @@ LightContribution world_map_unoccluded(PrincipledWeights w, SurfaceParams s, vec
     for (int k = 0; k < WORLD_LIGHT_SAMPLES; ++k) {
         float p_map;
         vec3 L = world_sample(world_sequence(pixel, 0u, uint(k)), p_map);
-        world_map_add(r, w, s, N, V, L, p_map + world_bsdf_pdf(c, w, N, V, L));
+        world_map_add(r, sharp_unknown, w, s, P, N, V, L, p_map + world_bsdf_pdf(c, w, N, V, L), jitter);
         if (sample_bsdf) {
             vec3 Lb = world_bsdf_sample(c, w, N, V, world_sequence(pixel, 1u, uint(k)));
-            world_map_add(r, w, s, N, V, Lb, world_pdf(Lb) + world_bsdf_pdf(c, w, N, V, Lb));
+            world_map_add(r, sharp_unknown, w, s, P, N, V, Lb, world_pdf(Lb) + world_bsdf_pdf(c, w, N, V, Lb),
+                          jitter);
         }
     }
-    r.diffuse *= 1.0 / float(WORLD_LIGHT_SAMPLES);
-    r.glossy *= 1.0 / float(WORLD_LIGHT_SAMPLES);
-    r.glossy += principled_mirror_weight(w, N, V) * world_light_radiance(reflect(-V, N));
+    vec3 R = reflect(-V, N);
+    add_sharp_glossy(r.glossy, sharp_unknown, principled_mirror_weight(w, N, V) * world_light_radiance(R), P, N, R,
+                     jitter);
     return r;
 }
 #endif
 
 LightContribution world_light(PrincipledWeights w, SurfaceParams s, vec3 P, vec3 N, vec3 V, ivec2 pixel,
                               out float ao) {
+    /* Sharp glossy light whose screen-space visibility is unknown: AO below. */
+    vec3 sharp_unknown = vec3(0.0);
+    float jitter = world_sequence(pixel, 2u, 0u).x;
 #ifdef HAS_WORLD_MAP
-    LightContribution r = world_map_unoccluded(w, s, N, V, pixel);
+    LightContribution r = world_map_unoccluded(w, s, P, N, V, pixel, jitter, sharp_unknown);
 #else
-    LightContribution r = world_constant_unoccluded(w, s, N, V);
+    LightContribution r = world_constant_unoccluded(w, s, P, N, V, jitter, sharp_unknown);
 #endif
     ao = 1.0;
 #ifdef HAS_WORLD_OCCLUSION
@@ -303,13 +377,15 @@ LightContribution world_light(PrincipledWeights w, SurfaceParams s, vec3 P, vec3
 #endif
             r.glossy -= Lu * f * blocked;
         } else {
-            /* A sharp lobe would make the occlusion direction fireflies: AO
-             * as its occlusion (clamped to [0, 1]: with an importance-sampled
+            /* A sharp lobe would make the occlusion direction fireflies: its
+             * light was occluded in screen space, and AO occludes what that
+             * could not see (clamped to [0, 1]: with an importance-sampled
              * direction one sample's AO can fall below 0). */
-            r.glossy *= clamp(ao, 0.0, 1.0);
+            sharp_unknown *= clamp(ao, 0.0, 1.0);
         }
     }
 #endif
+    r.glossy += sharp_unknown;
     return r;
 }
 

@@ -97,6 +97,10 @@ PLANS = {
                     "cycles": [1, 4, 16, 64], "ours_noshadow": [16, 64]},
     "analytic":    {"ref_spp": 1024, "unocc_spp": 1024, "ours": [1, 4, 16, 64], "eevee": [1, 4, 16, 64],
                     "cycles": [1, 4, 16, 64], "ours_noshadow": [4, 16, 64]},
+    # hdri_studio: lit by an HDRI only (world map, importance sampling,
+    # map-drawn occlusion directions); 256 samples show the convergence.
+    "hdri_studio": {"ref_spp": 1024, "unocc_spp": 512, "ours": [1, 4, 16, 64, 256], "eevee": [1, 4, 16, 64],
+                    "cycles": [1, 4, 16, 64, 256], "ours_noshadow": [64]},
 }
 DEFAULT_PLAN = {"ref_spp": 1024, "unocc_spp": 512, "ours": [1, 4, 16, 64], "eevee": [1, 4, 16],
                 "cycles": [1, 4, 16, 64], "ours_noshadow": [16, 64]}

@@ -116,7 +116,10 @@ def background(checks):
     cam.data.lens = 18
     environment_world(scene, image, strength=1.5)
     scene.cycles.filter_width = 0.01  # the pixel centre, as the reference
+    scene.view_layers[0].use_pass_environment = True
     ours, _ = render(scene, U.ENGINE, 1, "background")
+    env = U.exr_pass(U.read_exr(os.path.join(U.out_dir("test_world_map"), "background.exr")),
+                     "ViewLayer", "Env", "RGB").astype(np.float64)
     _, dirs, _ = U.camera_rays(scene, cam, 160, 100)
     pixels = np.array(image.pixels[:], dtype=np.float64).reshape(image.size[1], image.size[0], 4)[..., :3]
     expected = 1.5 * lookup_equirect(pixels, dirs)
@@ -128,6 +131,29 @@ def background(checks):
                  f"(|error| / (value + 0.05): max < {BACKGROUND_LIMIT:g}, mean < {BACKGROUND_MEAN_LIMIT:g})",
                  f"max {err.max():.2e}, mean {err.mean():.2e}")
     checks.check(bool(np.all(ours[..., 3] == 1.0)), "background alpha is 1", float(ours[..., 3].min()))
+    checks.check(float(np.abs(env - ours[..., :3]).max()) < 1e-6, "the Env pass is the background seen",
+                 float(np.abs(env - ours[..., :3]).max()))
+    scene.render.film_transparent = True
+    clear, _ = render(scene, U.ENGINE, 1, "background_transparent")
+    env_clear = U.exr_pass(U.read_exr(os.path.join(U.out_dir("test_world_map"), "background_transparent.exr")),
+                           "ViewLayer", "Env", "RGB").astype(np.float64)
+    checks.check(float(np.abs(clear).max()) == 0.0 and float(np.abs(env_clear - env).max()) < 1e-6,
+                 "Film > Transparent: Combined is (0, 0, 0, 0), the Env pass still holds the world",
+                 f"{np.abs(clear).max():.3g}, Env difference {np.abs(env_clear - env).max():.3g}")
+    scene.render.film_transparent = False
+    scene.view_layers[0].use_pass_environment = False
+    # Persistent Data: the kept renderer finds the HDRI by its key and bakes
+    # the same map again.
+    timings = __import__("deferred_render.engine.final", fromlist=["last_timings"]).last_timings
+    scene.render.use_persistent_data = True
+    first, _ = render(scene, U.ENGINE, 1, "persistent_1")
+    second, _ = render(scene, U.ENGINE, 1, "persistent_2")
+    scene.render.use_persistent_data = False
+    checks.check(float(np.abs(first - ours).max()) < 1e-6 and float(np.abs(second - ours).max()) < 1e-6 and
+                 timings.get("images_reused") == 1 and timings.get("images_uploaded") == 0,
+                 "Persistent Data: the second render reuses the HDRI and bakes the same world",
+                 f"uploaded {timings.get('images_uploaded')}, reused {timings.get('images_reused')}, "
+                 f"max difference {np.abs(second - ours).max():.3g}")
     timings = __import__("deferred_render.engine.final", fromlist=["last_timings"]).last_timings
     checks.check(timings.get("world_map_width") == image.size[0],
                  "the baked map has the HDRI's own width (its texels, exactly)", timings.get("world_map_width"))

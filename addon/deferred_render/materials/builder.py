@@ -150,6 +150,11 @@ class NodeBuilder:
     def image(self, image):
         return ("image", self._graph.image_slot(image))
 
+    def computed_image(self, key, make_pixels):
+        """A sampler2D of pixels the spec computes (make_pixels() -> (H, W, 4)
+        float32, row 0 first), uploaded once per distinct ``key``."""
+        return ("image", self._graph.pixels_slot(key, make_pixels))
+
     # -- the call ---------------------------------------------------------
     def call(self, func, args, outputs):
         if self.emitted:
@@ -218,6 +223,19 @@ class ImageRegistry:
             self._ids[key] = (self.magenta(), None)
         return self._ids[key]
 
+    def pixels_id(self, key, make_pixels):
+        """Native id of an image the add-on computes (a sky model's table):
+        ``make_pixels()`` -> (H, W, 4) float32, called only when neither this
+        export nor a kept renderer (find_image) has ``key`` already."""
+        cache_key = ("pixels", key)
+        if cache_key in self._ids:
+            return self._ids[cache_key]
+        native_id = self._find_image(key) if self._find_image else None
+        if native_id is None:
+            native_id = self._add_image(make_pixels(), key=key)
+        self._ids[cache_key] = (native_id, None)
+        return self._ids[cache_key]
+
     def magenta(self):
         if self._magenta is None:
             import numpy as np
@@ -268,7 +286,15 @@ class GraphBuilder:
     def image_slot(self, image):
         if self._registry is None:
             raise SpecError("no image registry")
-        native_id, info = self._registry.image_id(image)
+        return self._slot(*self._registry.image_id(image))
+
+    def pixels_slot(self, key, make_pixels):
+        """Slot of an image the add-on computes (ImageRegistry.pixels_id)."""
+        if self._registry is None:
+            raise SpecError("no image registry")
+        return self._slot(*self._registry.pixels_id(key, make_pixels))
+
+    def _slot(self, native_id, info):
         if native_id in self.images:
             return self.images.index(native_id)
         if len(self.images) >= MAX_IMAGES:

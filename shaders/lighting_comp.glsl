@@ -80,12 +80,13 @@ vec2 karis_env_brdf(float roughness, float NdotV) {
  *  with its BSDF ray; mirror lobes look the map up along the reflection.
  *
  * Occlusion, Monte Carlo over the film's samples (HAS_WORLD_OCCLUSION): each
- *  sample has one direction w of the world (uniform on the sphere for a
- *  constant world; drawn by the map's density otherwise: WorldModule) and an
- *  orthographic map along it holding the nearest and farthest geometry,
- *  which gives the visibility along w and along -w; the one of the pair
- *  above the horizon, u, was drawn with density q = p(w) + p(-w)
- *  (frame.world_occlusion.y; 1 / (2 pi) when uniform). The light blocked is
+ *  sample has frame.world_occlusion.y directions w of the world (one,
+ *  uniform on the sphere, for a constant world; several drawn by the map's
+ *  density otherwise: WorldModule) and an orthographic map along each
+ *  holding the nearest and farthest geometry, which gives the visibility
+ *  along w and along -w; the one of the pair above the horizon, u, was
+ *  drawn with density q = p(w) + p(-w) (the map's params.z; 1 / (2 pi) when
+ *  uniform), and the maps' estimates are averaged. The light blocked is
  *  subtracted as a control variate: L(u) f(u) cos (1 - V(u)) / q has the
  *  expectation integral L f cos (1 - V), so the result's expectation is
  *  integral L f cos V, with no noise where nothing occludes. Ambient
@@ -350,13 +351,19 @@ LightContribution world_light(PrincipledWeights w, SurfaceParams s, vec3 P, vec3
 #endif
     ao = 1.0;
 #ifdef HAS_WORLD_OCCLUSION
-    GpuShadow sh = shadows[int(frame.world_occlusion.x)];
-    float c = -dot(N, sh.point.xyz); /* cos to the map's world direction */
-    float side = c >= 0.0 ? 1.0 : -1.0;
-    vec3 u = -sh.point.xyz * side; /* whichever of the pair is above the horizon */
-    float cos_u = abs(c);
-    float inv_q = 1.0 / frame.world_occlusion.y; /* 1 / the pair's density */
-    if (cos_u > 0.0) {
+    /* The sample's maps, each a direction pair with its own density; their
+     * estimates are averaged. */
+    const int maps = int(frame.world_occlusion.y);
+    const float share = 1.0 / float(maps);
+    float ao_sum = 0.0;
+    for (int k = 0; k < maps; ++k) {
+        GpuShadow sh = shadows[int(frame.world_occlusion.x) + k];
+        float c = -dot(N, sh.point.xyz); /* cos to the map's world direction */
+        float side = c >= 0.0 ? 1.0 : -1.0;
+        vec3 u = -sh.point.xyz * side; /* whichever of the pair is above the horizon */
+        float cos_u = abs(c);
+        float inv_q = share / sh.params.z; /* 1 / the pair's density, this map's share */
+        if (cos_u <= 0.0) continue;
         float blocked = 1.0 - world_visibility(sh, P, N, side);
         vec3 Lu = world_radiance_from(u) * inv_q;
 #ifdef HAS_WORLD_MAP
@@ -368,7 +375,7 @@ LightContribution world_light(PrincipledWeights w, SurfaceParams s, vec3 P, vec3
         float t = bump_shadowing_term(s.Ns, N, u);
         r.diffuse -= Lu * principled_eval_diffuse_unbumped(s, w, N, V, u) * (1.0 - (1.0 - blocked) * t);
 #endif
-        ao = 1.0 - cos_u * blocked * inv_q * M_1_PI_F;
+        ao_sum += cos_u * blocked * inv_q * M_1_PI_F;
         if (w.alpha2 >= GLOSSY_OCCLUSION_MIN_ALPHA2) {
             /* A rough lobe: the same control variate (its f stays small). */
             vec3 f = principled_specular(w, N, V, u) + vec3(principled_clearcoat(w, N, V, u));
@@ -376,14 +383,14 @@ LightContribution world_light(PrincipledWeights w, SurfaceParams s, vec3 P, vec3
             f *= smooth_side(s, u);
 #endif
             r.glossy -= Lu * f * blocked;
-        } else {
-            /* A sharp lobe would make the occlusion direction fireflies: its
-             * light was occluded in screen space, and AO occludes what that
-             * could not see (clamped to [0, 1]: with an importance-sampled
-             * direction one sample's AO can fall below 0). */
-            sharp_unknown *= clamp(ao, 0.0, 1.0);
         }
     }
+    ao = 1.0 - ao_sum;
+    /* A sharp lobe would make the occlusion directions fireflies: its light
+     * was occluded in screen space, and AO occludes what that could not see
+     * (clamped to [0, 1]: with importance-sampled directions one sample's AO
+     * can fall below 0). */
+    if (w.alpha2 < GLOSSY_OCCLUSION_MIN_ALPHA2) sharp_unknown *= clamp(ao, 0.0, 1.0);
 #endif
     r.glossy += sharp_unknown;
     return r;

@@ -38,7 +38,7 @@
 #define TEX_GLOSS_LIGHT 9
 #define TEX_SHADOW_MAPS 10
 #define TEX_SHADOW_LIGHT 11
-#define TEX_WORLD_MAP 12    /* RG32F: (-nearest, farthest) depth along the world direction */
+#define TEX_WORLD_MAP 12    /* RG32F array: (-nearest, farthest) depth along each world direction */
 #define TEX_GBUF_SMOOTH_NORMAL 13
 #define TEX_WORLD_RADIANCE 14 /* RGBA32F equirectangular: the world's radiance for light (world_lib.glsl) */
 #define TEX_WORLD_CAMERA 15   /* ... as camera rays see it (differs with Light Path Is Camera Ray) */

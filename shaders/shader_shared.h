@@ -100,8 +100,9 @@ SHARED_ASSERT_SIZE(GpuInstance, 176);
  *                     mixes, rotated per pixel), w the sample's index (transparency_random)
  *   tiles           : x tiles per row, y tile rows, z 1 if light culling is on, w the pixel
  *                     filter's reach in whole pixels (tile frusta are widened by it)
- *   world_occlusion : x index (GpuShadow) of this sample's world-occlusion map, < 0 without
- *                     one; yzw unused
+ *   world_occlusion : x index (GpuShadow) of this sample's first world-occlusion map, < 0
+ *                     without one; y the number of maps (consecutive indices); zw the world
+ *                     map's width and height (world_lib.glsl; 0 for a constant world)
  *   jitter          : xy this sample's pixel-filter offset in NDC (added by projection), z the
  *                     camera's clip start, w unused */
 SHARED_STRUCT(FrameConstants) {
@@ -125,9 +126,11 @@ SHARED_ASSERT_SIZE(FrameConstants, 400);
  *   point         : xyz the sample's point on the light (camera-relative), w first layer in the
  *                   shadow map array
  *   params        : x kind (SHADOW_CUBE: 6 layers, +X -X +Y -Y +Z -Z; SHADOW_CASCADES: 4 layers;
- *                   SHADOW_WORLD: 1 layer, point.xyz the direction light travels from the world),
+ *                   SHADOW_WORLD: point.xyz the direction light travels from the world, w its
+ *                   layer of the world's own array (TEX_WORLD_MAP)),
  *                   y this light's map resolution (texels per side), z texel size at unit
- *                   distance (cube: 2 overlap/res), w resolution / the array's layer size
+ *                   distance (cube: 2 overlap/res; world: the density p(w) + p(-w) its
+ *                   direction pair was drawn with), w resolution / the array's layer size
  *                   (the maps fill the lower-left corner of their layers)
  *   cascade_split : cascades: far view depth of cascades 0..3; cubes: xy the sample's
  *                   offset on the sphere light's disk, along each face's right/up axes

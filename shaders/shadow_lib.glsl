@@ -61,7 +61,7 @@ float ortho_visibility(GpuShadow sh, mat4 m, int offset, vec3 P, vec3 N) {
 }
 
 #ifdef HAS_WORLD_OCCLUSION
-layout(binding = TEX_WORLD_MAP) uniform sampler2D world_map;
+layout(binding = TEX_WORLD_MAP) uniform sampler2DArray world_map; /* layer: the map's point.w */
 
 /* 1 where P (normal N) sees the world along u = -side * axis (side +1: where
  * the map looks from, -1: the opposite direction), 0 where geometry blocks
@@ -76,7 +76,7 @@ float world_visibility(GpuShadow sh, vec3 P, vec3 N, float side) {
     vec4 clip = m * vec4(Pb, 1.0);
     vec2 uv = clip.xy * 0.5 + 0.5;
     if (any(lessThan(uv, vec2(0.0))) || any(greaterThan(uv, vec2(1.0)))) return 1.0;
-    vec2 stored = texture(world_map, shadow_map_uv(sh, uv)).rg;
+    vec2 stored = texture(world_map, vec3(shadow_map_uv(sh, uv), sh.point.w)).rg;
     float d = dot(Pb, axis);
     return side > 0.0 ? (d - slope * texel <= -stored.r ? 1.0 : 0.0) : (d + slope * texel >= stored.g ? 1.0 : 0.0);
 }

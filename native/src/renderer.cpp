@@ -44,6 +44,8 @@ constexpr std::uint32_t kLightBatch = 512;
 // (deferred_bench_lights: 1 light 117 ms culled vs 38 ms brute force,
 // 16 lights 90 vs 225 ms, at 480x270 on llvmpipe).
 constexpr std::uint32_t kCullingMinLights = 8;
+// Occlusion directions (maps) per film sample for a world map (world_module.h).
+constexpr int kWorldMapOcclusionDirections = 4;
 
 gpu::mat4 to_gpu(const glm::dmat4& m) {
     gpu::mat4 r{};
@@ -325,7 +327,12 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     const bool world_lights = world_module.has_map() ? world_module.lights()
         : world.color[0] > 0.0f || world.color[1] > 0.0f || world.color[2] > 0.0f;
     const bool ao_pass = wanted.contains(Pass::AO);
-    if (settings.shadows && (world_lights || ao_pass) && scene.instance_count() > 0) shadows.offer_world();
+    // A world map (an HDRI) gets several occlusion directions per sample:
+    // each map is one draw of the casters, while one direction shared by
+    // every pixel leaves correlated noise that dominates the error (the
+    // hdri_studio report); a constant world keeps one.
+    const int world_maps = world_module.has_map() ? kWorldMapOcclusionDirections : 1;
+    if (settings.shadows && (world_lights || ao_pass) && scene.instance_count() > 0) shadows.offer_world(world_maps);
     lights.sync(scene.lights(), cam.position, settings.light_threshold, settings.shadows ? &shadows : nullptr);
     const bool culled = settings.light_culling && lights.count() >= kCullingMinLights;
 
@@ -346,7 +353,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     // How far (whole pixels) a jittered sample can look from its pixel centre.
     const std::uint32_t reach = settings.samples > 1 ? std::uint32_t(std::ceil(filter.support())) : 0u;
     fc.tiles = {tiles_x, tiles_y, culled ? 1u : 0u, reach};
-    fc.world_occlusion = {float(shadows.world_index()), 0.0f, float(world_module.width()),
+    fc.world_occlusion = {float(shadows.world_index()), float(shadows.world_count()), float(world_module.width()),
                           float(world_module.height())};
     Buffer frame_buffer = make_storage_buffer(nullptr, sizeof(fc), "frame constants");
     glBindBufferBase(GL_UNIFORM_BUFFER, UBO_FRAME, frame_buffer.get());
@@ -714,10 +721,15 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         // Where in each light-shape cell (and on the sun's disk) this sample looks.
         fc.sample_shift = {u[2], u[3], float(std::fmod(0.5 + sample * 0.6180339887498949, 1.0)),
                            float(sample)};
-        // This sample's direction of the world's occlusion map and the density
-        // its pair (it answers for the opposite direction too) was drawn with.
-        const WorldDirection world_dir = world_module.occlusion_direction(world_sample_point(sample));
-        fc.world_occlusion.y = float(world_dir.pair_pdf);
+        // This sample's directions of the world's occlusion maps and the
+        // density each pair (a map answers for the opposite direction too)
+        // was drawn with: consecutive points of one low-discrepancy sequence.
+        std::vector<glm::dvec4> world_dirs;
+        for (int k = 0; k < shadows.world_count(); ++k) {
+            const WorldDirection d =
+                world_module.occlusion_direction(world_sample_point(sample * shadows.world_count() + k));
+            world_dirs.emplace_back(d.dir, d.pair_pdf);
+        }
         glNamedBufferSubData(frame_buffer.get(), 0, sizeof(fc), &fc);
         glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
 
@@ -754,7 +766,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         // at sample 0 from what the visible surfaces need.
         if (!shadows.empty()) {
             if (sample == 0) shadows.fit(visible_receivers(cam, settings.width, settings.height));
-            shadows.render_sample(*shaders, {u[2], u[3]}, world_dir.dir, draw_shadow_casters,
+            shadows.render_sample(*shaders, {u[2], u[3]}, world_dirs, draw_shadow_casters,
                                   caster_defines, scene_alpha || alpha_graphs);
             shadow_ms += timer.lap_ms();
         }

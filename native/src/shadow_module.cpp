@@ -131,14 +131,19 @@ void ShadowModule::begin_frame(const CameraMatrices& camera, int max_resolution,
     entries_.clear();
     layers_ = 0;
     world_index_ = -1;
+    world_count_ = 0;
 }
 
-void ShadowModule::offer_world() {
-    Entry e;
-    e.world = true;
-    e.priority = 1e300;
-    e.light_index = std::size_t(-1);
-    entries_.push_back(e);
+void ShadowModule::offer_world(int maps) {
+    // Offered before any light and kept in order by the stable sort of
+    // allocate(): the world's maps get consecutive shadow indices.
+    for (int k = 0; k < maps; ++k) {
+        Entry e;
+        e.world = true;
+        e.priority = 1e300;
+        e.light_index = std::size_t(-1);
+        entries_.push_back(e);
+    }
 }
 
 bool ShadowModule::offer(std::size_t light_index, const Light& light, const gpu::GpuLight& packed) {
@@ -198,8 +203,12 @@ std::vector<int> ShadowModule::allocate(std::size_t light_count) {
     for (std::size_t i = 0; i < entries_.size(); ++i) {
         entries_[i].first_layer = layer;
         layer += layers_of(entries_[i]);
-        if (entries_[i].world) world_index_ = int(i);
-        else index[entries_[i].light_index] = int(i);
+        if (entries_[i].world) {
+            if (world_index_ < 0) world_index_ = int(i);
+            ++world_count_;
+        } else {
+            index[entries_[i].light_index] = int(i);
+        }
     }
     return index;
 }
@@ -281,15 +290,20 @@ void ShadowModule::fit(const std::vector<Receiver>& receivers) {
         e.resolution = std::clamp(int(std::ceil(std::min(r, 1e6) / 32.0)) * 32, 32, resolution_);
         e.rendered = false;
         if (e.world) {
-            if (e.resolution != world_allocated_) {
-                world_map_ = make_texture_2d(GL_RG32F, e.resolution, e.resolution, "world occlusion map");
-                glTextureParameteri(world_map_.get(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-                glTextureParameteri(world_map_.get(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+            if (e.resolution != world_allocated_ || world_count_ != world_layers_) {
+                GLuint id = 0;
+                glCreateTextures(GL_TEXTURE_2D_ARRAY, 1, &id);
+                world_map_ = Texture(id);
+                glTextureStorage3D(id, 1, GL_RG32F, e.resolution, e.resolution, world_count_);
+                glTextureParameteri(id, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+                glTextureParameteri(id, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+                glTextureParameteri(id, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+                glTextureParameteri(id, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
                 GLuint fbo = 0;
                 glCreateFramebuffers(1, &fbo);
                 world_fbo_ = Framebuffer(fbo);
-                glNamedFramebufferTexture(fbo, GL_COLOR_ATTACHMENT0, world_map_.get(), 0);
                 world_allocated_ = e.resolution;
+                world_layers_ = world_count_;
             }
             continue;
         }
@@ -297,7 +311,7 @@ void ShadowModule::fit(const std::vector<Receiver>& receivers) {
     }
     resolution_ = array_resolution;
     bytes_ = (layers_ > 0 ? (std::size_t(layers_) + 1) * resolution_ * resolution_ * 4 : 0) +
-              std::size_t(world_allocated_) * world_allocated_ * 8;
+              std::size_t(world_allocated_) * world_allocated_ * 8 * std::size_t(world_layers_);
     if (layers_ > 0 && (layers_ != allocated_layers_ || resolution_ != allocated_resolution_)) {
         GLuint id = 0;
         glCreateTextures(GL_TEXTURE_2D_ARRAY, 1, &id);
@@ -327,7 +341,7 @@ std::vector<int> ShadowModule::resolutions() const {
 }
 
 void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float, 2>& u,
-                                 const glm::dvec3& world_dir, const DrawCasters& draw_casters,
+                                 const std::vector<glm::dvec4>& world_dirs, const DrawCasters& draw_casters,
                                  const std::vector<std::string>& caster_defines, bool casters_vary) {
     if (entries_.empty()) return;
     ShaderVariant variant;
@@ -361,8 +375,8 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
 
     glEnable(GL_SCISSOR_TEST);
     const Cascades cs = cascades();
-    glm::dvec3 world_axis(0.0);
-    glm::dmat4 world_matrix(0.0);
+    std::vector<glm::dvec3> world_axes(std::size_t(world_count_), glm::dvec3(0.0));
+    std::vector<glm::dmat4> world_matrices(std::size_t(world_count_), glm::dmat4(0.0));
     for (std::size_t i = 0; i < entries_.size(); ++i) {
         Entry& e = entries_[i];
         gpu::GpuShadow& g = shadows[i];
@@ -375,15 +389,18 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
         glScissor(0, 0, e.resolution, e.resolution);  // clears too: only the corner in use
         const float uv_scale = float(e.resolution) / float(resolution_);
         if (e.world) {
-            // This sample's direction of the world (the map also answers
-            // for the opposite one); light from it travels along `axis`.
-            const glm::dvec3 axis = -world_dir;
+            // This sample's k-th direction of the world (the map also
+            // answers for the opposite one); light from it travels along
+            // `axis`. Layer k of the world's array, the pair's density in params.z.
+            const std::size_t k = i - std::size_t(world_index_);
+            const glm::dvec4 d = k < world_dirs.size() ? world_dirs[k] : glm::dvec4(0.0, 0.0, 1.0, 0.5 / M_PI);
+            const glm::dvec3 axis = -glm::dvec3(d);
             const glm::dmat4 m = ortho_map(axis, receivers_center_, receivers_radius_, camera_.clip_end);
             g.cascade[0] = to_gpu_mat(m);
-            g.point = {float(axis.x), float(axis.y), float(axis.z), 0.0f};
-            g.params = {float(SHADOW_WORLD), float(e.resolution), 0.0f, 1.0f};
-            world_axis = axis;
-            world_matrix = m;
+            g.point = {float(axis.x), float(axis.y), float(axis.z), float(k)};
+            g.params = {float(SHADOW_WORLD), float(e.resolution), float(d.w), 1.0f};
+            world_axes[k] = axis;
+            world_matrices[k] = m;
             continue;
         }
         if (e.sun) {
@@ -448,21 +465,26 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
         // opposite direction), the stored value is the exact depth anyway.
         ShaderVariant world_variant = variant;
         world_variant.defines.push_back("WORLD_MAP");
-        glUseProgram(shaders.graphics_program("geometry_vert.glsl", "shadow_frag.glsl", world_variant));
+        const GLuint world_program = shaders.graphics_program("geometry_vert.glsl", "shadow_frag.glsl", world_variant);
         glBindFramebuffer(GL_FRAMEBUFFER, world_fbo_.get());
         glViewport(0, 0, world_allocated_, world_allocated_);
-        const float lowest[4] = {-3.0e38f, -3.0e38f, 0, 0};
-        glClearNamedFramebufferfv(world_fbo_.get(), GL_COLOR, 0, lowest);
         glDisable(GL_DEPTH_TEST);
         glEnable(GL_DEPTH_CLAMP);
         glEnable(GL_BLEND);
         glBlendEquation(GL_MAX);
-        const gpu::mat4 m = to_gpu_mat(world_matrix);
-        glUniformMatrix4fv(2, 1, GL_FALSE, &m.cols[0].x);
-        glUniform4f(3, 0.0f, 0.0f, 0.0f, float(SHADOW_CASCADES));
-        glUniform3f(4, float(world_axis.x), float(world_axis.y), float(world_axis.z));
-        draw_casters(ortho_casters(world_axis, receivers_center_, receivers_radius_, false));
-        ++layers_rendered_;
+        for (int k = 0; k < world_count_; ++k) {
+            glUseProgram(world_program);  // draw_casters may leave another bound
+            glNamedFramebufferTextureLayer(world_fbo_.get(), GL_COLOR_ATTACHMENT0, world_map_.get(), 0, k);
+            const float lowest[4] = {-3.0e38f, -3.0e38f, 0, 0};
+            glClearNamedFramebufferfv(world_fbo_.get(), GL_COLOR, 0, lowest);
+            const gpu::mat4 m = to_gpu_mat(world_matrices[std::size_t(k)]);
+            const glm::dvec3& axis = world_axes[std::size_t(k)];
+            glUniformMatrix4fv(2, 1, GL_FALSE, &m.cols[0].x);
+            glUniform4f(3, 0.0f, 0.0f, 0.0f, float(SHADOW_CASCADES));
+            glUniform3f(4, float(axis.x), float(axis.y), float(axis.z));
+            draw_casters(ortho_casters(axis, receivers_center_, receivers_radius_, false));
+            ++layers_rendered_;
+        }
         glDisable(GL_BLEND);
         glDisable(GL_DEPTH_CLAMP);
         glBlendEquation(GL_FUNC_ADD);

@@ -22,8 +22,8 @@
 // Lights without size (point/spot radius 0, sun angle 0) cast the same
 // shadow every sample: their maps are rendered once per frame.
 //
-// The world (offer_world()): per sample one orthographic RG32F map along a
-// direction of the sphere over the visible receivers' bounding sphere,
+// The world (offer_world(n)): per sample n orthographic RG32F maps (layers
+// of one array) along n directions of the world over the visible receivers' bounding sphere,
 // storing the nearest and the farthest geometry along it (MAX blending), so
 // it answers for that direction and its opposite; 4x the lights' texel
 // density. Each map draws only the instances whose bounding sphere can cast
@@ -53,9 +53,9 @@ public:
     void begin_frame(const CameraMatrices& camera, int max_resolution, float quality, std::size_t memory_budget);
     // Offers a light; returns false if it cannot shadow anything visible.
     bool offer(std::size_t light_index, const Light& light, const gpu::GpuLight& packed);
-    // Asks for the world's occlusion map: each sample, one orthographic map
-    // along a new direction of the sphere, fitted to the visible receivers.
-    void offer_world();
+    // Asks for the world's occlusion maps: each sample, `maps` orthographic
+    // maps along new directions of the world, fitted to the visible receivers.
+    void offer_world(int maps = 1);
     // Keeps as many offered lights as the array layers and the memory budget
     // allow (the world and suns first, then by power over squared distance
     // to the camera) and returns light_index -> shadow index (-1: none); the
@@ -78,19 +78,21 @@ public:
     // currently bound program.
     using DrawCasters = std::function<void(const CasterTest&)>;
     // Renders every kept light's maps (and the world's) for one film sample.
-    // `u`: the sample's point on the light shapes; `world_dir`: its
-    // direction of the world (unit, towards the world: WorldModule's
+    // `u`: the sample's point on the light shapes; `world_dirs`: its
+    // directions of the world, one per world map (xyz unit, towards the
+    // world; w the density its pair was drawn with: WorldModule's
     // occlusion_direction). `caster_defines` go into the
     // casters' program (SCENE_ALPHA: partly transparent constant materials).
     // `casters_vary`: some caster is drawn stochastically (transparency), so
     // even the maps of lights without size are drawn again every sample.
-    void render_sample(ShaderLibrary& shaders, const std::array<float, 2>& u, const glm::dvec3& world_dir,
+    void render_sample(ShaderLibrary& shaders, const std::array<float, 2>& u, const std::vector<glm::dvec4>& world_dirs,
                        const DrawCasters& draw_casters, const std::vector<std::string>& caster_defines = {},
                        bool casters_vary = false);
-    int world_index() const { return world_index_; }  // shadow index of the world's map, -1: none
+    int world_index() const { return world_index_; }  // shadow index of the world's first map, -1: none
+    int world_count() const { return world_count_; }  // the world's maps (consecutive shadow indices)
     void bind() const;
     bool empty() const { return entries_.empty(); }
-    std::size_t count() const { return entries_.size() - (world_index_ >= 0 ? 1 : 0); }  // lights only
+    std::size_t count() const { return entries_.size() - std::size_t(world_count_); }  // lights only
     std::size_t map_bytes() const { return bytes_; }
     int resolution() const { return resolution_; }  // the array's layer size after fit()
     // Texels per side of each kept light's maps, in shadow index order (the
@@ -120,6 +122,7 @@ private:
     Cascades cascades() const;
     float quality_ = 1.0f;
     int world_index_ = -1;
+    int world_count_ = 0;
     glm::dvec3 receivers_center_{0.0};  // bounding sphere of the visible receivers
     double receivers_radius_ = 0.0;
     std::size_t layers_rendered_ = 0;
@@ -131,9 +134,9 @@ private:
     int layers_ = 0;
     Texture maps_, depth_;
     Framebuffer fbo_;
-    Texture world_map_;  // RG32F, its own size (the world's entry resolution)
+    Texture world_map_;  // RG32F array, world_count_ layers of its own size (the world entries' resolution)
     Framebuffer world_fbo_;
-    int world_allocated_ = 0;
+    int world_allocated_ = 0, world_layers_ = 0;
     Buffer shadow_buffer_;
     int allocated_layers_ = 0, allocated_resolution_ = 0;
 };

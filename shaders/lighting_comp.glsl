@@ -93,11 +93,12 @@ vec2 karis_env_brdf(float roughness, float NdotV) {
  *  occlusion AO = 1 - cos(u) (1 - V(u)) / (pi q) (expectation: the
  *  cosine-weighted visible fraction, Cycles' AO pass). The glossy part of
  *  rough lobes takes the same control variate; for sharp lobes (alpha < 0.2)
- *  the occlusion direction would be fireflies, so AO scales them: specular
- *  occlusion from AO, an approximation (Cycles traces the lobe's own
- *  directions). */
+ *  the occlusion directions would be fireflies, so each of their own
+ *  directions (mirror, GGX and map samples) is occluded in screen space
+ *  (screen_space_visibility), and AO scales what that cannot see: an
+ *  approximation of the rays Cycles traces. */
 /* Lobes at least this rough (alpha >= 0.2, roughness >= 0.45) take their
- * world occlusion from the sampled direction; sharper ones from AO. */
+ * world occlusion from the occlusion maps; sharper ones in screen space. */
 #define GLOSSY_OCCLUSION_MIN_ALPHA2 0.04
 
 /* Three numbers in [0, 1) for direction k of a strategy at this pixel and
@@ -119,7 +120,7 @@ vec3 world_sequence(ivec2 pixel, uint strategy, uint k) {
 }
 
 /* Screen-space visibility of the world along unit L from P, for sharp
- * glossy lobes, which the occlusion map's one direction per sample cannot
+ * glossy lobes, which the occlusion maps' few directions per sample cannot
  * serve (their light comes from a narrow cone): the ray is marched through
  * the depth buffer (SS_TRACE_STEPS points, quadratically spaced up to four
  * times P's view depth, jittered per sample). It is blocked (0) where a

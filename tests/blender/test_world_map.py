@@ -13,6 +13,8 @@ the light the world casts, against the image itself and against Cycles.
     image's relMSE within the bounds below, printed beside Cycles' own noise;
   * Light Path Is Camera Ray: the background shows one colour, the sphere
     is lit by the other;
+  * a procedural world (a gradient through a ColorRamp, added to a constant
+    Background by an Add Shader): background and a lit sphere as Cycles';
   * bad input: an HDRI with NaN, Inf and negative texels, a 1x1 map and a
     strength of 1e9 give finite images (the non-finite texels warned about);
   * only what the scene needs: a constant world bakes no map.
@@ -316,6 +318,47 @@ def camera_ray_trick(checks):
                  "Is Camera Ray: the sphere is lit by the other colour only", sphere.round(4).tolist())
 
 
+def procedural_world(checks):
+    """A gradient sky (Generated -> Separate XYZ -> ColorRamp) added to a
+    dim constant Background (Add Shader): background and a lit sphere
+    against Cycles at equal samples."""
+    scene = reset_scene(120, 90)
+    cam = scene.camera
+    cam.location = (0.0, -4.0, 0.3)
+    cam.rotation_euler = (math.radians(80), 0.0, 0.0)
+    nt = scene.world.node_tree
+    nodes, links = nt.nodes, nt.links
+    coords = nodes.new("ShaderNodeTexCoord")
+    split = nodes.new("ShaderNodeSeparateXYZ")
+    ramp = nodes.new("ShaderNodeValToRGB")
+    ramp.color_ramp.elements[0].color = (0.9, 0.6, 0.3, 1.0)
+    ramp.color_ramp.elements[1].color = (0.2, 0.4, 1.0, 1.0)
+    ramp.color_ramp.elements[0].position = 0.0
+    ramp.color_ramp.elements[1].position = 0.6
+    links.new(coords.outputs["Generated"], split.inputs[0])
+    links.new(split.outputs["Z"], ramp.inputs["Fac"])
+    sky = nodes["Background"]
+    links.new(ramp.outputs["Color"], sky.inputs["Color"])
+    sky.inputs["Strength"].default_value = 2.0
+    dim = nodes.new("ShaderNodeBackground")
+    dim.inputs["Color"].default_value = (0.05, 0.05, 0.05, 1.0)
+    add = nodes.new("ShaderNodeAddShader")
+    links.new(sky.outputs[0], add.inputs[0])
+    links.new(dim.outputs[0], add.inputs[1])
+    links.new(add.outputs[0], nodes["World Output"].inputs["Surface"])
+    add_sphere(scene, "Grey", (0, 0, 0.2), diffuse_material("grey", (0.6, 0.6, 0.6, 1)), radius=1.0).pass_index = 1
+    ours, index = render(scene, U.ENGINE, 64, "procedural_ours")
+    cyc, _ = render(scene, "CYCLES", 256, "procedural_cycles")
+    for label, k in (("background", 0), ("lit sphere", 1)):
+        inside = U.interior_mask(index, 2) & (index == k)
+        a, b = ours[..., :3][inside], cyc[..., :3][inside]
+        rel = float(np.mean((a - b) ** 2 / (b ** 2 + 1e-2)))
+        ratio = a.mean(axis=0) / b.mean(axis=0)
+        checks.check(rel < 2e-3 and bool(np.all(np.abs(ratio - 1.0) < 0.01)),
+                     f"procedural world (gradient + Add Shader): {label} as Cycles' (relMSE < 2e-3, "
+                     "each channel's mean within 1 %)", f"relMSE {rel:.2e}, mean ratio {ratio.round(4).tolist()}")
+
+
 def bad_input(checks):
     scene = reset_scene(64, 64)
     scene.camera.location = (0.0, -4.0, 0.0)
@@ -355,7 +398,7 @@ def main():
     checks = U.Checks("test_world_map")
     if not U.require_engine(checks):
         checks.finish()
-    for test in (background, energy, camera_ray_trick, bad_input, against_cycles):
+    for test in (background, energy, camera_ray_trick, procedural_world, bad_input, against_cycles):
         checks.run(test.__name__, test, checks)
     checks.finish()
 

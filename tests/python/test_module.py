@@ -53,6 +53,25 @@ class ModuleTest(unittest.TestCase):
         self.assertGreater(out["Combined"][..., 0].min(), 0.0)
         self.assertIn("lighting_ms", self.r.last_timings)
 
+    def test_world_graph(self):
+        """A world graph is baked (a constant Background seen by the camera)
+        and one that cannot compile renders the fallback colour, warned."""
+        background = {"nodes": [{"func": "node_emission", "args": [("const", "color", 0), ("const", "float", 3)],
+                                 "outputs": ["closure"]}],
+                      "surface": (0, 0), "constants": [0.25, 0.5, 1.0, 2.0], "images": [], "attributes": []}
+        self.r.set_world(color=(0.0, 0.0, 0.0), graph=background)
+        out = self.r.render(camera(), 8, 6, passes=["Combined", "Env"])
+        np.testing.assert_allclose(out["Combined"][..., :3], np.broadcast_to([0.5, 1.0, 2.0], (6, 8, 3)), rtol=1e-6)
+        np.testing.assert_allclose(out["Env"][..., :3], out["Combined"][..., :3], rtol=1e-6)
+        self.assertGreater(self.r.last_timings["world_map_width"], 0)
+        broken = dict(background, nodes=[{"func": "node_not_in_the_library", "args": [], "outputs": ["closure"]}])
+        self.r.clear_scene()
+        self.r.set_world(color=(0.1, 0.2, 0.3), graph=broken)
+        out = self.r.render(camera(), 8, 6, passes=["Combined"])
+        np.testing.assert_allclose(out["Combined"][..., :3], np.broadcast_to([0.1, 0.2, 0.3], (6, 8, 3)), rtol=1e-6)
+        self.assertTrue(any("World" in w for w in self.r.last_warnings), self.r.last_warnings)
+        self.assertEqual(self.r.last_timings["world_map_width"], 0)
+
     def test_bad_arrays_raise_value_error_naming_the_array(self):
         p, i, n = plane()
         cases = [

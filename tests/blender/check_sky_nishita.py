@@ -62,10 +62,13 @@ SKIES = [
     # Cycles' clamps: sun size 0 -> 0.0005 rad, altitude 60 km -> 59999 m.
     ("tiny_sun_space", dict(sun_elevation=D(60.0), sun_rotation=D(10.0), altitude=60000.0,
                             air_density=10.0, dust_density=0.0, ozone_density=10.0, sun_size=0.0)),
-    # Elevation past the zenith (the property is unbounded), rotation below -2pi.
+    # Elevation past the zenith (the property is unbounded; Cycles folds it back
+    # with the sun half a turn round), rotation below -2pi.
     ("sun_past_zenith", dict(sun_elevation=D(100.0), sun_rotation=D(-400.0), altitude=500.0,
                              air_density=0.0, dust_density=10.0, ozone_density=3.0, sun_size=D(5.0),
                              sun_intensity=0.25)),
+    # Elevation -200 deg: wrapped to 160, folded to 20 with the sun turned round.
+    ("elevation_wrapped", dict(sun_elevation=D(-200.0), sun_rotation=D(50.0), sun_size=D(5.0))),
 ]
 
 NODE_DEFAULTS = dict(sun_disc=True, sun_size=None, sun_intensity=1.0, sun_elevation=None,

@@ -18,8 +18,9 @@ Written from the maths of these Cycles / Blender 3.4 sources (Apache-2.0):
   the table and the sun, the sun size is max(sun_size, 0.0005)
   (SkyTextureNode::get_sun_size, shader_nodes.h), the sun rotation is
   wrapped to [0, 2pi) and stored as 2pi - rotation; the table is LINEAR
-  interpolated with EXTEND (clamp-to-edge) wrapping. The sun elevation is
-  passed on unclamped.
+  interpolated with EXTEND (clamp-to-edge) wrapping. The sun elevation (an
+  unbounded property) is wrapped and folded into [-pi/2, pi/2], the sun
+  turned half round when folded: see sun_position() (measured in 3.4.1).
 - intern/cycles/kernel/svm/sky.h (as shipped with Blender 3.4.1 in
   scripts/addons/cycles/source): svm_node_tex_sky reads 10 floats,
   sky_radiance_nishita evaluates a direction; kernel/camera/projection.h
@@ -55,8 +56,8 @@ the Cycles clamps are applied here.
 Constant block (what node_tex_sky_nishita reads with mat_const):
    0..2  pixel_bottom (XYZ)      \\
    3..5  pixel_top (XYZ)          |  Cycles' nishita_data[0..9], in the
-   6     sun_elevation            |  order svm_node_tex_sky reads them
-   7     sun_rotation (2pi - wrap(rotation))
+   6     sun_elevation (folded)   |  order svm_node_tex_sky reads them
+   7     sun_rotation (2pi - wrapped rotation, + pi if folded: sun_position)
    8     sun angular diameter, or -1 when the sun disc is off
    9     sun_intensity           /
   10..18 xyz_to_rgb rows r, g, b (kernel_data.film.xyz_to_r/g/b)
@@ -72,9 +73,8 @@ import numpy as np
 
 __all__ = ["TEXTURE_WIDTH", "TEXTURE_HEIGHT", "CONSTANT_COUNT", "XYZ_TO_RGB",
            "precompute_texture", "precompute_sun", "node_constants", "radiance",
-           "clamp_altitude", "clamp_sun_size", "texture_key"]
+           "clamp_altitude", "clamp_sun_size", "sun_position", "texture_key"]
 
-_f32 = np.float32
 F = np.float32
 
 TEXTURE_WIDTH = 512   # SkyLoader::load_metadata
@@ -346,7 +346,7 @@ def clamp_sun_size(sun_size):
 
 def texture_key(sun_elevation, altitude, air_density, dust_density, ozone_density):
     """What the table depends on (after Cycles' clamps), e.g. for an image cache key."""
-    return ("sky_nishita", float(F(sun_elevation)), float(clamp_altitude(altitude)),
+    return ("sky_nishita", float(sun_position(sun_elevation)[0]), float(clamp_altitude(altitude)),
             float(F(air_density)), float(F(dust_density)), float(F(ozone_density)))
 
 
@@ -364,12 +364,13 @@ def precompute_texture(sun_elevation, altitude, air_density, dust_density, ozone
     (pi/2 + pi/(4 height)) (y/height)^2 (rows crowd toward the horizon,
     row 0 = horizon); column x is longitude 2pi x/width - pi relative to the
     sun, and the sky is mirrored: column width-1-x = column x.
-    Altitude is clamped as SkyTextureNode::compile does."""
+    Altitude is clamped and the elevation folded as Cycles does."""
     alt = clamp_altitude(altitude)
     air, dust, ozone = F(air_density), F(dust_density), F(ozone_density)
+    elevation = sun_position(sun_elevation)[0]
     half_width = width // 2
     origin = (F(0.0), F(0.0), EARTH_RADIUS + alt)
-    sun_dir = _geographical_to_direction(F(sun_elevation), F(0.0))
+    sun_dir = _geographical_to_direction(elevation, F(0.0))
     sun_dir = tuple(_a(c) for c in sun_dir)
 
     latitude_step = M_PI_2_F / F(height)
@@ -395,10 +396,10 @@ def precompute_texture(sun_elevation, altitude, air_density, dust_density, ozone
 
 def precompute_sun(sun_elevation, sun_size, altitude, air_density, dust_density):
     """SKY_nishita_skymodel_precompute_sun with the node's values (sun size and
-    altitude clamped as Cycles does): the sun's radiance (CIE XYZ, W m^-2 sr^-1
+    altitude clamped, elevation folded as Cycles does): the sun's radiance (CIE XYZ, W m^-2 sr^-1
     nm-weighted as the table) seen at the bottom and the top of its disc, the
     elevations clamped to >= 0. Returns (pixel_bottom, pixel_top), (3,) float32."""
-    elevation = F(sun_elevation)
+    elevation = sun_position(sun_elevation)[0]
     angular = clamp_sun_size(sun_size)
     alt = clamp_altitude(altitude)
     air, dust = F(air_density), F(dust_density)
@@ -418,12 +419,31 @@ def precompute_sun(sun_elevation, sun_size, altitude, air_density, dust_density)
     return xyz[0].copy(), xyz[1].copy()
 
 
-def _wrap_rotation(sun_rotation):
-    """sky_texture_precompute_nishita: rotation wrapped to [0, 2pi), stored as 2pi - it."""
-    r = F(math.fmod(float(F(sun_rotation)), float(M_2PI_F)))   # fmodf is exact
+def sun_position(sun_elevation, sun_rotation=0.0):
+    """The sun position Cycles 3.4.1 renders for the node's elevation and
+    rotation: (elevation, rotation as stored for the kernel), float32.
+
+    The elevation is wrapped to [-pi, pi] and folded into [-pi/2, pi/2] with
+    the sun moved half a turn (the same direction: the daylight cycle can be
+    animated past the zenith), then the rotation is wrapped to [0, 2pi) and
+    stored as 2pi - rotation (sky_texture_precompute_nishita). The folding
+    was measured in Blender 3.4.1 (elevations of 100, 170, 200, 400, -100 and
+    -200 degrees match Cycles' renders only folded; check_sky_nishita.py keeps
+    100 and -200); it is the arithmetic of SkyTextureNode::simplify_settings
+    in later Cycles sources. The folded elevation is also the one the table
+    and the sun pixels are computed for."""
+    e = F(sun_elevation)
+    r = F(sun_rotation)
+    e = F(math.fmod(float(e), float(M_2PI_F)))             # fmodf is exact
+    if abs(e) >= M_PI_F:
+        e = F(e - F(math.copysign(2.0, e)) * M_PI_F)
+    if e >= M_PI_2_F or e <= -M_PI_2_F:
+        e = F(F(math.copysign(float(M_PI_F), e)) - e)
+        r = F(r + M_PI_F)
+    r = F(math.fmod(float(r), float(M_2PI_F)))
     if r < 0.0:
         r = F(r + M_2PI_F)
-    return F(M_2PI_F - r)
+    return e, F(M_2PI_F - r)
 
 
 def node_constants(sun_disc, sun_size, sun_intensity, sun_elevation, sun_rotation,
@@ -433,7 +453,8 @@ def node_constants(sun_disc, sun_size, sun_intensity, sun_elevation, sun_rotatio
     them to svm_node_tex_sky, then the scene's XYZ -> RGB rows."""
     bottom, top = precompute_sun(sun_elevation, sun_size, altitude, air_density, dust_density)
     data = [float(v) for v in bottom] + [float(v) for v in top]
-    data += [float(F(sun_elevation)), float(_wrap_rotation(sun_rotation)),
+    elevation, rotation = sun_position(sun_elevation, sun_rotation)
+    data += [float(elevation), float(rotation),
              float(clamp_sun_size(sun_size)) if sun_disc else -1.0, float(F(sun_intensity))]
     m = np.asarray(xyz_to_rgb, dtype=np.float64).reshape(3, 3)
     data += [float(F(v)) for v in m.reshape(-1)]

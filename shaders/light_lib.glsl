@@ -369,11 +369,96 @@ LightContribution shade_light_unshadowed(GpuLight light, SurfaceParams s, Princi
     return r;
 }
 
+#ifdef HAS_MESH_LIGHTS
+layout(std430, binding = SSBO_EMITTERS) readonly buffer Emitters { GpuEmitterTriangle emitters[]; };
+
+/* Light from point X (unit normal n, radiance Le, density pdf in area
+ * measure) of a two-sided emitter: f cos Le |cos_l| / (d^2 pdf)
+ * (Cycles' emissive_simple_eval: |N.I|). */
+LightContribution mesh_light_point(SurfaceParams s, PrincipledWeights w, vec3 P, vec3 N, vec3 V, vec3 X, vec3 n,
+                                   vec3 Le, float pdf) {
+    LightContribution r;
+    r.diffuse = vec3(0.0);
+    r.glossy = vec3(0.0);
+    vec3 to_light = X - P;
+    float d2 = dot(to_light, to_light);
+    if (!(d2 > 1e-20) || !(pdf > 0.0)) return r;
+    vec3 L = to_light * inversesqrt(d2);
+    vec3 scale = Le * (abs(dot(n, L)) / (d2 * pdf));
+    LobeEval e = principled_eval(s, w, N, V, L);
+    r.diffuse = e.diffuse * scale;
+    r.glossy = e.glossy * (scale * smooth_side(s, L));
+    return r;
+}
+
+/* An emissive mesh's unoccluded light: MESH_LIGHT_SAMPLES points of its
+ * own per pixel and film sample (a triangle by power from the light's CDF,
+ * uniform on it, Turk 1990), stratified over the film's samples by the R2
+ * sequence (Roberts 2018) rotated per pixel and light (pcg4d). */
+LightContribution mesh_light_unoccluded(GpuLight light, SurfaceParams s, PrincipledWeights w, vec3 P, vec3 N,
+                                        vec3 V) {
+    LightContribution r;
+    r.diffuse = vec3(0.0);
+    r.glossy = vec3(0.0);
+    uint first = uint(light.direction.x), count = uint(light.direction.y);
+    if (count == 0u) return r;
+    uvec4 h = uvec4(gl_GlobalInvocationID.xy, first * 0x9E3779B9u + 0x632BE5ABu, 0x85EBCA6Bu);
+    h = h * 1664525u + 1013904223u;
+    h.x += h.y * h.w; h.y += h.z * h.x; h.z += h.x * h.y; h.w += h.y * h.z;
+    h ^= h >> 16u;
+    h.x += h.y * h.w; h.y += h.z * h.x; h.z += h.x * h.y; h.w += h.y * h.z;
+    for (int k = 0; k < MESH_LIGHT_SAMPLES; ++k) {
+        uint index = uint(frame.sample_shift.w) * uint(MESH_LIGHT_SAMPLES) + uint(k);
+        uvec2 bits = h.xy + index * uvec2(0xC13FA9A9u, 0x91E10DA5u);
+        vec2 u = vec2(bits >> 8u) * (1.0 / 16777216.0);
+        /* The first triangle whose running CDF exceeds u.x. */
+        uint lo = first, hi = first + count - 1u;
+        while (lo < hi) {
+            uint mid = (lo + hi) >> 1u;
+            if (emitters[mid].v0.w > u.x) hi = mid; else lo = mid + 1u;
+        }
+        GpuEmitterTriangle t = emitters[lo];
+        float p = t.e2.w;
+        float a = p > 0.0 ? clamp((u.x - (t.v0.w - p)) / p, 0.0, 1.0) : 0.5;
+        float sa = sqrt(a);
+        vec3 X = t.v0.xyz + t.e1.xyz * (sa * (1.0 - u.y)) + t.e2.xyz * (sa * u.y);
+        vec3 n = normalize(cross(t.e1.xyz, t.e2.xyz));
+        LightContribution c = mesh_light_point(s, w, P, N, V, X, n, t.radiance.rgb, p / t.e1.w);
+        r.diffuse += c.diffuse * (1.0 / float(MESH_LIGHT_SAMPLES));
+        r.glossy += c.glossy * (1.0 / float(MESH_LIGHT_SAMPLES));
+    }
+    return r;
+}
+#endif
+
 /* The light's unshadowed contribution, and in `visible` this sample's
  * visibility of its light point (1 without a shadow map): the sample's
- * shadowed light is their product. */
+ * shadowed light is their product. An emissive mesh returns its shadowed
+ * light with visible = 1: its own points' light minus what is blocked at
+ * the sample's shared point, where its cube map looks from (a control
+ * variate, as the world's occlusion: L(x_s) f G (1 - V(x_s)) / p(x_s) has
+ * the expectation of the blocked light). */
 LightContribution shade_light(GpuLight light, SurfaceParams s, PrincipledWeights w, vec3 P, vec3 N, vec3 V,
                               out float visible) {
+#ifdef HAS_MESH_LIGHTS
+    if (int(light.position_type.w) == LIGHT_MESH) {
+        LightContribution r = mesh_light_unoccluded(light, s, w, P, N, V);
+        visible = 1.0;
+#ifdef HAS_SHADOWS
+        int shadow = int(light.params.w);
+        if (shadow >= 0) {
+            float blocked = 1.0 - shadow_visibility(shadow, P, N);
+            if (blocked > 0.0) {
+                LightContribution c = mesh_light_point(s, w, P, N, V, light.axis_x.xyz, light.axis_y.xyz,
+                                                       light.strength.rgb, light.axis_x.w);
+                r.diffuse -= c.diffuse * blocked;
+                r.glossy -= c.glossy * blocked;
+            }
+        }
+#endif
+        return r;
+    }
+#endif
     LightContribution r = shade_light_unshadowed(light, s, w, P, N, V);
     visible = 1.0;
 #ifdef HAS_SHADOWS

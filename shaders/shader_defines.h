@@ -24,6 +24,7 @@
 #define SSBO_MATERIAL_CONSTANTS 14 /* node materials: per-material constants (material_lib.glsl) */
 #define SSBO_ATTRIBUTES 15     /* node materials: the mesh's named per-corner attributes */
 #define SSBO_WORLD_CDF 16      /* the world map's sampling CDFs (world_lib.glsl) */
+#define SSBO_EMITTERS 17       /* emissive meshes' triangles (GpuEmitterTriangle, emitter_module.h) */
 
 /* Textures sampled by compute passes (G-buffer inputs) */
 #define TEX_DEPTH 0
@@ -61,6 +62,8 @@
 /* Directions per pixel and film sample for the world's unoccluded light:
  * this many from the map and as many from the BSDF (multiple importance). */
 #define WORLD_LIGHT_SAMPLES 2
+/* Points per pixel and film sample on each emissive mesh light. */
+#define MESH_LIGHT_SAMPLES 2
 
 /* Fragment outputs of the geometry pass (G-buffer MRT) */
 #define OUT_EMISSION 0

@@ -26,6 +26,7 @@ struct alignas(16) mat4 { vec4 cols[4]; };
 #define LIGHT_SPOT 1
 #define LIGHT_SUN 2
 #define LIGHT_AREA 3
+#define LIGHT_MESH 4 /* an emissive mesh instance (emitter_module.h) */
 #define AREA_RECT 0
 #define AREA_ELLIPSE 1
 
@@ -50,6 +51,27 @@ SHARED_STRUCT(GpuLight) {
     vec4 params;
 };
 SHARED_ASSERT_SIZE(GpuLight, 96);
+/* An emissive mesh's light (LIGHT_MESH) reuses GpuLight:
+ *   position_type : xyz its bounding sphere's centre (culling), w LIGHT_MESH
+ *   strength      : rgb the radiance at this sample's shared point, w 0
+ *   direction     : x first triangle in the emitter buffer, y triangle count, z total area,
+ *                   w its bounding sphere's radius
+ *   axis_x        : xyz this sample's shared point (its cube shadow map looks from it),
+ *                   w its density (area measure) under the light's CDF
+ *   axis_y        : xyz the unit normal of the shared point's triangle
+ *   params        : as for the other lights (z influence radius, w shadow index) */
+
+/* One emitting triangle (camera-relative) of a mesh light.
+ *   v0       : xyz vertex 0, w the light's CDF after this triangle (the last is 1)
+ *   e1, e2   : xyz edges v1 - v0, v2 - v0; e1.w its area, e2.w its probability
+ *   radiance : rgb emitted radiance (two-sided), w unused */
+SHARED_STRUCT(GpuEmitterTriangle) {
+    vec4 v0;
+    vec4 e1;
+    vec4 e2;
+    vec4 radiance;
+};
+SHARED_ASSERT_SIZE(GpuEmitterTriangle, 64);
 
 /* One material (Blender 3.4 Principled BSDF constants).
  *   base_diffuse : rgb base colour, a diffuse model: < 0 the Principled BSDF's
@@ -133,7 +155,9 @@ SHARED_ASSERT_SIZE(FrameConstants, 400);
  *                   direction pair was drawn with), w resolution / the array's layer size
  *                   (the maps fill the lower-left corner of their layers)
  *   cascade_split : cascades: far view depth of cascades 0..3; cubes: xy the sample's
- *                   offset on the sphere light's disk, along each face's right/up axes
+ *                   offset on the sphere light's disk, along each face's right/up axes, z
+ *                   occluders nearer the point than this are no shadow (an emissive mesh's
+ *                   own surface around its point; 0 for lights)
  *   cascade       : camera-relative world -> cascade clip space (orthographic, depth in [0,1]
  *                   along the sun's direction, 1 nearest the sun) */
 #define SHADOW_CUBE 0

@@ -121,5 +121,9 @@ float shadow_visibility(int index, vec3 P, vec3 N) {
     float fwd = max(dot(vb, F), 1e-20);
     vec2 uv = vec2(dot(vb, R), dot(vb, U)) / (fwd * SHADOW_CUBE_OVERLAP) * 0.5 + 0.5;
     float stored = texture(shadow_maps, vec3(shadow_map_uv(sh, uv), sh.point.w + float(face))).r;
-    return length(vb) - slope * texel <= stored ? 1.0 : 0.0;
+    /* An emissive mesh's point lies on its own surface, which curves away
+     * from it: the texels around its tangent plane see that surface at
+     * almost no distance. Occluders nearer than cascade_split.z (a fraction
+     * of the emitter's size; 0 for lights) are that surface, not a shadow. */
+    return (length(vb) - slope * texel <= stored || stored < sh.cascade_split.z) ? 1.0 : 0.0;
 }

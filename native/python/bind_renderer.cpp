@@ -231,6 +231,7 @@ void declare_renderer(py::module_& m) {
             d["images_reused"] = self.last.images_reused;
             d["world_bake_ms"] = self.last.world_bake_ms;
             d["world_map_width"] = self.last.world_map_width;
+            d["emitter_triangles"] = self.last.emitter_triangles;
             return d;
         })
         .def_property_readonly("last_warnings", [](PyRenderer& self) { return self.last_warnings; },

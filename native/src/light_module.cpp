@@ -1,5 +1,6 @@
 #include "light_module.h"
 
+#include "emitter_module.h"
 #include "shadow_module.h"
 
 #include "../../shaders/shader_defines.h"
@@ -65,8 +66,9 @@ gpu::GpuLight pack_light(const Light& l, const glm::dvec3& camera_position, doub
 }
 
 void LightModule::sync(const std::vector<Light>& lights, const glm::dvec3& camera_position, double threshold,
-                       ShadowModule* shadows) {
-    std::vector<gpu::GpuLight> packed;
+                       ShadowModule* shadows, const EmitterModule* emitters) {
+    std::vector<gpu::GpuLight>& packed = packed_;
+    packed.clear();
     packed.reserve(lights.size());
     for (auto& t : has_type_) t = false;
     for (const Light& l : lights) {
@@ -79,17 +81,58 @@ void LightModule::sync(const std::vector<Light>& lights, const glm::dvec3& camer
         if (shadows) shadows->offer(packed.size() - 1, l, packed.back());
         has_type_[static_cast<int>(l.type)] = true;
     }
+    first_mesh_ = packed.size();
+    if (emitters) {
+        for (const MeshLight& m : emitters->lights()) {
+            gpu::GpuLight g{};
+            g.position_type = v4(m.center, double(LIGHT_MESH));
+            g.direction = {float(m.first), float(m.count), float(m.area), float(m.radius)};
+            // A point at distance d from a two-sided emitter of radiance
+            // <= Lmax and area A gets E <= Lmax A / d^2, so a white diffuse
+            // surface reflects E / pi < T beyond d = sqrt(Lmax A / (pi T))
+            // from the emitter's bounding sphere.
+            const double reach = threshold > 0.0 ? m.radius + std::sqrt(m.max_radiance * m.area / (M_PI * threshold))
+                                                 : -1.0;
+            g.params = {float(m.area), m.cast_shadow ? 1.0f : 0.0f, float(reach), -1.0f};
+            packed.push_back(g);
+            if (shadows && m.cast_shadow)
+                shadows->offer_mesh(packed.size() - 1, packed.back(), m.power * M_PI);
+            has_type_[LIGHT_MESH] = true;
+        }
+    }
     if (shadows) {
         const std::vector<int> shadow_index = shadows->allocate(packed.size());
         for (std::size_t i = 0; i < packed.size(); ++i) packed[i].params.w = float(shadow_index[i]);
     }
     count_ = static_cast<std::uint32_t>(packed.size());
-    buffer_ = make_storage_buffer(packed.data(), packed.size() * sizeof(gpu::GpuLight), "lights");
+    if (first_mesh_ < packed.size()) {
+        // Mesh lights change every sample (their shared point): a buffer updated in place.
+        buffer_ = make_storage_buffer(nullptr, packed.size() * sizeof(gpu::GpuLight), "lights");
+        glNamedBufferSubData(buffer_.get(), 0, GLsizeiptr(packed.size() * sizeof(gpu::GpuLight)), packed.data());
+    } else {
+        buffer_ = make_storage_buffer(packed.data(), packed.size() * sizeof(gpu::GpuLight), "lights");
+    }
+}
+
+void LightModule::update_mesh_points(const EmitterModule& emitters, const std::array<float, 2>& u,
+                                     ShadowModule* shadows) {
+    if (first_mesh_ >= packed_.size()) return;
+    for (std::size_t k = 0; k < emitters.lights().size() && first_mesh_ + k < packed_.size(); ++k) {
+        const MeshLightPoint p = emitters.sample_point(k, u);
+        gpu::GpuLight& g = packed_[first_mesh_ + k];
+        g.strength = v4(p.radiance, 0.0);
+        g.axis_x = v4(p.position, p.pdf);
+        g.axis_y = v4(p.normal, 0.0);
+        if (shadows) shadows->update_light(first_mesh_ + k, g);
+    }
+    glNamedBufferSubData(buffer_.get(), GLintptr(first_mesh_ * sizeof(gpu::GpuLight)),
+                         GLsizeiptr((packed_.size() - first_mesh_) * sizeof(gpu::GpuLight)), &packed_[first_mesh_]);
 }
 
 void LightModule::add_defines(ShaderVariant& variant) const {
-    static const char* names[4] = {"HAS_POINT_LIGHTS", "HAS_SPOT_LIGHTS", "HAS_SUN_LIGHTS", "HAS_AREA_LIGHTS"};
-    for (int i = 0; i < 4; ++i)
+    static const char* names[5] = {"HAS_POINT_LIGHTS", "HAS_SPOT_LIGHTS", "HAS_SUN_LIGHTS", "HAS_AREA_LIGHTS",
+                                   "HAS_MESH_LIGHTS"};
+    for (int i = 0; i < 5; ++i)
         if (has_type_[i]) variant.defines.push_back(names[i]);
 }
 

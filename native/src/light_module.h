@@ -10,6 +10,7 @@
 
 #include <deferred/scene.h>
 
+#include <array>
 #include <vector>
 
 namespace deferred {
@@ -29,11 +30,18 @@ gpu::GpuLight pack_light(const Light& light, const glm::dvec3& camera_position, 
 // S is the largest colour channel x energy. Negative energies count by magnitude.
 double influence_radius(const Light& light, double threshold);
 
+class EmitterModule;
+
 class LightModule {
 public:
-    // `shadows` (optional) gives each kept light its shadow index (params.w).
+    // `shadows` (optional) gives each kept light its shadow index (params.w);
+    // `emitters` (optional): emissive meshes, packed after the lights as LIGHT_MESH.
     void sync(const std::vector<Light>& lights, const glm::dvec3& camera_position, double threshold,
-              class ShadowModule* shadows = nullptr);
+              class ShadowModule* shadows = nullptr, const EmitterModule* emitters = nullptr);
+    // Per film sample: each emissive mesh light's shared point for `u`, in
+    // the light buffer and (if it has maps) in the shadow module's entry.
+    void update_mesh_points(const EmitterModule& emitters, const std::array<float, 2>& u,
+                            class ShadowModule* shadows);
     void add_defines(ShaderVariant& variant) const;
     void bind() const;
     std::uint32_t count() const { return count_; }
@@ -41,7 +49,9 @@ public:
 private:
     Buffer buffer_;
     std::uint32_t count_ = 0;
-    bool has_type_[4] = {false, false, false, false};
+    bool has_type_[5] = {false, false, false, false, false};
+    std::vector<gpu::GpuLight> packed_;
+    std::size_t first_mesh_ = 0;  // packed index of the first mesh light
 };
 
 }  // namespace deferred

@@ -5,6 +5,7 @@
 
 #include "camera.h"
 #include "egl_context.h"
+#include "emitter_module.h"
 #include "film.h"
 #include "gbuffer.h"
 #include "gl_util.h"
@@ -93,6 +94,7 @@ struct Renderer::Impl {
     LightCulling culling;
     ShadowModule shadows;
     WorldModule world_module;
+    EmitterModule emitters;
     std::int32_t world_graph = -1;  // the world's node graph in `materials`, -1: a constant colour
     VertexArray empty_vao;
     Buffer dummy_ssbo;
@@ -114,6 +116,7 @@ struct Renderer::Impl {
             culling = LightCulling();
             shadows = ShadowModule();
             world_module.release();
+            emitters.release();
             scene.clear();
             materials.release_all();
             shaders.reset();
@@ -333,7 +336,10 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     // hdri_studio report); a constant world keeps one.
     const int world_maps = world_module.has_map() ? kWorldMapOcclusionDirections : 1;
     if (settings.shadows && (world_lights || ao_pass) && scene.instance_count() > 0) shadows.offer_world(world_maps);
-    lights.sync(scene.lights(), cam.position, settings.light_threshold, settings.shadows ? &shadows : nullptr);
+    // Emissive meshes become lights (constant emission; emitter_module.h).
+    result.timings.emitter_triangles = emitters.sync(scene, cam.position);
+    lights.sync(scene.lights(), cam.position, settings.light_threshold, settings.shadows ? &shadows : nullptr,
+                &emitters);
     const bool culled = settings.light_culling && lights.count() >= kCullingMinLights;
 
     gpu::FrameConstants fc{};
@@ -724,6 +730,8 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         // This sample's directions of the world's occlusion maps and the
         // density each pair (a map answers for the opposite direction too)
         // was drawn with: consecutive points of one low-discrepancy sequence.
+        // Each emissive mesh's shared point this sample (its cube map's origin).
+        lights.update_mesh_points(emitters, {u[2], u[3]}, settings.shadows ? &shadows : nullptr);
         std::vector<glm::dvec4> world_dirs;
         for (int k = 0; k < shadows.world_count(); ++k) {
             const WorldDirection d =
@@ -786,6 +794,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         if (culled) culling.bind();
         shadows.bind();
         world_module.bind();
+        emitters.bind();
         glBindImageTexture(IMG_FILM, film.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
         if (shadow_pass)
             glBindImageTexture(IMG_SHADOW, shadow_light.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);

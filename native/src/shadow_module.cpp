@@ -177,6 +177,23 @@ bool ShadowModule::offer(std::size_t light_index, const Light& light, const gpu:
     return true;
 }
 
+bool ShadowModule::offer_mesh(std::size_t light_index, const gpu::GpuLight& packed, double power) {
+    if (!(power > 0.0)) return false;
+    Entry e;
+    e.light = packed;
+    e.light_index = light_index;
+    e.fixed_point = false;
+    const double d2 = glm::dot(v3(packed.position_type), v3(packed.position_type));
+    e.priority = power / std::max(d2, 1.0);
+    entries_.push_back(e);
+    return true;
+}
+
+void ShadowModule::update_light(std::size_t light_index, const gpu::GpuLight& packed) {
+    for (Entry& e : entries_)
+        if (!e.world && e.light_index == light_index) e.light = packed;
+}
+
 std::vector<int> ShadowModule::allocate(std::size_t light_count) {
     std::vector<int> index(light_count, -1);
     dropped_ = 0;
@@ -432,7 +449,9 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
             glm::dvec3 p = v3(l.position_type);
             glm::dvec2 disk(0.0);
             const int type = int(l.position_type.w);
-            if (type == LIGHT_AREA) {
+            if (type == LIGHT_MESH) {
+                p = v3(l.axis_x);  // the sample's shared point on the emitting surface
+            } else if (type == LIGHT_AREA) {
                 const glm::dvec2 xy = int(l.axis_y.w) == AREA_ELLIPSE ? concentric_disk(u[0], u[1])
                                                                       : glm::dvec2(2 * u[0] - 1, 2 * u[1] - 1);
                 p += v3(l.axis_x) * xy.x + v3(l.axis_y) * xy.y;
@@ -453,7 +472,10 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
             g.point = {float(p.x), float(p.y), float(p.z), float(e.first_layer)};
             g.params = {float(SHADOW_CUBE), float(e.resolution), float(2.0 * SHADOW_CUBE_OVERLAP / e.resolution),
                         uv_scale};
-            g.cascade_split = {float(disk.x), float(disk.y), 0.0f, 0.0f};
+            // A mesh light's own surface within 2 % of its size around the
+            // point is not a shadow (shadow_lib.glsl).
+            const float near_ignore = type == LIGHT_MESH ? 0.02f * l.direction.w : 0.0f;
+            g.cascade_split = {float(disk.x), float(disk.y), near_ignore, 0.0f};
         }
     }
     glNamedBufferSubData(shadow_buffer_.get(), 0, GLsizeiptr(shadows.size() * sizeof(gpu::GpuShadow)), shadows.data());

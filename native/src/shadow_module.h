@@ -53,6 +53,11 @@ public:
     void begin_frame(const CameraMatrices& camera, int max_resolution, float quality, std::size_t memory_budget);
     // Offers a light; returns false if it cannot shadow anything visible.
     bool offer(std::size_t light_index, const Light& light, const gpu::GpuLight& packed);
+    // Offers an emissive mesh's light (LIGHT_MESH, emitting `power` W): a
+    // cube map from its shared point (axis_x), which moves every sample.
+    bool offer_mesh(std::size_t light_index, const gpu::GpuLight& packed, double power);
+    // A kept light's new data for the coming sample (a mesh light's point).
+    void update_light(std::size_t light_index, const gpu::GpuLight& packed);
     // Asks for the world's occlusion maps: each sample, `maps` orthographic
     // maps along new directions of the world, fitted to the visible receivers.
     void offer_world(int maps = 1);

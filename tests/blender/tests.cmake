@@ -33,6 +33,7 @@ set(DEFERRED_BLENDER_TESTS
     world_ao
     node_materials
     node_probes
+    emissive
     transparency
     bump_lighting
     world_map

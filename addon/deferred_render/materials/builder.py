@@ -386,6 +386,27 @@ def build_material_graph(material, images=None):
         raise GraphCycle(str(ex)) from ex
 
 
+def _graph_emits(g):
+    """True if some Emission node of the graph, or a Principled BSDF's
+    Emission, can emit (a link, or a constant colour and strength not 0)."""
+    def nonzero(arg):
+        if arg[0] != "const":
+            return True  # linked: varies
+        kind, offset = arg[1], arg[2]
+        n = 1 if kind == "float" else 3
+        return any(v != 0.0 for v in g.constants[offset:offset + n])
+    for node in g.nodes:
+        if node["func"] == "node_emission":
+            color, strength = node["args"][0], node["args"][1]
+        elif node["func"] == "node_bsdf_principled":
+            color, strength = node["args"][-4], node["args"][-3]
+        else:
+            continue
+        if nonzero(color) and nonzero(strength):
+            return True
+    return False
+
+
 def build_world_graph(world, images=None):
     """MaterialGraph of a world's node tree: its surface closure's emission is
     the background radiance along each direction (the world module bakes it,
@@ -423,6 +444,9 @@ def _build(material, images, world=False):
             s = output.inputs.get(name)
             if s is not None and s.is_linked:
                 g.note(f"{name} (not rendered)")
+    if not world and _graph_emits(g):
+        g.note("its emission lights nothing around it (only constant emission makes a mesh a light; "
+               "its own pixels show it)")
     if world:
         used = {n["func"] for n in g.nodes} & WORLD_UNSUPPORTED
         if used:

@@ -118,6 +118,7 @@ struct FrameTimings {
     std::size_t images_reused = 0;      // images kept from the previous scene and found by key
     double world_bake_ms = 0;           // baking the world's node tree and its sampling CDF
     int world_map_width = 0;            // the baked world map's width (0: a constant world)
+    std::size_t emitter_triangles = 0;  // emissive mesh triangles lighting the scene
 };
 
 struct FrameResult {

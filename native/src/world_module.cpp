@@ -57,7 +57,10 @@ double WorldModule::prepare(ShaderLibrary& shaders, MaterialModule& materials, s
     width_ = width;
     height_ = width / 2;
     radiance_ = bake(shaders, materials, g, true);
-    if (materials.calls(g, "node_light_path")) camera_ = bake(shaders, materials, g, false);
+    // Camera rays see another world than light does: Light Path tricks, and
+    // a sky's sun disc, which lights as a lamp (node_sky_lib.glsl).
+    if (materials.calls(g, "node_light_path") || materials.calls(g, "node_tex_sky_nishita"))
+        camera_ = bake(shaders, materials, g, false);
 
     std::vector<float> rgba(std::size_t(width_) * std::size_t(height_) * 4);
     glGetTextureImage(radiance_.get(), 0, GL_RGBA, GL_FLOAT, GLsizei(rgba.size() * sizeof(float)), rgba.data());

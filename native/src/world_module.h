@@ -5,9 +5,11 @@
 // density). A constant world has no map, no CDF and no bake: the lighting
 // integrates it analytically (only what the scene needs).
 //
-// Two maps when the graph reads Light Path (Is Camera Ray and friends): the
-// world as camera rays see it (background, Env pass) and as light samples
-// see it (lighting); otherwise one map serves both.
+// Two maps when the graph reads Light Path (Is Camera Ray and friends) or
+// has a Nishita sky (whose sun disc lights as a sun lamp the add-on adds,
+// so the lighting map leaves it out): the world as camera rays see it
+// (background, Env pass) and as light samples see it (lighting); otherwise
+// one map serves both.
 #pragma once
 
 #include "gl_util.h"

@@ -78,6 +78,13 @@ void node_tex_sky_nishita(int const_block, sampler2D sky_texture, vec3 direction
   vec3 xyz_to_b = vec3(mat_const(const_block + 16), mat_const(const_block + 17),
                        mat_const(const_block + 18));
   bool sun_disc = angular_diameter >= 0.0;
+#ifdef WORLD_LIGHTING
+  /* The disc lights as a sun lamp (constant 19, the add-on's
+   * sky_nishita.sun_lamp): the world map baked for light leaves it out. */
+  if (mat_const(const_block + 19) > 0.5) {
+    sun_disc = false;
+  }
+#endif
   vec3 dir = direction;
 
   /* direction_to_spherical: theta = safe_acosf(dir.z), phi = atan2f(dir.x, dir.y). */

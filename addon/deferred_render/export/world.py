@@ -60,6 +60,8 @@ def export_world(world, renderer, image_registry, warn=None):
             try:
                 # The colour is the fallback if the native bake fails (warned).
                 renderer.set_world(color=_finite_color(world.color), graph=graph.ir)
+                for direction, irradiance, angle in graph.sun_lamps:
+                    _add_sun_lamp(renderer, direction, irradiance, angle, note)
                 return
             except ValueError as ex:  # refused by the native validation
                 note(f"World '{world.name}': {ex} (rendered with the viewport colour)")
@@ -69,6 +71,27 @@ def export_world(world, renderer, image_registry, warn=None):
     for message in warnings:
         note(message)
     renderer.set_world(color=color)
+
+
+def _add_sun_lamp(renderer, direction, irradiance, angle, note):
+    """A sky's sun disc as a sun lamp: light from ``direction`` (world, unit)
+    with ``irradiance`` (RGB, W/m^2) over a disc of ``angle`` (radians)."""
+    import numpy as np
+    z = np.asarray(direction, dtype=np.float64)
+    if not np.all(np.isfinite(z)) or not np.all(np.isfinite(irradiance)):
+        note("Sky Texture: the sun disc's light is not finite (left out)")
+        return
+    z /= np.linalg.norm(z)
+    helper = np.array([0.0, 0.0, 1.0]) if abs(z[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
+    x = np.cross(helper, z)
+    x /= np.linalg.norm(x)
+    y = np.cross(z, x)
+    matrix = np.eye(4)
+    matrix[:3, 0], matrix[:3, 1], matrix[:3, 2] = x, y, z  # a sun lamp shines along its -Z
+    peak = max(irradiance)
+    energy = min(peak, MAX_WORLD)
+    renderer.add_light(type="SUN", matrix=matrix, color=tuple(c / peak for c in irradiance), energy=energy,
+                       angle=float(angle), cast_shadow=True)
 
 
 def _finite_color(value):

@@ -258,6 +258,7 @@ class GraphBuilder:
         self.uses_alpha = False  # some closure's alpha can be below 1 (MATERIAL_ALPHA)
         self.closure_normal = False  # some closure's normal is not the smooth one
         self.world = False       # a world's tree (its shading point is a direction)
+        self.sun_lamps = []      # (direction, irradiance RGB, angle) of sky sun discs (world trees)
         self._none = None
 
     def note(self, text):
@@ -368,12 +369,14 @@ def material_output(tree, kind="ShaderNodeOutputMaterial"):
 
 
 class MaterialGraph:
-    """The IR of one material and what it needs from meshes."""
+    """The IR of one material and what it needs from meshes (and, for a
+    world, the sun lamps its sky discs light with)."""
 
-    def __init__(self, ir, notes, attributes):
+    def __init__(self, ir, notes, attributes, sun_lamps=()):
         self.ir = ir
         self.notes = notes
         self.attributes = attributes
+        self.sun_lamps = list(sun_lamps)
 
 
 def build_material_graph(material, images=None):
@@ -456,4 +459,4 @@ def _build(material, images, world=False):
     ir = {"name": material.name, "nodes": g.nodes, "surface": surface, "constants": g.constants,
           "images": g.images, "attributes": g.attributes, "alpha": g.uses_alpha,
           "closure_normal": g.closure_normal}
-    return MaterialGraph(ir, g.notes, list(g.attributes))
+    return MaterialGraph(ir, g.notes, list(g.attributes), g.sun_lamps)

@@ -551,3 +551,48 @@ def radiance(dirs, constants, texture):
     xyz = np.nan_to_num(xyz.astype(F), nan=0.0, posinf=0.0, neginf=0.0)
     rgb = np.maximum(xyz @ m.T, F(0.0)).astype(F)
     return rgb.reshape(shape + (3,))
+
+
+# ---------------------------------------------------------------------------
+# The sun disc as a lamp (this engine's addition, not Cycles')
+# ---------------------------------------------------------------------------
+
+def sun_lamp(constants, samples=48):
+    """The sun disc as a sun lamp: (direction towards the sun (3,), irradiance
+    RGB (3,) at normal incidence, angular diameter) or None (no disc, or a
+    disc wholly below the horizon).
+
+    Cycles samples the disc of a Nishita sky as its own light strategy
+    (background_sun_sample); a baked environment map cannot hold a 0.5
+    degree disc, so this engine lights with it as a sun lamp of the same
+    irradiance: the disc's radiance (limb darkening, the part above the
+    horizon) integrated over its cone, sampled on a polar grid."""
+    c = [float(v) for v in constants]
+    angular_diameter = c[8]
+    if angular_diameter < 0.0:
+        return None
+    half = 0.5 * angular_diameter
+    axis = np.array(_geographical_to_direction(F(c[6]), F(c[7] + M_PI_2_F)), dtype=np.float64)
+    axis /= np.linalg.norm(axis)
+    helper = np.array([0.0, 0.0, 1.0]) if abs(axis[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
+    t = np.cross(helper, axis)
+    t /= np.linalg.norm(t)
+    b = np.cross(axis, t)
+    # Uniform in solid angle over the cone: cos from 1 to cos(half), stratified.
+    i = (np.arange(samples) + 0.5) / samples
+    cos_t = 1.0 - i * (1.0 - math.cos(half))
+    phi = 2.0 * math.pi * (np.arange(samples) + 0.5) / samples
+    cos_t, phi = np.meshgrid(cos_t, phi, indexing="ij")
+    sin_t = np.sqrt(np.maximum(0.0, 1.0 - cos_t * cos_t))
+    dirs = (axis[None, None, :] * cos_t[..., None] + t[None, None, :] * (sin_t * np.cos(phi))[..., None] +
+            b[None, None, :] * (sin_t * np.sin(phi))[..., None])
+    dirs /= np.linalg.norm(dirs, axis=-1, keepdims=True)
+    # Only the disc's own radiance: directions inside it and above the horizon.
+    empty = np.zeros((TEXTURE_HEIGHT, TEXTURE_WIDTH, 4), dtype=F)
+    rgb = radiance(dirs, constants, empty).astype(np.float64)
+    inside = dirs[..., 2] >= 0.0
+    solid_angle = 2.0 * math.pi * (1.0 - math.cos(half))
+    irradiance = (rgb * (inside * cos_t)[..., None]).reshape(-1, 3).mean(axis=0) * solid_angle
+    if not np.all(np.isfinite(irradiance)) or irradiance.max() <= 0.0:
+        return None
+    return axis, irradiance, angular_diameter

@@ -25,6 +25,8 @@ intern/cycles/scene/shader_nodes.cpp of the 3.x series:
 """
 
 
+import math
+
 from . import register
 from .texture_mapping import mapping_args as _mapping_args
 
@@ -253,3 +255,58 @@ def tex_white_noise(b):
             _in(b, "Vector", "vector"),
             _in(b, "W", "float")],
            [("Value", "float"), ("Color", "color")])
+
+
+@register("ShaderNodeTexSky")
+def sky_texture(b):
+    """The Sky Texture: Nishita (Blender 3.4's default) as Cycles 3.4.1
+    evaluates it (materials/sky_nishita.py builds the 512x128 XYZ table and
+    the sun disc's constants; shaders/nodes/node_sky_lib.glsl looks it up).
+    Preetham and Hosek/Wilkie are not rendered (their default output, noted)."""
+    from .. import sky_nishita
+    node = b.node
+    if node.sky_type != "NISHITA":
+        return b.unsupported(f"{node.sky_type.replace('_', ' ').title()} sky model (only Nishita is rendered)")
+    from .texture_mapping import MAP_NONE, texture_mapping
+    if texture_mapping(getattr(node, "texture_mapping", None))[0] != MAP_NONE:
+        b._graph.note(f"'{node.name}': the node's texture mapping is not applied (link a Mapping node instead)")
+    params = (node.sun_elevation, node.altitude, node.air_density, node.dust_density, node.ozone_density)
+    key = "computed:" + repr(sky_nishita.texture_key(*params))
+    table = b.computed_image(key, lambda: sky_nishita.precompute_texture(*params))
+    constants = sky_nishita.node_constants(node.sun_disc, node.sun_size, node.sun_intensity, node.sun_elevation,
+                                           node.sun_rotation, node.altitude, node.air_density, node.dust_density)
+    # The sun disc lights as a sun lamp (sky_nishita.sun_lamp) where its
+    # strength is known: the sky straight into a world's Background. The
+    # lighting bake then leaves the disc out (constant 19, WORLD_LIGHTING).
+    strength = _background_strength(b) if (b._graph.world and node.sun_disc) else None
+    lamp = sky_nishita.sun_lamp(constants) if strength is not None else None
+    if lamp is not None:
+        direction, irradiance, angle = lamp
+        b._graph.sun_lamps.append((tuple(direction), tuple(float(v) * strength for v in irradiance), angle))
+    elif b._graph.world and node.sun_disc:
+        b._graph.note(f"'{node.name}': the sun disc lights only through the baked map (where the Sky Texture "
+                      "feeds a Background directly, with its Vector unlinked, it is a sun lamp)")
+    b.call("node_tex_sky_nishita",
+           [b.block(list(constants) + [1.0 if lamp is not None else 0.0]), table,
+            b.input("Vector", "vector", implicit="P")],
+           [("Color", "color")])
+
+
+def _background_strength(b):
+    """The Strength of the Background the Sky Texture's Color feeds directly,
+    when that Background is the world's surface; else None."""
+    node = b.node
+    if b.is_linked("Vector") or b.ctx:
+        return None
+    for link in node.outputs["Color"].links:
+        target = link.to_node
+        if (link.is_muted or target.bl_idname != "ShaderNodeBackground" or target.mute or
+                link.to_socket.identifier != "Color" or target.inputs["Strength"].is_linked):
+            continue
+        for out_link in target.outputs[0].links:
+            output = out_link.to_node
+            if (not out_link.is_muted and output.bl_idname == "ShaderNodeOutputWorld" and
+                    getattr(output, "is_active_output", True) and out_link.to_socket.name == "Surface"):
+                strength = float(target.inputs["Strength"].default_value)
+                return strength if math.isfinite(strength) and strength > 0.0 else None
+    return None

@@ -385,6 +385,8 @@ LightContribution mesh_light_point(SurfaceParams s, PrincipledWeights w, vec3 P,
     if (!(d2 > 1e-20) || !(pdf > 0.0)) return r;
     vec3 L = to_light * inversesqrt(d2);
     vec3 scale = Le * (abs(dot(n, L)) / (d2 * pdf));
+    /* A point almost on the receiver with a tiny density: no finite estimate. */
+    if (any(isinf(scale)) || any(isnan(scale))) return r;
     LobeEval e = principled_eval(s, w, N, V, L);
     r.diffuse = e.diffuse * scale;
     r.glossy = e.glossy * (scale * smooth_side(s, L));

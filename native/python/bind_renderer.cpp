@@ -331,15 +331,18 @@ void declare_renderer(py::module_& m) {
              py::arg("key"), "The id of an image kept (by key) from the previous scene, or None; "
              "the current scene then counts as using it.")
         .def("add_graph_material",
-             [](PyRenderer& self, const py::dict& graph, const py::object& pass_index) {
+             [](PyRenderer& self, const py::dict& graph, const py::object& pass_index, const py::object& light_emission) {
                  Material base;
                  base.pass_index = index_from(pass_index, "add_graph_material: pass_index");
+                 if (!light_emission.is_none()) base.emission = vec3_from(light_emission, "add_graph_material: light_emission");
                  MaterialGraph g = graph_from_python(graph);
                  py::gil_scoped_release release;
                  return self.get().add_graph_material(base, g);
              },
-             py::arg("graph"), py::kw_only(), py::arg("pass_index") = 0,
-             "A node material from the add-on's graph dict (materials/builder.py); returns the material id.")
+             py::arg("graph"), py::kw_only(), py::arg("pass_index") = 0, py::arg("light_emission") = py::none(),
+             "A node material from the add-on's graph dict (materials/builder.py); returns the material id. "
+             "light_emission: the radiance its surface emits when the graph makes it a constant (the mesh "
+             "then lights other surfaces); the graph alone decides what its pixels show.")
         .def("add_material",
              [](PyRenderer& self, const py::object& base_color, float metallic, float roughness, float specular,
                 float specular_tint, float sheen, float sheen_tint, float clearcoat, float clearcoat_roughness,

@@ -16,7 +16,9 @@ double luminance(const glm::dvec3& c) { return 0.2126729 * c.x + 0.7151522 * c.y
 glm::dvec3 material_emission(const std::vector<Material>& materials, std::uint32_t id, int depth = 0) {
     if (id >= materials.size() || depth > 64) return glm::dvec3(0.0);
     const Material& m = materials[id];
-    if (m.graph >= 0) return glm::dvec3(0.0);  // a node graph's emission is not known here
+    // A node material: the constant radiance the add-on found in its graph
+    // (add_graph_material's light_emission; 0 where the graph varies it).
+    if (m.graph >= 0) return glm::dvec3(m.emission[0], m.emission[1], m.emission[2]);
     const glm::dvec3 own = glm::dvec3(m.emission[0], m.emission[1], m.emission[2]) * double(m.emission_strength) *
                            double(std::clamp(m.alpha, 0.0f, 1.0f));
     if (m.mix_with < 0 || !(m.mix_probability > 0.0f)) return own;
@@ -33,7 +35,11 @@ std::size_t EmitterModule::sync(const SceneStore& scene, const glm::dvec3& camer
     bool any = false;
     for (std::size_t i = 0; i < materials.size(); ++i) {
         emission[i] = material_emission(materials, std::uint32_t(i));
-        emission[i] = glm::max(emission[i], glm::dvec3(0.0));  // negative light is not sampled
+        // Negative light is not sampled; radiance beyond the lights' power
+        // limit (InputLimits::kMaxLightPower) lights as that limit, which keeps
+        // every float product of the lighting finite (the fuzzer found 1e25).
+        emission[i] = glm::clamp(emission[i], glm::dvec3(0.0), glm::dvec3(double(InputLimits::kMaxLightPower)));
+        if (!std::isfinite(emission[i].x + emission[i].y + emission[i].z)) emission[i] = glm::dvec3(0.0);
         any = any || luminance(emission[i]) > 0.0;
     }
     if (!any) return 0;

@@ -9,8 +9,9 @@ at max_bounces 0 and 256 samples against ours at 64:
     triangles, ours at 256 samples: means within SHAPE_LIMIT;
   * a strength of 1e9: finite pixels;
   * only what the scene needs: no emitter, no emitter triangles;
-  * a node material whose emission is a graph (textured): warned that it
-    lights nothing, its own pixels still show it.
+  * a node material with a constant emission lights as a constant one; one
+    whose emission is a graph (textured): warned that it lights nothing,
+    its own pixels still show it.
 
     blender -b --factory-startup blend_samples/analytic.blend --addons deferred_render \
         -E DEFERRED_RENDER --python-exit-code 1 --python tests/blender/test_emissive.py
@@ -32,10 +33,18 @@ SHAPE_LIMIT = 0.04    # at 256 samples (closed emitters: the shared point's nois
 RELMSE_LIMIT = 2e-3   # panel scene, measured 1.1e-4
 
 
-def material(name, emit=None, color=(0.8, 0.8, 0.8, 1.0), strength=5.0, textured=False):
+def material(name, emit=None, color=(0.8, 0.8, 0.8, 1.0), strength=5.0, textured=False, graph=False):
     m = bpy.data.materials.new(name)
     m.use_nodes = True
     nt = m.node_tree
+    if graph:
+        # A node material (a textured base colour) with a constant emission.
+        bsdf = nt.nodes["Principled BSDF"]
+        checker = nt.nodes.new("ShaderNodeTexChecker")
+        nt.links.new(checker.outputs["Color"], bsdf.inputs["Base Color"])
+        bsdf.inputs["Emission"].default_value = emit
+        bsdf.inputs["Emission Strength"].default_value = strength
+        return m
     nt.nodes.remove(nt.nodes["Principled BSDF"])
     if emit is not None:
         shader = nt.nodes.new("ShaderNodeEmission")
@@ -51,7 +60,7 @@ def material(name, emit=None, color=(0.8, 0.8, 0.8, 1.0), strength=5.0, textured
     return m
 
 
-def build(shape, strength=5.0, textured=False):
+def build(shape, strength=5.0, textured=False, graph=False):
     for collection in (bpy.data.objects, bpy.data.meshes, bpy.data.materials, bpy.data.cameras):
         for block in list(collection):
             collection.remove(block)
@@ -75,7 +84,7 @@ def build(shape, strength=5.0, textured=False):
         bpy.ops.mesh.primitive_plane_add(size=1.2, location=(-0.8, 0.5, 2.2))
     if shape is not None:
         bpy.context.object.data.materials.append(material("emitter", emit=(1.0, 0.9, 0.7, 1.0), strength=strength,
-                                                          textured=textured))
+                                                          textured=textured, graph=graph))
         bpy.context.object.pass_index = 3
     cam = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
     scene.collection.objects.link(cam)
@@ -128,6 +137,16 @@ def main():
     checks.check(rel < RELMSE_LIMIT, f"panel: image relMSE < {RELMSE_LIMIT:g}", f"{rel:.2e}")
     for shape in ("torus", "icosphere"):
         checks.run(shape, against_cycles, checks, shape, SHAPE_LIMIT, 256)
+
+    # A node material whose emission is a constant lights as the constant one.
+    scene = build("panel")
+    constant, index = render(scene, U.ENGINE, 16, "constant_panel")
+    scene = build("panel", graph=True)
+    graph, _ = render(scene, U.ENGINE, 16, "graph_panel")
+    inside = U.interior_mask(index, 2) & (index == 1)
+    ratio = graph[inside].mean() / constant[inside].mean()
+    checks.check(abs(ratio - 1.0) < 1e-4 and timings().get("emitter_triangles") == 2,
+                 "a node material with a constant emission lights as a constant material does", f"ratio {ratio:.6f}")
 
     scene = build("panel", strength=1e9)
     ours, _ = render(scene, U.ENGINE, 4, "strong")

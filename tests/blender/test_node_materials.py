@@ -61,7 +61,9 @@ def render_combined(scene, plane, mat, tag, passes=("Combined",)):
 
 
 def warnings_of(messages):
-    return [m for level, m in messages if level == "WARNING"]
+    """Warnings, less the one every emission-driven probe earns: a varying
+    emission shows on its surface but lights nothing (test_emissive.py)."""
+    return [m for level, m in messages if level == "WARNING" and "lights nothing around it" not in m]
 
 
 def centre(img):

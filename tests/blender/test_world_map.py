@@ -15,6 +15,8 @@ the light the world casts, against the image itself and against Cycles.
     is lit by the other;
   * a procedural world (a gradient through a ColorRamp, added to a constant
     Background by an Add Shader): background and a lit sphere as Cycles';
+  * a Nishita Sky Texture: the sky, and a floor and a sphere lit by it and by
+    its sun disc, as Cycles';
   * bad input: an HDRI with NaN, Inf and negative texels, a 1x1 map and a
     strength of 1e9 give finite images (the non-finite texels warned about);
   * only what the scene needs: a constant world bakes no map.
@@ -40,6 +42,7 @@ BACKGROUND_MEAN_LIMIT = 5e-4   # mean (measured 1.0e-4; 9e-3 while the mapping u
 ENERGY_LIMIT = 2e-3       # mean of a white sphere under a white world (exactly 1)
 OBJECT_MEAN_LIMIT = 0.04  # per object, relative, ours 256 vs Cycles 256 samples
 RELMSE_LIMIT = 0.01       # whole image, ours 256 vs Cycles 256 samples
+SKY_LIMITS = (0.002, 0.03)  # Nishita sky: background, lit surfaces (measured: see the printout)
 SHARP_RELMSE_LIMIT = 0.1   # the sharp metal sphere's pixels (measured 0.072; AO alone 8.5)
 
 
@@ -359,6 +362,39 @@ def procedural_world(checks):
                      "each channel's mean within 1 %)", f"relMSE {rel:.2e}, mean ratio {ratio.round(4).tolist()}")
 
 
+def sky_world(checks):
+    """A Nishita Sky Texture world (Blender 3.4's default sky): the sky the
+    camera sees, and a floor and a sphere lit by the sky and its sun disc
+    (a sun lamp here, sampled by Cycles as its own strategy), against Cycles."""
+    scene = reset_scene(160, 96)
+    cam = scene.camera
+    cam.location = (0.0, -8.0, 2.0)
+    cam.rotation_euler = (math.radians(80), 0.0, 0.0)
+    nt = scene.world.node_tree
+    sky = nt.nodes.new("ShaderNodeTexSky")
+    sky.sky_type = 'NISHITA'
+    sky.sun_elevation = math.radians(15.0)
+    sky.sun_rotation = math.radians(40.0)
+    nt.links.new(sky.outputs["Color"], nt.nodes["Background"].inputs["Color"])
+    nt.nodes["Background"].inputs["Strength"].default_value = 0.5
+    bpy.ops.mesh.primitive_plane_add(size=20)
+    floor = bpy.context.object
+    floor.data.materials.append(diffuse_material("floor", (0.5, 0.5, 0.5, 1)))
+    floor.pass_index = 1
+    add_sphere(scene, "Ball", (0.0, 0.0, 1.0), diffuse_material("ball", (0.7, 0.7, 0.7, 1)), radius=1.0).pass_index = 2
+    ours, index = render(scene, U.ENGINE, 64, "sky_ours")
+    lights = " ".join(m for _, m in U.last_messages())
+    cyc, _ = render(scene, "CYCLES", 128, "sky_cycles")
+    for label, k, limit in (("sky", 0, SKY_LIMITS[0]), ("floor", 1, SKY_LIMITS[1]), ("sphere", 2, SKY_LIMITS[1])):
+        inside = U.interior_mask(index, 2) & (index == k)
+        a, b = ours[..., :3][inside], cyc[..., :3][inside]
+        ratio = a.mean(axis=0) / b.mean(axis=0)
+        checks.check(bool(np.all(np.abs(ratio - 1.0) < limit)),
+                     f"Nishita sky: the {label} as Cycles renders it (each channel's mean within {limit:.1%})",
+                     f"ratio {ratio.round(4).tolist()}")
+    checks.check("not rendered" not in lights and "sun disc" not in lights, "Nishita sky: no warning", lights[:200])
+
+
 def bad_input(checks):
     scene = reset_scene(64, 64)
     scene.camera.location = (0.0, -4.0, 0.0)
@@ -398,7 +434,7 @@ def main():
     checks = U.Checks("test_world_map")
     if not U.require_engine(checks):
         checks.finish()
-    for test in (background, energy, camera_ray_trick, procedural_world, bad_input, against_cycles):
+    for test in (background, energy, camera_ray_trick, procedural_world, sky_world, bad_input, against_cycles):
         checks.run(test.__name__, test, checks)
     checks.finish()
 

@@ -195,7 +195,10 @@ class SceneExporter:
         if graph.notes:
             self._warn_once(("material", key), f"Material '{material.name}': " + "; ".join(graph.notes))
         try:
-            mat_id = self.renderer.add_graph_material(graph.ir, pass_index=int(material.pass_index))
+            kwargs = {"pass_index": int(material.pass_index)}
+            if getattr(graph, "light_emission", None) is not None:
+                kwargs["light_emission"] = graph.light_emission  # its meshes light other surfaces
+            mat_id = self.renderer.add_graph_material(graph.ir, **kwargs)
         except ValueError as ex:  # refused by the native validation
             self._warn_once(("material-graph", key), f"Material '{material.name}': {ex} "
                                                      "(rendered with its viewport display colour)")

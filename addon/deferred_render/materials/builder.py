@@ -410,6 +410,31 @@ def _graph_emits(g):
     return False
 
 
+def _constant_emission(g, surface):
+    """The radiance the surface closure emits when the graph makes it a
+    constant: an Emission shader or a Principled BSDF (emission x strength x
+    its constant alpha) straight at the output; else None."""
+    if surface is None:
+        return None
+    node = g.nodes[surface[0]]
+    def const(arg):
+        if arg[0] != "const":
+            return None
+        n = 1 if arg[1] == "float" else 3
+        return g.constants[arg[2]:arg[2] + n]
+    if node["func"] == "node_emission":
+        color, strength, alpha = const(node["args"][0]), const(node["args"][1]), [1.0]
+    elif node["func"] == "node_bsdf_principled":
+        color, strength, alpha = const(node["args"][-4]), const(node["args"][-3]), const(node["args"][-2])
+    else:
+        return None
+    if color is None or strength is None or alpha is None:
+        return None
+    a = min(max(alpha[0], 0.0), 1.0)
+    # Bounded for float32 (the native side lights with at most 1e12 anyway).
+    return tuple(min(max(0.0, c * strength[0] * a), 1e30) for c in color)
+
+
 def build_world_graph(world, images=None):
     """MaterialGraph of a world's node tree: its surface closure's emission is
     the background radiance along each direction (the world module bakes it,
@@ -447,9 +472,12 @@ def _build(material, images, world=False):
             s = output.inputs.get(name)
             if s is not None and s.is_linked:
                 g.note(f"{name} (not rendered)")
+    light_emission = None
     if not world and _graph_emits(g):
-        g.note("its emission lights nothing around it (only constant emission makes a mesh a light; "
-               "its own pixels show it)")
+        light_emission = _constant_emission(g, surface)
+        if light_emission is None:
+            g.note("its emission lights nothing around it (it varies over the surface; only a constant "
+                   "emission makes a mesh a light; its own pixels show it)")
     if world:
         used = {n["func"] for n in g.nodes} & WORLD_UNSUPPORTED
         if used:
@@ -459,4 +487,6 @@ def _build(material, images, world=False):
     ir = {"name": material.name, "nodes": g.nodes, "surface": surface, "constants": g.constants,
           "images": g.images, "attributes": g.attributes, "alpha": g.uses_alpha,
           "closure_normal": g.closure_normal}
-    return MaterialGraph(ir, g.notes, list(g.attributes), g.sun_lamps)
+    graph = MaterialGraph(ir, g.notes, list(g.attributes), g.sun_lamps)
+    graph.light_emission = light_emission
+    return graph

@@ -165,6 +165,8 @@ public:
     // find_image(key) gives its id back without an upload (-1: not kept).
     std::uint32_t add_image(const ImageData& image, const std::string& key = {});
     std::int64_t find_image(const std::string& key);
+    // `base`: pass_index, and in `emission` the constant radiance the graph
+    // emits (what makes its meshes lights; 0 where the graph varies it).
     std::uint32_t add_graph_material(const Material& base, const MaterialGraph& graph);
     void add_light(const Light& light);
     // `graph` (optional): the world's node tree, whose surface closure's

@@ -372,11 +372,12 @@ LightContribution shade_light_unshadowed(GpuLight light, SurfaceParams s, Princi
 #ifdef HAS_MESH_LIGHTS
 layout(std430, binding = SSBO_EMITTERS) readonly buffer Emitters { GpuEmitterTriangle emitters[]; };
 
-/* Light from point X (unit normal n, radiance Le, density pdf in area
- * measure) of a two-sided emitter: f cos Le |cos_l| / (d^2 pdf)
- * (Cycles' emissive_simple_eval: |N.I|). */
+/* Light from point X (unit winding normal n, radiance Le, density pdf in
+ * area measure) of an emitter: f cos Le cos_l / (d^2 pdf), cos_l = |N.I| for
+ * an open mesh (Cycles' emissive_simple_eval: both sides emit), the side's
+ * own cosine for a closed one (side = +-1: its other side faces its inside). */
 LightContribution mesh_light_point(SurfaceParams s, PrincipledWeights w, vec3 P, vec3 N, vec3 V, vec3 X, vec3 n,
-                                   vec3 Le, float pdf) {
+                                   vec3 Le, float pdf, float side) {
     LightContribution r;
     r.diffuse = vec3(0.0);
     r.glossy = vec3(0.0);
@@ -384,7 +385,8 @@ LightContribution mesh_light_point(SurfaceParams s, PrincipledWeights w, vec3 P,
     float d2 = dot(to_light, to_light);
     if (!(d2 > 1e-20) || !(pdf > 0.0)) return r;
     vec3 L = to_light * inversesqrt(d2);
-    vec3 scale = Le * (abs(dot(n, L)) / (d2 * pdf));
+    float cos_l = side == 0.0 ? abs(dot(n, L)) : max(-side * dot(n, L), 0.0);
+    vec3 scale = Le * (cos_l / (d2 * pdf));
     /* A point almost on the receiver with a tiny density: no finite estimate. */
     if (any(isinf(scale)) || any(isnan(scale))) return r;
     LobeEval e = principled_eval(s, w, N, V, L);
@@ -425,7 +427,7 @@ LightContribution mesh_light_unoccluded(GpuLight light, SurfaceParams s, Princip
         float sa = sqrt(a);
         vec3 X = t.v0.xyz + t.e1.xyz * (sa * (1.0 - u.y)) + t.e2.xyz * (sa * u.y);
         vec3 n = normalize(cross(t.e1.xyz, t.e2.xyz));
-        LightContribution c = mesh_light_point(s, w, P, N, V, X, n, t.radiance.rgb, p / t.e1.w);
+        LightContribution c = mesh_light_point(s, w, P, N, V, X, n, t.radiance.rgb, p / t.e1.w, light.axis_y.w);
         r.diffuse += c.diffuse * (1.0 / float(MESH_LIGHT_SAMPLES));
         r.glossy += c.glossy * (1.0 / float(MESH_LIGHT_SAMPLES));
     }
@@ -452,7 +454,7 @@ LightContribution shade_light(GpuLight light, SurfaceParams s, PrincipledWeights
             float blocked = 1.0 - shadow_visibility(shadow, P, N);
             if (blocked > 0.0) {
                 LightContribution c = mesh_light_point(s, w, P, N, V, light.axis_x.xyz, light.axis_y.xyz,
-                                                       light.strength.rgb, light.axis_x.w);
+                                                       light.strength.rgb, light.axis_x.w, light.axis_y.w);
                 r.diffuse -= c.diffuse * blocked;
                 r.glossy -= c.glossy * blocked;
             }

@@ -58,7 +58,9 @@ SHARED_ASSERT_SIZE(GpuLight, 96);
  *                   w its bounding sphere's radius
  *   axis_x        : xyz this sample's shared point (its cube shadow map looks from it),
  *                   w its density (area measure) under the light's CDF
- *   axis_y        : xyz the unit normal of the shared point's triangle
+ *   axis_y        : xyz the unit (winding) normal of the shared point's triangle, w the side
+ *                   that emits: 0 both (an open mesh), +1 / -1 along / against the winding
+ *                   normal (a closed mesh: its other side faces its inside)
  *   params        : as for the other lights (z influence radius, w shadow index) */
 
 /* One emitting triangle (camera-relative) of a mesh light.

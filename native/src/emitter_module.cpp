@@ -3,7 +3,9 @@
 #include "../../shaders/shader_defines.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <map>
 
 namespace deferred {
 
@@ -24,6 +26,43 @@ glm::dvec3 material_emission(const std::vector<Material>& materials, std::uint32
     if (m.mix_with < 0 || !(m.mix_probability > 0.0f)) return own;
     const double p = std::clamp(double(m.mix_probability), 0.0, 1.0);
     return own * (1.0 - p) + material_emission(materials, std::uint32_t(m.mix_with), depth + 1) * p;
+}
+
+// +1 / -1: the mesh is closed (every edge, with vertices merged by
+// position, shared by exactly two triangles running it in opposite
+// directions) and its winding normals point out (+1) or in (-1), by the sign
+// of its volume; 0: an open mesh.
+int closed_mesh_side(const std::vector<float>& positions, const std::vector<std::uint32_t>& indices) {
+    const std::size_t vertex_count = positions.size() / 3;
+    // Vertices split by UV seams or sharp edges share a position: one id each.
+    std::map<std::array<float, 3>, std::uint32_t> by_position;
+    std::vector<std::uint32_t> id(vertex_count);
+    for (std::size_t v = 0; v < vertex_count; ++v) {
+        const std::array<float, 3> p{positions[v * 3], positions[v * 3 + 1], positions[v * 3 + 2]};
+        id[v] = by_position.emplace(p, std::uint32_t(by_position.size())).first->second;
+    }
+    std::map<std::pair<std::uint32_t, std::uint32_t>, int> edges;  // directed edge -> count
+    double volume = 0.0;
+    for (std::size_t t = 0; t + 2 < indices.size(); t += 3) {
+        std::uint32_t v[3];
+        for (int k = 0; k < 3; ++k) {
+            if (indices[t + std::size_t(k)] >= vertex_count) return 0;
+            v[k] = id[indices[t + std::size_t(k)]];
+        }
+        if (v[0] == v[1] || v[1] == v[2] || v[0] == v[2]) continue;  // degenerate: no edge of the surface
+        for (int k = 0; k < 3; ++k) ++edges[{v[k], v[(k + 1) % 3]}];
+        const std::uint32_t* i = &indices[t];
+        const glm::dvec3 a(positions[i[0] * 3], positions[i[0] * 3 + 1], positions[i[0] * 3 + 2]);
+        const glm::dvec3 b(positions[i[1] * 3], positions[i[1] * 3 + 1], positions[i[1] * 3 + 2]);
+        const glm::dvec3 c(positions[i[2] * 3], positions[i[2] * 3 + 1], positions[i[2] * 3 + 2]);
+        volume += glm::dot(a, glm::cross(b, c)) / 6.0;
+    }
+    if (edges.empty()) return 0;
+    for (const auto& [edge, count] : edges) {
+        const auto twin = edges.find({edge.second, edge.first});
+        if (count != 1 || twin == edges.end() || twin->second != 1) return 0;
+    }
+    return volume > 0.0 ? 1 : volume < 0.0 ? -1 : 0;
 }
 
 }  // namespace
@@ -67,6 +106,7 @@ std::size_t EmitterModule::sync(const SceneStore& scene, const glm::dvec3& camer
         glGetNamedBufferSubData(mesh.indices.get(), 0, GLsizeiptr(indices.size() * sizeof(std::uint32_t)),
                                 indices.data());
         const std::size_t vertex_count = positions.size() / 3;
+        const int mesh_side = closed_mesh_side(positions, indices);
         for (std::size_t inst = 0; inst < batch.matrices.size() / 16; ++inst) {
             glm::dmat4 model;
             for (int c = 0; c < 4; ++c)
@@ -74,6 +114,8 @@ std::size_t EmitterModule::sync(const SceneStore& scene, const glm::dvec3& camer
             MeshLight light;
             light.first = std::uint32_t(triangles_.size());
             light.cast_shadow = batch.cast_shadow;
+            // A mirroring transform turns the winding (and the outside) over.
+            light.side = glm::determinant(glm::dmat3(model)) < 0.0 ? -mesh_side : mesh_side;
             glm::dvec3 lo(1e300), hi(-1e300);
             for (std::size_t s = 0; s < mesh.slot_ranges.size(); ++s) {
                 const glm::dvec3 Le = slot_emission[s];

@@ -36,6 +36,11 @@ struct MeshLight {
     double power = 0.0;                  // sum of area x luminance of the radiance
     double max_radiance = 0.0;           // largest radiance channel
     bool cast_shadow = true;
+    // Which side emits: 0 both (an open mesh, as Cycles' emission); +1 or -1
+    // the side the triangles' winding normal points to, for a closed mesh,
+    // whose other side faces its own inside (lighting nothing but adding
+    // noise: half of its points would be drawn to be blocked).
+    int side = 0;
 };
 
 // The sample's shared point of a mesh light: where its cube map looks from,

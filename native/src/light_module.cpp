@@ -122,7 +122,7 @@ void LightModule::update_mesh_points(const EmitterModule& emitters, const std::a
         gpu::GpuLight& g = packed_[first_mesh_ + k];
         g.strength = v4(p.radiance, 0.0);
         g.axis_x = v4(p.position, p.pdf);
-        g.axis_y = v4(p.normal, 0.0);
+        g.axis_y = v4(p.normal, double(emitters.lights()[k].side));
         if (shadows) shadows->update_light(first_mesh_ + k, g);
     }
     glNamedBufferSubData(buffer_.get(), GLintptr(first_mesh_ * sizeof(gpu::GpuLight)),

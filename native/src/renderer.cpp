@@ -727,11 +727,11 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         // Where in each light-shape cell (and on the sun's disk) this sample looks.
         fc.sample_shift = {u[2], u[3], float(std::fmod(0.5 + sample * 0.6180339887498949, 1.0)),
                            float(sample)};
+        // Each emissive mesh's shared point this sample (its cube map's origin).
+        lights.update_mesh_points(emitters, {u[2], u[3]}, settings.shadows ? &shadows : nullptr);
         // This sample's directions of the world's occlusion maps and the
         // density each pair (a map answers for the opposite direction too)
         // was drawn with: consecutive points of one low-discrepancy sequence.
-        // Each emissive mesh's shared point this sample (its cube map's origin).
-        lights.update_mesh_points(emitters, {u[2], u[3]}, settings.shadows ? &shadows : nullptr);
         std::vector<glm::dvec4> world_dirs;
         for (int k = 0; k < shadows.world_count(); ++k) {
             const WorldDirection d =

@@ -396,7 +396,8 @@ LightContribution mesh_light_point(SurfaceParams s, PrincipledWeights w, vec3 P,
 }
 
 /* An emissive mesh's unoccluded light: MESH_LIGHT_SAMPLES points of its
- * own per pixel and film sample (a triangle by power from the light's CDF,
+ * own (MESH_LIGHT_SAMPLES_NEAR within twice its bounding radius) per pixel
+ * and film sample (a triangle by power from the light's CDF,
  * uniform on it, Turk 1990), stratified over the film's samples by the R2
  * sequence (Roberts 2018) rotated per pixel and light (pcg4d). */
 LightContribution mesh_light_unoccluded(GpuLight light, SurfaceParams s, PrincipledWeights w, vec3 P, vec3 N,
@@ -411,8 +412,13 @@ LightContribution mesh_light_unoccluded(GpuLight light, SurfaceParams s, Princip
     h.x += h.y * h.w; h.y += h.z * h.x; h.z += h.x * h.y; h.w += h.y * h.z;
     h ^= h >> 16u;
     h.x += h.y * h.w; h.y += h.z * h.x; h.z += h.x * h.y; h.w += h.y * h.z;
-    for (int k = 0; k < MESH_LIGHT_SAMPLES; ++k) {
-        uint index = uint(frame.sample_shift.w) * uint(MESH_LIGHT_SAMPLES) + uint(k);
+    /* Near the emitter (within its size) the 1/d^2 of area sampling makes
+     * its own points' estimate noisy: more of them there. */
+    vec3 to_center = light.position_type.xyz - P;
+    float radius = light.direction.w;
+    int points = dot(to_center, to_center) < 4.0 * radius * radius ? MESH_LIGHT_SAMPLES_NEAR : MESH_LIGHT_SAMPLES;
+    for (int k = 0; k < points; ++k) {
+        uint index = uint(frame.sample_shift.w) * uint(MESH_LIGHT_SAMPLES_NEAR) + uint(k);
         uvec2 bits = h.xy + index * uvec2(0xC13FA9A9u, 0x91E10DA5u);
         vec2 u = vec2(bits >> 8u) * (1.0 / 16777216.0);
         /* The first triangle whose running CDF exceeds u.x. */
@@ -428,8 +434,8 @@ LightContribution mesh_light_unoccluded(GpuLight light, SurfaceParams s, Princip
         vec3 X = t.v0.xyz + t.e1.xyz * (sa * (1.0 - u.y)) + t.e2.xyz * (sa * u.y);
         vec3 n = normalize(cross(t.e1.xyz, t.e2.xyz));
         LightContribution c = mesh_light_point(s, w, P, N, V, X, n, t.radiance.rgb, p / t.e1.w, light.axis_y.w);
-        r.diffuse += c.diffuse * (1.0 / float(MESH_LIGHT_SAMPLES));
-        r.glossy += c.glossy * (1.0 / float(MESH_LIGHT_SAMPLES));
+        r.diffuse += c.diffuse * (1.0 / float(points));
+        r.glossy += c.glossy * (1.0 / float(points));
     }
     return r;
 }

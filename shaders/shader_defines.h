@@ -64,6 +64,7 @@
 #define WORLD_LIGHT_SAMPLES 2
 /* Points per pixel and film sample on each emissive mesh light. */
 #define MESH_LIGHT_SAMPLES 2
+#define MESH_LIGHT_SAMPLES_NEAR 8 /* ... within twice its bounding radius */
 
 /* Fragment outputs of the geometry pass (G-buffer MRT) */
 #define OUT_EMISSION 0

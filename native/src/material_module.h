@@ -71,7 +71,6 @@ public:
     std::size_t image_count(std::uint32_t graph) const { return graphs_[graph].graph.images.size(); }
     // Largest width and height among the graph's images (0, 0 without images).
     std::array<int, 2> largest_image(std::uint32_t graph) const;
-    std::uint32_t graph_count() const { return std::uint32_t(graphs_.size()); }
     // The graph's images at TEX_MATERIAL_IMAGE0 + slot.
     void bind_images(std::uint32_t graph) const;
     // Per draw: the graph's images and the mesh's attribute slots and texture space.

@@ -153,6 +153,19 @@ def render_exr(path_without_ext, scene=None):
     return path_without_ext + ".exr"
 
 
+def render_combined(scene, engine, samples, path_without_ext, letters="RGBA"):
+    """Render with ``engine`` at ``samples`` (Cycles' and ours) into a
+    multilayer EXR; returns (Combined as float64 (H, W, len(letters)), IndexOB
+    as int64 (H, W) or None), rows bottom-up."""
+    scene.render.engine = engine
+    scene.cycles.samples = samples
+    scene.deferred_render.samples = samples
+    channels = read_exr(render_exr(path_without_ext, scene))
+    combined = exr_pass(channels, "ViewLayer", "Combined", letters).astype(np.float64)
+    index = channels.get("ViewLayer.IndexOB.X")
+    return combined, (index.astype(np.int64) if index is not None else None)
+
+
 def _oiio():
     try:
         import OpenImageIO

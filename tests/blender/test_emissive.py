@@ -102,12 +102,7 @@ def build(shape, strength=5.0, textured=False, graph=False):
 
 
 def render(scene, engine, samples, name):
-    scene.render.engine = engine
-    scene.cycles.samples = samples
-    scene.deferred_render.samples = samples
-    channels = U.read_exr(U.render_exr(os.path.join(U.out_dir("test_emissive"), name), scene))
-    return (U.exr_pass(channels, "ViewLayer", "Combined", "RGB").astype(np.float64),
-            channels["ViewLayer.IndexOB.X"].astype(np.int64))
+    return U.render_combined(scene, engine, samples, os.path.join(U.out_dir("test_emissive"), name), "RGB")
 
 
 def timings():

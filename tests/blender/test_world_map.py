@@ -85,13 +85,7 @@ def environment_world(scene, image, strength=1.0, rotation_z=None):
 
 
 def render(scene, engine, samples, name):
-    scene.render.engine = engine
-    scene.cycles.samples = samples
-    scene.deferred_render.samples = samples
-    channels = U.read_exr(U.render_exr(os.path.join(U.out_dir("test_world_map"), name), scene))
-    combined = U.exr_pass(channels, "ViewLayer", "Combined", "RGBA").astype(np.float64)
-    index = channels.get("ViewLayer.IndexOB.X")
-    return combined, (index.astype(np.int64) if index is not None else None)
+    return U.render_combined(scene, engine, samples, os.path.join(U.out_dir("test_world_map"), name))
 
 
 def lookup_equirect(pixels, dirs):
@@ -426,6 +420,14 @@ def bad_input(checks):
         if image is bad:
             checks.check("NaN/inf" in messages, "the non-finite texels are warned about", messages[:200])
         if image is tiny and strength == 1.0:
+            # Window coordinates of a world are screen positions: not in a baked map, warned.
+            coords = scene.world.node_tree.nodes.new("ShaderNodeTexCoord")
+            scene.world.node_tree.links.new(coords.outputs["Window"], bg.inputs["Strength"])
+            render(scene, U.ENGINE, 1, "window")
+            warned = " ".join(m for _, m in U.last_messages())
+            checks.check("Window coordinates in a world are not rendered" in warned,
+                         "Window coordinates in a world are warned about", warned[:160])
+            scene.world.node_tree.nodes.remove(coords)
             checks.check(bool(np.allclose(ours[0, 0, :3], (0.3, 0.6, 0.9), atol=1e-5)),
                          "a 1x1 map is a constant background", ours[0, 0, :3].round(5).tolist())
 

@@ -98,17 +98,17 @@ def _finite_color(value):
     return tuple(min(max(c, 0.0), MAX_WORLD) for c in _color3(value))
 
 
+def _world_output(tree):
+    """The World Output Cycles renders (the graph compiler's own choice)."""
+    from ..materials.builder import material_output
+    return material_output(tree, "ShaderNodeOutputWorld")
+
+
 def _needs_graph(world):
     """True if the world's tree is more than a constant background."""
     if not world.use_nodes or world.node_tree is None:
         return False
-    tree = world.node_tree
-    try:
-        output = tree.get_output_node("CYCLES")
-    except (AttributeError, TypeError):
-        output = None
-    if output is None:
-        output = next((n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputWorld"), None)
+    output = _world_output(world.node_tree)
     if output is None:
         return False
     node = _linked(output.inputs.get("Surface"))
@@ -140,14 +140,7 @@ def _world_color(world):
         return (0.0, 0.0, 0.0), []
     if not world.use_nodes or world.node_tree is None:
         return _color3(world.color), []
-    tree = world.node_tree
-    output = None
-    try:
-        output = tree.get_output_node("CYCLES")
-    except (AttributeError, TypeError):
-        output = None
-    if output is None:
-        output = next((n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputWorld"), None)
+    output = _world_output(world.node_tree)
     if output is None:
         return (0.0, 0.0, 0.0), []
     node = _linked(output.inputs.get("Surface"))

@@ -29,6 +29,9 @@ def tex_coord(b):
         args = [b.int(0), b.int(0)]
     if b.node.from_instancer:
         b.unsupported("'From Instancer' (the instance's own coordinates are used)")
+    if b._graph.world and b.node.outputs["Window"].is_linked:
+        # A baked world map holds directions, not screen positions.
+        b._graph.note(f"'{b.node.name}': Window coordinates in a world are not rendered (0)")
     b.call("node_tex_coord", args,
            [("Generated", "vector"), ("Normal", "vector"), ("UV", "vector"), ("Object", "vector"),
             ("Camera", "vector"), ("Window", "vector"), ("Reflection", "vector")])

@@ -204,6 +204,7 @@ void declare_renderer(py::module_& m) {
             d["renderer"] = i.renderer;
             d["version"] = i.version;
             d["display"] = i.display;
+            d["device_note"] = i.device_note;
             return d;
         })
         .def_property_readonly("last_timings", [](PyRenderer& self) {

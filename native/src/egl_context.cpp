@@ -1,11 +1,19 @@
 #include "egl_context.h"
 
+#include "device_selection.h"
+
 #include <deferred/renderer.h>
 
 #include <cstdlib>
 #include <cstring>
+#include <optional>
 #include <string>
 #include <vector>
+
+// EGL_EXT_device_query_name: not in libepoxy's generated headers.
+#ifndef EGL_RENDERER_EXT
+#define EGL_RENDERER_EXT 0x335F
+#endif
 
 namespace deferred {
 
@@ -53,16 +61,45 @@ bool try_initialize(EGLDisplay display) {
     return eglInitialize(display, &major, &minor) == EGL_TRUE;
 }
 
-struct DeviceChoice {
+// What each EGL device says of itself, for choose_egl_device.
+std::vector<EglDeviceInfo> describe_devices(const std::vector<EGLDeviceEXT>& devices) {
+    std::vector<EglDeviceInfo> infos;
+    for (EGLDeviceEXT device : devices) {
+        EglDeviceInfo info;
+        const char* ext = eglQueryDeviceStringEXT(device, EGL_EXTENSIONS);
+        info.software = has_extension(ext, "EGL_MESA_device_software");
+        info.cuda_extension = has_extension(ext, "EGL_NV_device_cuda");
+        if (info.cuda_extension) {
+            EGLAttrib ordinal = -1;
+            if (eglQueryDeviceAttribEXT(device, EGL_CUDA_DEVICE_NV, &ordinal) == EGL_TRUE && ordinal >= 0)
+                info.cuda_ordinal = static_cast<int>(ordinal);
+            else
+                eglGetError();  // not visible to this process's CUDA: clear the error
+        }
+        if (has_extension(ext, "EGL_EXT_device_query_name")) {
+            const char* renderer = eglQueryDeviceStringEXT(device, EGL_RENDERER_EXT);
+            if (renderer) info.name = renderer;
+        }
+        if (info.name.empty() && has_extension(ext, "EGL_EXT_device_drm")) {
+            const char* node = eglQueryDeviceStringEXT(device, EGL_DRM_DEVICE_FILE_EXT);
+            if (node) info.name = node;
+        }
+        infos.push_back(std::move(info));
+    }
+    return infos;
+}
+
+struct DeviceDisplay {
     EGLDisplay display = EGL_NO_DISPLAY;
-    std::string description;
+    std::string description, note;
 };
 
-// Step 1 of the cascade. With an explicit index a missing device is an error
-// (the caller asked for that GPU); without one, no usable device just means
-// "fall through to surfaceless".
-DeviceChoice open_device_display(int requested) {
-    DeviceChoice choice;
+// Step 1 of the cascade: the device choose_egl_device names. With an
+// explicit index a missing device is an error (the caller asked for that
+// GPU); without one, no usable device just means "fall through to
+// surfaceless".
+DeviceDisplay open_device_display(int requested) {
+    DeviceDisplay result;
     const char* client_ext = eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
     const bool have_devices = has_extension(client_ext, "EGL_EXT_device_enumeration") ||
                               has_extension(client_ext, "EGL_EXT_device_base");
@@ -71,37 +108,28 @@ DeviceChoice open_device_display(int requested) {
         if (requested >= 0)
             throw Error("EGL device " + std::to_string(requested) +
                         " requested, but the EGL client has no EGL_EXT_platform_device");
-        return choice;
+        return result;
     }
     EGLint count = 0;
     if (!eglQueryDevicesEXT(0, nullptr, &count)) fail("eglQueryDevicesEXT");
     std::vector<EGLDeviceEXT> devices(static_cast<std::size_t>(count));
     if (count > 0 && !eglQueryDevicesEXT(count, devices.data(), &count)) fail("eglQueryDevicesEXT");
+    devices.resize(static_cast<std::size_t>(count));
 
-    if (requested >= 0) {
-        if (requested >= count)
-            throw Error("EGL device " + std::to_string(requested) + " requested, but only " +
-                        std::to_string(count) + " EGL device(s) exist (indices 0.." +
-                        std::to_string(count - 1) + ")");
-        EGLDisplay d = eglGetPlatformDisplayEXT(EGL_PLATFORM_DEVICE_EXT, devices[requested], nullptr);
-        if (!try_initialize(d)) fail("eglInitialize on EGL device " + std::to_string(requested));
-        choice.display = d;
-        choice.description = "EGL device " + std::to_string(requested);
-        return choice;
+    const char* visible = std::getenv("CUDA_VISIBLE_DEVICES");
+    const DeviceChoice choice = choose_egl_device(
+        describe_devices(devices), visible ? std::optional<std::string>(visible) : std::nullopt, requested);
+    result.note = choice.note;
+    if (choice.egl_index < 0) return result;
+    EGLDisplay d = eglGetPlatformDisplayEXT(EGL_PLATFORM_DEVICE_EXT, devices[choice.egl_index], nullptr);
+    if (!try_initialize(d)) {
+        // The default choice may fall through; a GPU asked for may not.
+        if (requested >= 0 || visible) fail("eglInitialize on " + choice.description);
+        return result;
     }
-    // Automatic: the first hardware device (software devices are llvmpipe,
-    // which the surfaceless platform gives as well).
-    for (EGLint i = 0; i < count; ++i) {
-        const char* dev_ext = eglQueryDeviceStringEXT(devices[i], EGL_EXTENSIONS);
-        if (has_extension(dev_ext, "EGL_MESA_device_software")) continue;
-        EGLDisplay d = eglGetPlatformDisplayEXT(EGL_PLATFORM_DEVICE_EXT, devices[i], nullptr);
-        if (try_initialize(d)) {
-            choice.display = d;
-            choice.description = "EGL device " + std::to_string(i) + " (hardware)";
-            return choice;
-        }
-    }
-    return choice;
+    result.display = d;
+    result.description = choice.description;
+    return result;
 }
 
 int device_index_from_environment(int device_index) {
@@ -120,9 +148,10 @@ int device_index_from_environment(int device_index) {
 EglContext::EglContext(int device_index) {
     const int requested = device_index_from_environment(device_index);
 
-    DeviceChoice choice = open_device_display(requested);
+    DeviceDisplay choice = open_device_display(requested);
     display_ = choice.display;
     display_description_ = choice.description;
+    device_note_ = choice.note;
 
     if (display_ == EGL_NO_DISPLAY) {
         const char* client_ext = eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);

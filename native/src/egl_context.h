@@ -2,8 +2,8 @@
 //
 // Display cascade (Magnum's windowless EGL application, moderngl/glcontext):
 //   1. EGL device platform (EGL_EXT_platform_device): one display per GPU;
-//      a requested index picks one, otherwise the first hardware device
-//      (one without EGL_MESA_device_software) wins;
+//      device_selection.h chooses which (CUDA_VISIBLE_DEVICES, the Device
+//      setting, else the first hardware device);
 //   2. Mesa's surfaceless platform (EGL_MESA_platform_surfaceless);
 //   3. eglGetDisplay(EGL_DEFAULT_DISPLAY).
 // Every failing step throws deferred::Error naming the step and the EGL
@@ -26,11 +26,13 @@ public:
 
     // Which step of the cascade produced the display, e.g. "EGL device 0 (hardware)".
     const std::string& display_description() const { return display_description_; }
+    // A fallback taken while choosing the device (device_selection.h), or "".
+    const std::string& device_note() const { return device_note_; }
 
 private:
     EGLDisplay display_ = EGL_NO_DISPLAY;
     EGLContext context_ = EGL_NO_CONTEXT;
-    std::string display_description_;
+    std::string display_description_, device_note_;
 };
 
 const char* egl_error_name(EGLint error);

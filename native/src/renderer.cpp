@@ -132,6 +132,7 @@ struct Renderer::Impl {
         info.renderer = gl_string(GL_RENDERER);
         info.version = gl_string(GL_VERSION);
         info.display = context->display_description();
+        info.device_note = context->device_note();
         if (epoxy_gl_version() < 45)
             throw Error("OpenGL 4.5 core is required, the context gives " + info.version);
         glGetIntegerv(GL_MAX_TEXTURE_SIZE, &max_texture_size);

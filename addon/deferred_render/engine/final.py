@@ -38,6 +38,10 @@ last_messages = collections.deque(maxlen=256)
 # The native timings of the last render (stage times, programs compiled or
 # loaded from the disk cache): what the status line shows, for scripts.
 last_timings = {}
+# The GPU of the last render: GL renderer, how the EGL device was chosen
+# (device_selection.h) and a fallback note, for the log and for farm scripts
+# that record which GPU rendered each frame (scripts/cluster/).
+last_device = {}
 
 
 class RenderCancelled(Exception):
@@ -190,6 +194,21 @@ class FinalRender:
             renderer = None  # noqa: F841
             engine.end_result(result, cancel=cancelled)
 
+    def _log_device(self, renderer):
+        """Names the GPU in the status line and, once per new renderer, in the log."""
+        try:
+            info = dict(renderer.gl_info)
+        except Exception:
+            info = {}
+        self.gl_name = info.get("renderer", "?")
+        last_device.clear()
+        last_device.update(gpu=self.gl_name, display=info.get("display", ""),
+                           note=info.get("device_note", ""))
+        if not self.reused_renderer:
+            print(f"{LOG_PREFIX}: rendering on {self.gl_name} ({last_device['display']})", flush=True)
+            if last_device["note"]:
+                print(f"{LOG_PREFIX}: device note: {last_device['note']}", flush=True)
+
     def _render_cancellable(self, renderer, mod, camera, frame, kwargs):
         """The native render on a worker thread (it releases the GIL and
         touches no bpy data), while this thread polls test_break() and asks
@@ -239,10 +258,7 @@ class FinalRender:
                     "reusing the renderer kept by the last render (Persistent Data)", 0.02)
         renderer, self.reused_renderer = session.acquire(mod, device_index, persistent)
         self._session = (mod, device_index, persistent)
-        try:
-            self.gl_name = renderer.gl_info.get("renderer", "?")
-        except Exception:
-            self.gl_name = "?"
+        self._log_device(renderer)
         self.check_break()
 
         self.status("exporting scene", 0.05)

@@ -45,7 +45,8 @@ struct ContextOptions {
 
 struct GLInfo {
     std::string vendor, renderer, version;
-    std::string display;  // which step of the cascade gave the display
+    std::string display;      // which step of the cascade gave the display, and which GPU
+    std::string device_note;  // a fallback taken choosing the device (CUDA_VISIBLE_DEVICES), or ""
 };
 
 struct RenderSettings {

@@ -63,9 +63,10 @@ class DeferredRenderSettings(bpy.types.PropertyGroup):
     device_index: IntProperty(
         name="Device",
         description=(
-            "EGL device index used for rendering; -1 picks automatically (first hardware "
-            "device, else Mesa surfaceless, else the default display). The environment "
-            "variable DEFERRED_EGL_DEVICE overrides -1"
+            "GPU used for rendering; -1 picks automatically. With NVIDIA GPUs this indexes the "
+            "GPUs CUDA_VISIBLE_DEVICES leaves visible, in CUDA's order (-1: the one CUDA calls 0, "
+            "the GPU a cluster scheduler gave this process); otherwise it indexes EGL devices "
+            "(-1: first hardware device, else Mesa surfaceless). DEFERRED_EGL_DEVICE overrides -1"
         ),
         default=-1,
         min=-1,

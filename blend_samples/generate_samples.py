@@ -520,10 +520,37 @@ def build_instancing():
 
 
 def build_analytic():
-    A = ANALYTIC
-    scene = new_scene("Analytic", resolution=(320, 180))
-    set_world(scene, (0.05, 0.05, 0.05))
+    scene = analytic_scene("Analytic", resolution=(320, 180))
     scene.frame_end = 3
+    save(scene, "analytic")
+
+
+def build_turntable():
+    """The analytic scene as a 24-frame animation for farm renders
+    (scripts/cluster/): the camera orbits once, SphereB bobs."""
+    scene = analytic_scene("Turntable", resolution=(320, 180))
+    scene.frame_start, scene.frame_end = 1, 24
+    orbit = link(bpy.data.objects.new("Orbit", None))
+    scene.camera.parent = orbit
+    for frame, angle in ((1, 0.0), (25, 2.0 * math.pi)):
+        orbit.rotation_euler.z = angle
+        orbit.keyframe_insert("rotation_euler", index=2, frame=frame)
+    sphere = bpy.data.objects["SphereB"]
+    for frame, z in ((1, 1.5), (12, 2.5), (24, 1.5)):
+        sphere.location.z = z
+        sphere.keyframe_insert("location", index=2, frame=frame)
+    for obj in (orbit, sphere):
+        for fcurve in obj.animation_data.action.fcurves:
+            for key in fcurve.keyframe_points:
+                key.interpolation = 'LINEAR'
+    scene.frame_set(1)
+    save(scene, "turntable")
+
+
+def analytic_scene(name, resolution):
+    A = ANALYTIC
+    scene = new_scene(name, resolution=resolution)
+    set_world(scene, (0.05, 0.05, 0.05))
 
     floor = A["floor"]
     mesh_object("Floor", plane_mesh("Floor", *floor["size"]), location=floor["center"],
@@ -554,7 +581,7 @@ def build_analytic():
     add_camera(scene, "CameraOrtho", ortho["location"], ortho["target"], ortho_scale=ortho["ortho_scale"],
                active=False)
     scene["analytic"] = repr(A)
-    save(scene, "analytic")
+    return scene
 
 
 def _node(nodes, kind, inputs=None, **props):
@@ -717,6 +744,7 @@ BUILDERS = {
     "many_lights": build_many_lights,
     "instancing": build_instancing,
     "analytic": build_analytic,
+    "turntable": build_turntable,
 }
 
 

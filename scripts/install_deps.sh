@@ -10,6 +10,7 @@ packages=(
   python3.11-dev python3-numpy python3-openimageio python3-matplotlib
   libegl-mesa0 libegl-dev libgl1-mesa-dri
   blender
+  slurmctld slurmd slurm-client munge
 )
 missing=()
 for p in "${packages[@]}"; do

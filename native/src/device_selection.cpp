@@ -107,6 +107,17 @@ DeviceChoice choose_without_nvidia(const std::vector<EglDeviceInfo>& devices,
 
 }  // namespace
 
+std::string format_gpu_uuid(const unsigned char bytes[16]) {
+    static const char* hex = "0123456789abcdef";
+    std::string out = "GPU-";
+    for (int i = 0; i < 16; ++i) {
+        if (i == 4 || i == 6 || i == 8 || i == 10) out += '-';
+        out += hex[bytes[i] >> 4];
+        out += hex[bytes[i] & 15];
+    }
+    return out;
+}
+
 DeviceChoice choose_egl_device(const std::vector<EglDeviceInfo>& devices,
                                const std::optional<std::string>& cuda_visible_devices, int requested) {
     std::vector<int> nvidia;
@@ -161,6 +172,7 @@ DeviceChoice choose_egl_device(const std::vector<EglDeviceInfo>& devices,
     if (d.cuda_ordinal >= 0) what += " = CUDA device " + std::to_string(position);
     if (cuda_visible_devices) what += " of CUDA_VISIBLE_DEVICES=" + quoted(*cuda_visible_devices);
     choice.description = with_name(what, d);
+    if (!d.uuid.empty()) choice.description += " " + d.uuid;
     return choice;
 }
 

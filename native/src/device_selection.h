@@ -36,7 +36,12 @@ struct EglDeviceInfo {
     bool cuda_extension = false;  // EGL_NV_device_cuda
     int cuda_ordinal = -1;        // EGL_CUDA_DEVICE_NV, -1 where the query failed
     std::string name;             // renderer or DRM node, for messages
+    std::string uuid;             // "GPU-…" as nvidia-smi prints it (EGL_EXT_device_persistent_id), or ""
 };
+
+// The 16 bytes of EGL_DEVICE_UUID_EXT as nvidia-smi and CUDA_VISIBLE_DEVICES
+// write a GPU's UUID: GPU-xxxxxxxx-xxxx-xxxx-xxxx-xxxxxxxxxxxx.
+std::string format_gpu_uuid(const unsigned char bytes[16]);
 
 struct DeviceChoice {
     int egl_index = -1;        // -1: no device-platform display; fall through

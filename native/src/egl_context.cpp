@@ -14,6 +14,11 @@
 #ifndef EGL_RENDERER_EXT
 #define EGL_RENDERER_EXT 0x335F
 #endif
+// EGL_EXT_device_persistent_id, likewise.
+#ifndef EGL_DEVICE_UUID_EXT
+#define EGL_DEVICE_UUID_EXT 0x335C
+#endif
+using QueryDeviceBinary = EGLBoolean (*)(EGLDeviceEXT, EGLint, EGLint, void*, EGLint*);
 
 namespace deferred {
 
@@ -79,6 +84,15 @@ std::vector<EglDeviceInfo> describe_devices(const std::vector<EGLDeviceEXT>& dev
         if (has_extension(ext, "EGL_EXT_device_query_name")) {
             const char* renderer = eglQueryDeviceStringEXT(device, EGL_RENDERER_EXT);
             if (renderer) info.name = renderer;
+        }
+        if (has_extension(ext, "EGL_EXT_device_persistent_id")) {
+            auto query = reinterpret_cast<QueryDeviceBinary>(eglGetProcAddress("eglQueryDeviceBinaryEXT"));
+            unsigned char uuid[16] = {};
+            EGLint size = 0;
+            if (query && query(device, EGL_DEVICE_UUID_EXT, 16, uuid, &size) == EGL_TRUE && size == 16)
+                info.uuid = format_gpu_uuid(uuid);
+            else
+                eglGetError();
         }
         if (info.name.empty() && has_extension(ext, "EGL_EXT_device_drm")) {
             const char* node = eglQueryDeviceStringEXT(device, EGL_DRM_DEVICE_FILE_EXT);

@@ -137,14 +137,30 @@ TEST(DeviceSelection, WithoutNvidiaTheChoiceOfBeforeStandsAndTheVariableIsNoted)
     EXPECT_EQ(choose_egl_device(mixed, std::nullopt, -1).egl_index, 1);
 }
 
+TEST(DeviceSelection, UuidIsWrittenAsNvidiaSmiWritesIt) {
+    const unsigned char bytes[16] = {0x5d, 0x1a, 0x7f, 0x2e, 0x01, 0x23, 0x45, 0x67,
+                                     0x89, 0xab, 0xcd, 0xef, 0x00, 0x10, 0x20, 0xff};
+    EXPECT_EQ(format_gpu_uuid(bytes), "GPU-5d1a7f2e-0123-4567-89ab-cdef001020ff");
+}
+
 // On the machine the suite runs on: the chosen device is the one CUDA calls 0
-// when NVIDIA is present (DEFERRED_EXPECT_GPU names the GPU the caller
-// expects, e.g. on the lent GPU machine), else the fallback is noted.
+// when NVIDIA is present, else the fallback is noted. On a GPU machine,
+// DEFERRED_EXPECT_GPU_UUID (nvidia-smi's UUID of the GPU CUDA_VISIBLE_DEVICES
+// names first) checks that it is the GPU CUDA names, and DEFERRED_EXPECT_GPU
+// a part of its name:
+//   CUDA_VISIBLE_DEVICES=1
+//   DEFERRED_EXPECT_GPU_UUID=$(nvidia-smi -i 1 --query-gpu=uuid --format=csv,noheader)
+//   build/tests/deferred_native_tests --gtest_filter='DeviceSelection.*'
+// (nvidia-smi numbers GPUs by PCI bus, as CUDA does with
+// CUDA_DEVICE_ORDER=PCI_BUS_ID and on nodes of identical GPUs.)
 TEST(DeviceSelection, ThisMachine) {
     Renderer r;
     const GLInfo& info = r.gl_info();
     std::printf("device: %s | %s | note: %s\n", info.display.c_str(), info.renderer.c_str(),
                 info.device_note.empty() ? "-" : info.device_note.c_str());
+    if (const char* expect = std::getenv("DEFERRED_EXPECT_GPU_UUID")) {
+        EXPECT_NE(info.display.find(expect), std::string::npos) << info.display;
+    }
     if (const char* expect = std::getenv("DEFERRED_EXPECT_GPU")) {
         EXPECT_NE(info.renderer.find(expect), std::string::npos) << info.renderer;
     }

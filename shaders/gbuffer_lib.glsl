@@ -40,6 +40,15 @@ struct SurfaceParams {
     vec3 Ns; /* the smooth normal (Cycles' sd->N); N where closures keep it */
 };
 
+/* What the G-buffer's storage keeps of a value: half floats for base and
+ * params, 16-bit unorm for the encoded normal. The forward pass shades the
+ * values it would have written through these, so a surface is lit alike
+ * drawn either way. */
+vec4 gbuffer_half(vec4 v) {
+    return vec4(unpackHalf2x16(packHalf2x16(v.xy)), unpackHalf2x16(packHalf2x16(v.zw)));
+}
+vec2 gbuffer_unorm16(vec2 v) { return unpackUnorm2x16(packUnorm2x16(v)); }
+
 SurfaceParams gbuffer_unpack(vec4 base, vec4 params0, vec4 params1, vec2 normal_enc) {
     SurfaceParams s;
     s.base_color = base.rgb;

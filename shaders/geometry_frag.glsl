@@ -1,9 +1,15 @@
 /* Geometry pass, fragment stage: fills the G-buffer (layout in gbuffer_lib.glsl).
  * SHADOW_PASS (node materials that drive alpha only): a shadow-map caster
  * instead, evaluating the graph for its alpha and writing what
- * shadow_frag.glsl writes. */
+ * shadow_frag.glsl writes.
+ * FORWARD_PASS (materials in Blend mode, forward_module.h): the surface is
+ * lit here, by the lighting pass's own code (lighting_lib.glsl), in front
+ * of the opaque depth, and blended over the forward layer with its alpha. */
 #include "frame_lib.glsl"
 #include "octahedral_lib.glsl"
+#ifdef FORWARD_PASS
+#include "lighting_lib.glsl"
+#endif
 
 layout(std430, binding = SSBO_MATERIALS) readonly buffer Materials { GpuMaterial materials[]; };
 
@@ -26,6 +32,10 @@ layout(location = 0) out vec2 out_depths;
 #else
 layout(location = 0) out float out_distance;
 #endif
+#elif defined(FORWARD_PASS)
+/* Premultiplied light and alpha; blended ONE, ONE_MINUS_SRC_ALPHA (alpha:
+ * ZERO, ONE_MINUS_SRC_ALPHA), so the target's a is the transmittance. */
+layout(location = 0) out vec4 out_forward;
 #else
 layout(location = OUT_EMISSION) out vec4 out_emission;
 layout(location = OUT_BASE) out vec4 out_base;
@@ -35,6 +45,7 @@ layout(location = OUT_NORMAL) out vec2 out_normal;
 layout(location = OUT_SMOOTH_NORMAL) out vec2 out_smooth_normal;
 #endif
 #endif
+#ifndef FORWARD_PASS
 #ifdef GBUF_PARAMS1
 layout(location = OUT_PARAMS1) out vec4 out_params1;
 #endif
@@ -43,6 +54,7 @@ layout(location = OUT_IDS) out uvec2 out_ids;
 #endif
 #ifdef GBUF_UV
 layout(location = OUT_UV) out vec2 out_uv;
+#endif
 #endif
 
 #ifdef MATERIAL_GRAPH
@@ -188,10 +200,42 @@ vec3 finite_or(vec3 v, vec3 fallback) {
 }
 #endif
 
+#ifdef FORWARD_PASS
+/* The surface lit as the lighting pass lights a G-buffer pixel: every light
+ * (forward_module.h caps their number), the world, its emission. */
+vec3 forward_light(vec4 emission, vec4 base, vec4 params0, vec4 params1, vec3 N, vec3 Ns) {
+    /* The values at the G-buffer's precision, as the lighting pass reads them. */
+    SurfaceParams s = gbuffer_unpack(gbuffer_half(base), gbuffer_half(params0), gbuffer_half(params1),
+                                     gbuffer_unorm16(octahedral_encode(N)));
+    s.Ns = octahedral_decode(gbuffer_unorm16(octahedral_encode(Ns)));
+    N = s.N;
+    PrincipledWeights w = principled_weights(s);
+    vec3 P = v_position;
+    vec3 V = frame_view_vector(P);
+    ivec2 pixel = ivec2(gl_FragCoord.xy);
+    float ao;
+    LightContribution total = world_light(w, s, P, N, V, pixel, ao);
+    for (uint i = 0u; i < min(frame.counts.x, uint(FORWARD_MAX_LIGHTS)); ++i) {
+        float visible;
+        LightContribution c = shade_light(lights[i], s, w, P, N, V, visible);
+        total.diffuse += c.diffuse * visible;
+        total.glossy += c.glossy * visible;
+    }
+    return emission.rgb + total.diffuse + total.glossy;
+}
+#endif
+
 void main() {
+#ifdef FORWARD_PASS
+    /* In front of this sample's opaque surfaces only (reversed Z; the same
+     * jittered projection drew them). The depth test is done here, by hand:
+     * the opaque depth is read as a texture, so it cannot also be this
+     * pass's depth attachment. */
+    if (gl_FragCoord.z <= texelFetch(gbuf_depth, ivec2(gl_FragCoord.xy), 0).r) discard;
+#endif
 #ifndef MATERIAL_GRAPH
     GpuMaterial m = pick_material(v_material);
-#ifdef SCENE_ALPHA
+#if defined(SCENE_ALPHA) && !defined(FORWARD_PASS)
     /* Partly transparent (mix.w: alpha): kept with probability alpha. */
     /* The Alpha Threshold judges the material's whole alpha (a mix chain
      * averaged), the stochastic pass the picked component's. */
@@ -226,7 +270,7 @@ void main() {
     g_mix_u = fract(pixel_hash(uvec2(gl_FragCoord.xy)) + frame.sample_shift.z);
     Closure c;
     material_graph_eval(c);
-#ifdef MATERIAL_ALPHA
+#if defined(MATERIAL_ALPHA) && !defined(FORWARD_PASS)
     if (transparent_here(clamp(finite_or(c.alpha, 1.0), 0.0, 1.0))) discard;
 #endif
 #ifdef SHADOW_PASS
@@ -239,37 +283,50 @@ void main() {
 #else
     vec3 shading_normal = finite_or(c.N, N);
     shading_normal = dot(shading_normal, shading_normal) > 0.0 ? normalize(shading_normal) : N;
-    out_emission = vec4(clamp(finite_or(c.emission, vec3(0.0)), vec3(-65504.0), vec3(65504.0)), 1.0);
-    out_base = vec4(clamp(finite_or(c.base_color, vec3(0.0)), vec3(0.0), vec3(65504.0)),
-                    /* the closure model, as gbuffer_lib.glsl lays it out */
-                    c.glossy_model > 0.5 ? 1.0 + c.glossy_model : clamp(finite_or(c.diffuse_sigma, -1.0), -1.0, 1.0));
-    out_params0 = vec4(clamp(finite_or(c.metallic, 0.0), 0.0, 1.0), clamp(finite_or(c.roughness, 0.5), 0.0, 1.0),
-                       clamp(finite_or(c.specular, 0.0), 0.0, 12.0), clamp(finite_or(c.specular_tint, 0.0), 0.0, 1.0));
-    out_normal = octahedral_encode(shading_normal);
-#ifdef GBUF_PARAMS1
-    out_params1 = clamp(vec4(finite_or(c.sheen, 0.0), finite_or(c.sheen_tint, 0.0), finite_or(c.clearcoat, 0.0),
-                             finite_or(c.clearcoat_roughness, 0.0)), vec4(0.0), vec4(1.0));
-#endif
-#ifdef GBUF_IDS
-    out_ids = uvec2(v_object_index, uint(materials[v_material].emission.w));
-#endif
+    vec4 surf_emission = vec4(clamp(finite_or(c.emission, vec3(0.0)), vec3(-65504.0), vec3(65504.0)), 1.0);
+    vec4 surf_base = vec4(clamp(finite_or(c.base_color, vec3(0.0)), vec3(0.0), vec3(65504.0)),
+                          /* the closure model, as gbuffer_lib.glsl lays it out */
+                          c.glossy_model > 0.5 ? 1.0 + c.glossy_model
+                                               : clamp(finite_or(c.diffuse_sigma, -1.0), -1.0, 1.0));
+    vec4 surf_params0 = vec4(clamp(finite_or(c.metallic, 0.0), 0.0, 1.0), clamp(finite_or(c.roughness, 0.5), 0.0, 1.0),
+                             clamp(finite_or(c.specular, 0.0), 0.0, 12.0),
+                             clamp(finite_or(c.specular_tint, 0.0), 0.0, 1.0));
+    vec4 surf_params1 = clamp(vec4(finite_or(c.sheen, 0.0), finite_or(c.sheen_tint, 0.0), finite_or(c.clearcoat, 0.0),
+                                   finite_or(c.clearcoat_roughness, 0.0)), vec4(0.0), vec4(1.0));
+    uint surf_material_index = uint(materials[v_material].emission.w);
+    float surf_alpha = clamp(finite_or(c.alpha, 1.0), 0.0, 1.0);
 #endif  /* SHADOW_PASS */
 #else
-    out_emission = vec4(min(m.emission.rgb, vec3(65504.0)), 1.0);
-    out_base = m.base_diffuse;
-    out_params0 = m.params0;
-    out_normal = octahedral_encode(N);
+    vec3 shading_normal = N;
+    vec4 surf_emission = vec4(min(m.emission.rgb, vec3(65504.0)), 1.0);
+    vec4 surf_base = m.base_diffuse;
+    vec4 surf_params0 = m.params0;
+    vec4 surf_params1 = m.params1;
+    uint surf_material_index = uint(m.emission.w);
+    float surf_alpha = clamp(isnan(m.mix.w) ? 1.0 : m.mix.w, 0.0, 1.0);
+#endif
+#ifndef SHADOW_PASS
+#ifdef FORWARD_PASS
+    if (surf_alpha <= 0.0) discard;
+    out_forward = vec4(forward_light(surf_emission, surf_base, surf_params0, surf_params1, shading_normal, N) *
+                       surf_alpha, surf_alpha);
+#else
+    out_emission = surf_emission;
+    out_base = surf_base;
+    out_params0 = surf_params0;
+    out_normal = octahedral_encode(shading_normal);
 #ifdef GBUF_PARAMS1
-    out_params1 = m.params1;
+    out_params1 = surf_params1;
 #endif
 #ifdef GBUF_IDS
-    out_ids = uvec2(v_object_index, uint(m.emission.w));
+    out_ids = uvec2(v_object_index, surf_material_index);
 #endif
 #endif
-#if defined(GBUF_SMOOTH_NORMAL) && !defined(SHADOW_PASS)
+#endif
+#if defined(GBUF_SMOOTH_NORMAL) && !defined(SHADOW_PASS) && !defined(FORWARD_PASS)
     out_smooth_normal = octahedral_encode(N);
 #endif
-#ifdef GBUF_UV
+#if defined(GBUF_UV) && !defined(FORWARD_PASS)
     out_uv = v_uv;
 #endif
 }

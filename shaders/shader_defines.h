@@ -43,6 +43,10 @@
 #define TEX_GBUF_SMOOTH_NORMAL 13
 #define TEX_WORLD_RADIANCE 14 /* RGBA32F equirectangular: the world's radiance for light (world_lib.glsl) */
 #define TEX_WORLD_CAMERA 15   /* ... as camera rays see it (differs with Light Path Is Camera Ray) */
+/* The forward pass's layer (rgb light, a transmittance) read by the lighting
+ * pass; the unit is TEX_SHADOW_LIGHT's, which only the Shadow resolve reads,
+ * after the sample loop (units from 16 on are the materials' images). */
+#define TEX_FORWARD_LAYER 11
 /* Node materials: image slot k of the drawn material at unit TEX_MATERIAL_IMAGE0 + k */
 #define TEX_MATERIAL_IMAGE0 16
 

@@ -214,6 +214,7 @@ void declare_renderer(py::module_& m) {
             d["shadow_ms"] = self.last.shadow_ms;
             d["culling_ms"] = self.last.culling_ms;
             d["lighting_ms"] = self.last.lighting_ms;
+            d["forward_ms"] = self.last.forward_ms;
             d["tile_light_pairs"] = self.last.tile_light_pairs;
             d["shadowed_lights"] = self.last.shadowed_lights;
             d["shadow_lights_dropped"] = self.last.shadow_lights_dropped;
@@ -332,8 +333,10 @@ void declare_renderer(py::module_& m) {
              py::arg("key"), "The id of an image kept (by key) from the previous scene, or None; "
              "the current scene then counts as using it.")
         .def("add_graph_material",
-             [](PyRenderer& self, const py::dict& graph, const py::object& pass_index, const py::object& light_emission) {
+             [](PyRenderer& self, const py::dict& graph, const py::object& pass_index, const py::object& light_emission,
+               bool blend) {
                  Material base;
+                 base.blend = blend;
                  base.pass_index = index_from(pass_index, "add_graph_material: pass_index");
                  if (!light_emission.is_none()) base.emission = vec3_from(light_emission, "add_graph_material: light_emission");
                  MaterialGraph g = graph_from_python(graph);
@@ -341,15 +344,18 @@ void declare_renderer(py::module_& m) {
                  return self.get().add_graph_material(base, g);
              },
              py::arg("graph"), py::kw_only(), py::arg("pass_index") = 0, py::arg("light_emission") = py::none(),
+             py::arg("blend") = false,
              "A node material from the add-on's graph dict (materials/builder.py); returns the material id. "
              "light_emission: the radiance its surface emits when the graph makes it a constant (the mesh "
-             "then lights other surfaces); the graph alone decides what its pixels show.")
+             "then lights other surfaces); the graph alone decides what its pixels show. blend: Blend mode, "
+             "drawn by the forward pass (Material::blend).")
         .def("add_material",
              [](PyRenderer& self, const py::object& base_color, float metallic, float roughness, float specular,
                 float specular_tint, float sheen, float sheen_tint, float clearcoat, float clearcoat_roughness,
                 const py::object& emission, float emission_strength, float alpha, float diffuse_roughness,
-                int glossy_model, const py::object& pass_index, int mix_with, float mix_probability) {
+                int glossy_model, const py::object& pass_index, int mix_with, float mix_probability, bool blend) {
                  Material mat;
+                 mat.blend = blend;
                  mat.base_color = vec3_from(base_color, "base_color");
                  mat.metallic = metallic;
                  mat.roughness = roughness;
@@ -374,7 +380,8 @@ void declare_renderer(py::module_& m) {
              py::arg("sheen") = 0.0f, py::arg("sheen_tint") = 0.5f, py::arg("clearcoat") = 0.0f,
              py::arg("clearcoat_roughness") = 0.03f, py::arg("emission") = py::make_tuple(0.0, 0.0, 0.0),
              py::arg("emission_strength") = 1.0f, py::arg("alpha") = 1.0f, py::arg("diffuse_roughness") = -1.0f, py::arg("glossy_model") = 0,
-             py::arg("pass_index") = 0, py::arg("mix_with") = -1, py::arg("mix_probability") = 0.0f)
+             py::arg("pass_index") = 0, py::arg("mix_with") = -1, py::arg("mix_probability") = 0.0f,
+             py::arg("blend") = false)
         .def("add_instances",
              [](PyRenderer& self, const py::object& mesh_id_obj, const py::object& matrices,
                 const py::object& object_indices, const py::object& material_slots, bool cast_shadow,

@@ -7,6 +7,7 @@
 #include "egl_context.h"
 #include "emitter_module.h"
 #include "film.h"
+#include "forward_module.h"
 #include "gbuffer.h"
 #include "gl_util.h"
 #include "light_culling.h"
@@ -95,6 +96,7 @@ struct Renderer::Impl {
     ShadowModule shadows;
     WorldModule world_module;
     EmitterModule emitters;
+    ForwardModule forward;
     std::int32_t world_graph = -1;  // the world's node graph in `materials`, -1: a constant colour
     VertexArray empty_vao;
     Buffer dummy_ssbo;
@@ -117,6 +119,7 @@ struct Renderer::Impl {
             shadows = ShadowModule();
             world_module.release();
             emitters.release();
+            forward.release();
             scene.clear();
             materials.release_all();
             shaders.reset();
@@ -411,7 +414,6 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     ShaderVariant geometry_variant = base_variant;
     if (scene_alpha) geometry_variant.defines.push_back("SCENE_ALPHA");
     const GLuint geometry = shaders->graphics_program("geometry_vert.glsl", "geometry_frag.glsl", geometry_variant);
-    const GLuint lighting = shaders->compute_program("lighting_comp.glsl", lighting_variant);
     auto pass_program = [&](Pass p, const char* mode) {
         ShaderVariant v = base_variant;
         v.defines.push_back("PASS_ID " + std::to_string(static_cast<int>(p)));
@@ -424,7 +426,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
 
     const GLuint groups_x = GLuint((settings.width + LIGHTING_GROUP_SIZE - 1) / LIGHTING_GROUP_SIZE);
     const GLuint groups_y = GLuint((settings.height + LIGHTING_GROUP_SIZE - 1) / LIGHTING_GROUP_SIZE);
-    double geometry_ms = 0, lighting_ms = 0, passes_ms = 0, culling_ms = 0, shadow_ms = 0;
+    double geometry_ms = 0, lighting_ms = 0, passes_ms = 0, culling_ms = 0, shadow_ms = 0, forward_ms = 0;
 
     auto bind_mesh = [&](const GpuMesh& mesh) {
         auto bind = [&](GLuint slot, const Buffer& b) {
@@ -528,6 +530,41 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     bool alpha_graphs = false;
     for (auto& [id, program] : graph_programs)
         if (is_alpha_graph(id)) alpha_graphs = true;
+    // Blend-mode materials (Material::blend): drawn by the forward pass, not
+    // into the G-buffer. Each gets its forward program now; one that does not
+    // compile stays in the stochastic path, warned.
+    ShaderVariant forward_variant;
+    lights.add_defines(forward_variant);
+    if (!shadows.empty()) forward_variant.defines.push_back("HAS_SHADOWS");
+    if (shadows.world_index() >= 0) forward_variant.defines.push_back("HAS_WORLD_OCCLUSION");
+    world_module.add_defines(forward_variant);
+    forward_variant.defines.push_back("FORWARD_PASS");
+    forward_variant.defines.push_back("FORWARD_MAX_LIGHTS " + std::to_string(kLightBatch));
+    std::map<std::uint32_t, GLuint> forward_programs;  // material id -> its forward program
+    for (std::uint32_t id = 0; id < scene.materials().size(); ++id) {
+        const Material& m = scene.materials()[id];
+        if (!m.blend) continue;
+        try {
+            forward_programs[id] = m.graph >= 0 && !graph_failed[id]
+                ? this->materials.program(*shaders, std::uint32_t(m.graph), forward_variant)
+                : shaders->graphics_program("geometry_vert.glsl", "geometry_frag.glsl", forward_variant);
+        } catch (const Error& e) {
+            result.warnings.push_back("Material " + std::to_string(id) +
+                                      ": its Blend-mode (forward) program did not compile; rendered with "
+                                      "stochastic transparency instead: " + std::string(e.what()));
+        }
+    }
+    auto is_forward = [&](std::uint32_t id) { return forward_programs.count(id) != 0; };
+    const bool forward_pass = !forward_programs.empty();
+    if (forward_pass && lights.count() > kLightBatch)
+        result.warnings.push_back("Blend-mode materials are lit by the first " + std::to_string(kLightBatch) +
+                                  " of the scene's " + std::to_string(lights.count()) + " lights");
+    if (forward_pass) {
+        forward.ensure(settings.width, settings.height);
+        result.timings.gbuffer_bytes += forward.bytes();
+        lighting_variant.defines.push_back("FORWARD_LAYER");
+    }
+    const GLuint lighting = shaders->compute_program("lighting_comp.glsl", lighting_variant);
     // Draws the slot ranges of the visible instances that use node material `id`.
     auto draw_graph_material = [&](std::uint32_t id, GLuint program) {
         const Material& material = scene.materials()[id];
@@ -550,6 +587,9 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     auto draw_geometry = [&](const ShadowModule::CasterTest& keep) -> std::uint64_t {
         const std::uint64_t n = cull(keep, false);
         glUseProgram(geometry);
+        // Per slot range when some slots are not this program's or not the
+        // G-buffer's (node materials, Blend-mode materials).
+        const bool by_slot = !graph_programs.empty() || forward_pass;
         if (!graph_programs.empty()) {
             // Depth first, so node materials (the expensive fragments) shade
             // each pixel once: the colour pass then tests for equal depth
@@ -559,18 +599,20 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
             glColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
             for (const Culled& c : visible) {
                 const GpuMesh& mesh = scene.meshes()[c.draw->mesh];
-                if (!alpha_graphs) {
+                if (!alpha_graphs && !forward_pass) {
                     draw_range(c, 0, mesh.triangle_count);
                     continue;
                 }
-                for (std::size_t s = 0; s < mesh.slot_ranges.size(); ++s)
-                    if (!is_alpha_graph(slot_material_id(*c.draw, s)))
+                for (std::size_t s = 0; s < mesh.slot_ranges.size(); ++s) {
+                    const std::uint32_t id = slot_material_id(*c.draw, s);
+                    if (!is_alpha_graph(id) && !is_forward(id))
                         draw_range(c, mesh.slot_ranges[s].first, mesh.slot_ranges[s].second);
+                }
             }
             if (alpha_graphs) {
                 this->materials.bind_constants();
                 for (auto& [id, program] : graph_programs)
-                    if (is_alpha_graph(id)) draw_graph_material(id, program);
+                    if (is_alpha_graph(id) && !is_forward(id)) draw_graph_material(id, program);
                 glUseProgram(geometry);
             }
             glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
@@ -579,17 +621,20 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         }
         for (const Culled& c : visible) {
             const GpuMesh& mesh = scene.meshes()[c.draw->mesh];
-            if (graph_programs.empty()) {
+            if (!by_slot) {
                 draw_range(c, 0, mesh.triangle_count);
                 continue;
             }
-            for (std::size_t s = 0; s < mesh.slot_ranges.size(); ++s)
-                if (slot_material(*c.draw, s).graph < 0 || graph_failed[slot_material_id(*c.draw, s)])
+            for (std::size_t s = 0; s < mesh.slot_ranges.size(); ++s) {
+                const std::uint32_t id = slot_material_id(*c.draw, s);
+                if ((scene.materials()[id].graph < 0 || graph_failed[id]) && !is_forward(id))
                     draw_range(c, mesh.slot_ranges[s].first, mesh.slot_ranges[s].second);
+            }
         }
         if (graph_programs.empty()) return n;
         this->materials.bind_constants();
-        for (auto& [id, program] : graph_programs) draw_graph_material(id, program);
+        for (auto& [id, program] : graph_programs)
+            if (!is_forward(id)) draw_graph_material(id, program);
         glDepthMask(GL_TRUE);
         glDepthFunc(GL_GREATER);  // reversed Z
         return n;
@@ -713,6 +758,48 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
 
 
 
+    // The forward pass of one sample: the visible instances with Blend-mode
+    // slots, one draw each, farthest first (by the bounding sphere's centre
+    // along the view), over the layer begin_sample cleared.
+    struct ForwardDraw { double depth; Culled one; };
+    std::vector<ForwardDraw> forward_draws;
+    auto draw_forward = [&]() {
+        camera_instances_drawn += cull(in_view, false);
+        forward_draws.clear();
+        for (const Culled& c : visible) {
+            const GpuMesh& mesh = scene.meshes()[c.draw->mesh];
+            bool any = false;
+            for (std::size_t s = 0; s < mesh.slot_ranges.size(); ++s)
+                if (is_forward(slot_material_id(*c.draw, s)) && mesh.slot_ranges[s].second > 0) any = true;
+            if (!any) continue;
+            for (std::uint32_t j = 0; j < c.count; ++j) {
+                const glm::dvec3 v = to_view * bounds[remap[c.first + j]].center;
+                forward_draws.push_back({cam.orthographic ? -v.z : glm::length(v), {c.draw, c.first + j, 1}});
+            }
+        }
+        std::stable_sort(forward_draws.begin(), forward_draws.end(),
+                         [](const ForwardDraw& a, const ForwardDraw& b) { return a.depth > b.depth; });
+        forward.begin_sample();
+        this->materials.bind_constants();
+        for (const ForwardDraw& f : forward_draws) {
+            const GpuMesh& mesh = scene.meshes()[f.one.draw->mesh];
+            for (std::size_t s = 0; s < mesh.slot_ranges.size(); ++s) {
+                const std::uint32_t id = slot_material_id(*f.one.draw, s);
+                auto program = forward_programs.find(id);
+                if (program == forward_programs.end() || mesh.slot_ranges[s].second == 0) continue;
+                glUseProgram(program->second);
+                const Material& m = scene.materials()[id];
+                if (m.graph >= 0 && !graph_failed[id]) {
+                    this->materials.bind_for_draw(std::uint32_t(m.graph), mesh);
+                    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_ATTRIBUTES,
+                                     mesh.attributes ? mesh.attributes.get() : dummy_ssbo.get());
+                }
+                draw_range(f.one, mesh.slot_ranges[s].first, mesh.slot_ranges[s].second);
+            }
+        }
+        forward.end_sample();
+    };
+
     for (int sample = 0; sample < settings.samples; ++sample) {
         check_cancel();
         // Jitter: one pixel-filter offset for the whole image (sample 0: none).
@@ -790,12 +877,22 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
             culling_ms += timer.lap_ms();
         }
 
-        // Lighting pass: adds this sample's share to the film.
-        glUseProgram(lighting);
-        if (culled) culling.bind();
         shadows.bind();
         world_module.bind();
         emitters.bind();
+        // Forward pass: Blend-mode surfaces in front of this sample's opaque
+        // depth, lit by the same lights and maps, into the forward layer.
+        if (forward_pass) {
+            draw_forward();
+            glViewport(0, 0, settings.width, settings.height);
+            forward.bind_layer();
+            check_gl("forward pass");
+            forward_ms += timer.lap_ms();
+        }
+
+        // Lighting pass: adds this sample's share to the film.
+        glUseProgram(lighting);
+        if (culled) culling.bind();
         glBindImageTexture(IMG_FILM, film.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
         if (shadow_pass)
             glBindImageTexture(IMG_SHADOW, shadow_light.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
@@ -855,6 +952,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     result.timings.readback_ms = timer.lap_ms();
     result.timings.geometry_ms = geometry_ms;
     result.timings.lighting_ms = lighting_ms;
+    result.timings.forward_ms = forward_ms;
     result.timings.culling_ms = culling_ms;
     result.timings.shadow_ms = shadow_ms;
     result.timings.shadow_map_bytes = shadows.empty() ? 0 : shadows.map_bytes();
@@ -873,6 +971,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     result.timings.programs_loaded = shaders->disk_loads() - loads_before;
     result.timings.load_ms = shaders->load_ms() - load_ms_before;
     result.timings.total_ms = result.timings.upload_ms + shadow_ms + geometry_ms + culling_ms + lighting_ms + passes_ms +
+                              forward_ms +
                               result.timings.readback_ms;
     return result;
 }

@@ -100,6 +100,16 @@ void node_bsdf_transparent(vec3 color, out Closure c) {
  * diffuse and metallic lobes (linear in the base colour); the dielectric
  * specular weight scales F0, which leaves the grazing-angle Fresnel rise
  * unscaled. */
+/* Material > Blend Mode: Alpha Clip (EEVEE's; Cycles has no such mode): the
+ * surface is there where its alpha is above the threshold and absent
+ * elsewhere (EEVEE: alpha <= threshold discards). The exporter appends it
+ * after the surface closure (builder.apply_alpha_clip), so the geometry
+ * pass, shadow casters and data passes all see the same cut. */
+void node_alpha_clip(Closure a, float threshold, out Closure c) {
+    c = a;
+    c.alpha = a.alpha > threshold ? 1.0 : 0.0;
+}
+
 void node_mix_shader(float fac, Closure a, Closure b, out Closure c) {
     fac = clamp01(fac);
     float wa = (1.0 - fac) * a.alpha, wb = fac * b.alpha;

@@ -15,10 +15,13 @@ samples (the reference), ours at 256. Per object (object-index pass of
 Cycles, eroded) and on the floor's shadow regions the mean of ours must be
 within MEAN_LIMIT of Cycles', relative; a region with an opaque-drawn pane
 or an opaque shadow is off by 40-60 %.
+Blend Mode (EEVEE's setting): Blend on the panes renders them with the
+forward pass, within MEAN_LIMIT of the same Cycles reference at 16
+samples; Alpha Clip at 0.5 equals a 0/1 alpha exactly.
 Also: Alpha NaN, negative or above 1 from a node renders finite (1: the
 default, 0 and 1),
 and 1000 overlapping panes of alpha 0.1 render (bounded cost) and hide
-what is behind them as 0.9^1000 says.
+what is behind them as 0.9^1000 says, stochastic and in Blend mode.
 
     blender -b --factory-startup --addons deferred_render -E DEFERRED_RENDER \\
         --python-exit-code 1 --python tests/blender/test_transparency.py
@@ -215,11 +218,68 @@ def main():
     diff = np.abs(ours - cycles).mean(axis=2)
     print(f"  whole image: mean |ours - Cycles| {diff.mean():.4f}, relMSE "
           f"{float(np.mean((ours - cycles) ** 2 / (cycles ** 2 + 0.01))):.2e}")
+    checks.run("Blend mode (forward pass)", blend_mode, checks, scene, cycles)
+    checks.run("Clip mode", clip_mode, checks, scene)
     checks.run("sharp sun", sharp_sun, checks, scene, index)
     checks.run("film transparent", film_transparent, checks, scene)
     checks.run("bad alpha values", bad_alpha, checks, scene)
     checks.run("1000 overlapping panes", many_panes, checks, scene)
     checks.finish()
+
+
+BLEND_SAMPLES = 16
+
+
+def blend_mode(checks, scene, cycles):
+    """Material > Blend Mode: Blend on the panes (the forward pass): each
+    single-layer pane, and the two 0.5 panes (two objects, sorted back to
+    front), within MEAN_LIMIT of Cycles' 1024 samples at 16 samples (their
+    partial shadows are still stochastic), and the forward pass ran."""
+    from deferred_render.engine import final
+    names = ("pane 0.4", "checker alpha", "pane 0.5")
+    for name in names:
+        bpy.data.materials[name].blend_method = 'BLEND'
+    scene.deferred_render.samples = BLEND_SAMPLES
+    try:
+        ours, _ = render(scene, "DEFERRED_RENDER")
+        forward_ms = float(final.last_timings.get("forward_ms", 0.0))
+    finally:
+        for name in names:
+            bpy.data.materials[name].blend_method = 'OPAQUE'
+        scene.deferred_render.samples = OURS_SAMPLES
+    checks.check(forward_ms > 0.0, "the forward pass ran", f"{forward_ms:.1f} ms")
+    h, w = cycles.shape[:2]
+    rows = slice(int(h * 0.2), int(h * 0.8))
+    for label, cols in (("alpha 0.4 pane", (0.08, 0.30)), ("checker alpha pane", (0.30, 0.48)),
+                        ("two 0.5 panes", (0.72, 0.92))):
+        block = (rows, slice(int(w * cols[0]), int(w * cols[1])))
+        c, o = cycles[block].mean(), ours[block].mean()
+        print(f"  Blend mode, {label}: Cycles {c:.4f}, ours at {BLEND_SAMPLES} samples {o:.4f}, ratio {o / c:.4f}")
+        checks.check(abs(o / c - 1.0) < MEAN_LIMIT, f"Blend mode, {label}: mean within {MEAN_LIMIT:.0%} of Cycles",
+                     f"ratio {o / c:.4f}")
+
+
+def clip_mode(checks, scene):
+    """Blend Mode: Alpha Clip at 0.5 on the checker pane (alpha 0.1 / 0.9):
+    the same image as a checker of alpha 0 / 1 with stochastic alpha (which
+    is then deterministic), to float precision."""
+    mat = bpy.data.materials["checker alpha"]
+    remap = next(n for n in mat.node_tree.nodes if n.bl_idname == "ShaderNodeMapRange")
+    scene.deferred_render.samples = 4
+    try:
+        mat.blend_method = 'CLIP'
+        mat.alpha_threshold = 0.5
+        clipped, _ = render(scene, "DEFERRED_RENDER")
+        mat.blend_method = 'OPAQUE'
+        remap.inputs["To Min"].default_value, remap.inputs["To Max"].default_value = 0.0, 1.0
+        binary, _ = render(scene, "DEFERRED_RENDER")
+    finally:
+        mat.blend_method = 'OPAQUE'
+        remap.inputs["To Min"].default_value, remap.inputs["To Max"].default_value = 0.1, 0.9
+        scene.deferred_render.samples = OURS_SAMPLES
+    worst = float(np.abs(clipped - binary).max())
+    print(f"  Alpha Clip 0.5 vs a 0/1 checker: max |difference| {worst:.2e}")
+    checks.check(worst < 1e-5, "Alpha Clip cuts at the threshold (as a 0/1 alpha)", f"{worst:.2e}")
 
 
 def sharp_sun(checks, scene, index):
@@ -323,6 +383,17 @@ def many_panes(checks, scene):
     print(f"  1000 panes: {seconds:.2f} s at 4 samples; red/green behind them {red_over_green:.4f}")
     checks.check(np.isfinite(ours).all() and red_over_green < 0.2,
                  "the panes hide the red wall (transmittance 0.9^1000)", f"{red_over_green:.4f}")
+    # The same in Blend mode: one object of 1000 layers in the forward pass
+    # (composited in triangle order; equal layers make the order moot).
+    mesh.materials[0].blend_method = 'BLEND'
+    t0 = time.perf_counter()
+    blended, _ = render(scene, "DEFERRED_RENDER")
+    seconds = time.perf_counter() - t0
+    centre = blended[int(h * 0.4):int(h * 0.55), int(w * 0.4):int(w * 0.6)]
+    red_over_green = float(centre[..., 0].mean() / max(centre[..., 1].mean(), 1e-9))
+    print(f"  1000 panes in Blend mode: {seconds:.2f} s at 4 samples; red/green behind them {red_over_green:.4f}")
+    checks.check(np.isfinite(blended).all() and red_over_green < 0.2,
+                 "Blend mode: the panes hide the red wall too", f"{red_over_green:.4f}")
 
 
 main()

@@ -159,6 +159,7 @@ class SceneExporter:
             params, notes = material_export.material_params(material)
             if notes:
                 self._warn_once(("material", key), material_export.warning_text(material, notes))
+            params = material_export.apply_blend_mode(params, material)
             try:
                 mat_id = material_export.add_materials(self.renderer.add_material, params)
             except ValueError as ex:  # refused by the native validation: default surface
@@ -194,8 +195,11 @@ class SceneExporter:
             return None
         if graph.notes:
             self._warn_once(("material", key), f"Material '{material.name}': " + "; ".join(graph.notes))
+        mode, threshold = material_export.blend_mode(material)
+        if mode == "clip":
+            graph_builder.apply_alpha_clip(graph, threshold)
         try:
-            kwargs = {"pass_index": int(material.pass_index)}
+            kwargs = {"pass_index": int(material.pass_index), "blend": mode == "blend"}
             if getattr(graph, "light_emission", None) is not None:
                 kwargs["light_emission"] = graph.light_emission  # its meshes light other surfaces
             mat_id = self.renderer.add_graph_material(graph.ir, **kwargs)

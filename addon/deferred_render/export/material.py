@@ -481,6 +481,41 @@ def material_params(material):
     return params, notes
 
 
+def blend_mode(material):
+    """(mode, threshold) from Material > Settings > Blend Mode (EEVEE's
+    setting, which Cycles ignores): "blend" (the forward pass), "clip"
+    (opaque above the threshold, absent below) or "stochastic" (Opaque and
+    Alpha Hashed: alpha as Cycles renders it)."""
+    method = getattr(material, "blend_method", "OPAQUE") if material is not None else "OPAQUE"
+    if method == 'BLEND':
+        return "blend", 0.0
+    if method == 'CLIP':
+        t = float(getattr(material, "alpha_threshold", 0.5))
+        return "clip", (t if math.isfinite(t) else 0.5)
+    return "stochastic", 0.0
+
+
+def apply_blend_mode(params, material):
+    """add_material keyword arguments (and a chain's components) with the
+    material's Blend Mode: Clip turns each constant alpha into 0 or 1, Blend
+    sends the material to the forward pass."""
+    mode, threshold = blend_mode(material)
+    if mode == "stochastic":
+        return params
+
+    def one(p):
+        p = dict(p)
+        if mode == "clip":
+            p["alpha"] = 1.0 if p.get("alpha", 1.0) > threshold else 0.0
+        else:
+            p["blend"] = True
+        return p
+    out = one(params)
+    if params.get("components"):
+        out["components"] = [(one(p), w) for p, w in params["components"]]
+    return out
+
+
 def is_clamp_note(note):
     """A note of _sanitize (a value clamped to the renderer's limits): the
     parameter set still represents the material, only clamped."""

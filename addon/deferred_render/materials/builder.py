@@ -435,6 +435,23 @@ def _constant_emission(g, surface):
     return tuple(min(max(0.0, c * strength[0] * a), 1e30) for c in color)
 
 
+def apply_alpha_clip(graph, threshold):
+    """Material > Blend Mode: Alpha Clip on a built graph: its surface closure
+    goes through node_alpha_clip (opaque where alpha > threshold, absent
+    elsewhere). Nothing to do when the graph's alpha is always 1."""
+    ir = graph.ir
+    if not ir.get("alpha") or ir.get("surface") is None:
+        return graph
+    offset = len(ir["constants"])
+    ir["constants"].append(_finite(float(threshold)))
+    node, output = ir["surface"]
+    ir["nodes"].append({"func": "node_alpha_clip",
+                        "args": [("link", "closure", node, output, "closure"), ("const", "float", offset)],
+                        "outputs": ["closure"]})
+    ir["surface"] = (len(ir["nodes"]) - 1, 0)
+    return graph
+
+
 def build_world_graph(world, images=None):
     """MaterialGraph of a world's node tree: its surface closure's emission is
     the background radiance along each direction (the world module bakes it,

@@ -100,6 +100,7 @@ struct PassImage {
 struct FrameTimings {
     double upload_ms = 0, shadow_ms = 0, geometry_ms = 0, culling_ms = 0, lighting_ms = 0, passes_ms = 0,
            readback_ms = 0;
+    double forward_ms = 0;  // the forward pass (Blend-mode materials), all samples
     double total_ms = 0;
     std::uint64_t tile_light_pairs = 0;  // entries in the culled per-tile light lists
     std::size_t shadow_map_bytes = 0;    // shadow map array + its depth buffer

@@ -77,6 +77,12 @@ struct Material {
     // A node material: index of its graph (Renderer::add_graph_material sets
     // it); -1 for a constant parameter set.
     std::int32_t graph = -1;
+    // Blend mode (EEVEE's Blend): drawn after the opaque surfaces by the
+    // forward pass (forward_module.h), lit where it is drawn and composited
+    // over what is behind with its alpha, back to front per object: exact
+    // for one layer at any sample count. Off: alpha is stochastic coverage
+    // (Cycles' behaviour, converging over samples).
+    bool blend = false;
 };
 constexpr int kMaxMixChain = 16;
 

@@ -1,0 +1,175 @@
+// The forward pass (forward_module.h): Blend-mode surfaces composited over
+// the deferred frame. Scenes seen from straight above (orthographic), lit by
+// a hard sun with shadows and a grey world (its light and occlusion run too):
+// a floor, panes above it. Panes cast no shadow here, so each surface's light
+// is the same whatever is in front of it and the compositing alone is
+// measured. Colours and roughness are exact in half floats, the G-buffer's
+// precision: the forward pass rounds its values to half with packHalf2x16,
+// the driver rounds on storing to the G-buffer, and the two may round a
+// value that is not exact in opposite directions (one half ulp, 4.9e-4).
+#include "test_helpers.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+using namespace deferred;
+using namespace deferred::testing;
+
+namespace {
+
+constexpr int kSize = 48;
+
+Material diffuse(float r, float g, float b) {
+    Material m;
+    m.base_color = {r, g, b};
+    m.roughness = 0.5f;
+    return m;
+}
+
+struct Pane {
+    Material material;
+    double height;
+};
+
+// A floor and the given panes (half size 2, z = height, no shadow of their
+// own); the camera covers 6 m, so the panes cover the middle of the frame.
+FrameResult render_scene(const std::vector<Pane>& panes, int samples, bool film_transparent = false,
+                         bool with_floor = true, float world = 0.25f) {
+    Renderer r;
+    set_world_color(r, world, world, world);
+    Light sun;
+    sun.type = LightType::Sun;
+    sun.angle = 0.0f;  // a hard sun: its light is the same at every sample
+    const double eye[3] = {1.0, 0.5, 3.0}, target[3] = {0.0, 0.0, 0.0};
+    sun.matrix = tools::look_at(eye, target);
+    sun.energy = 3.0f;
+    r.add_light(sun);
+    if (with_floor) add_plane(r, diffuse(0.75f, 0.375f, 0.25f), 10.0f);
+    // Added nearest first, so the pass's own sorting is what orders them.
+    std::vector<Pane> order = panes;
+    std::sort(order.begin(), order.end(), [](const Pane& a, const Pane& b) { return a.height > b.height; });
+    for (const Pane& p : order)
+        add_plane(r, p.material, 2.0f, 1, tools::translation(0, 0, p.height), /*cast_shadow=*/false);
+    RenderSettings s;
+    s.width = s.height = kSize;
+    s.samples = samples;
+    s.film_transparent = film_transparent;
+    s.filter_width = 0.01f;  // pixel centres: the same points at every sample
+    return r.render(top_down_ortho(10.0, 6.0f), s);
+}
+
+// Largest per-pixel |a - b| / max(|b|, 0.05) over the pixels the panes cover
+// (the middle 16 x 16).
+double worst_inside(const PassImage& a, const std::function<glm::dvec4(int, int)>& expect) {
+    double worst = 0;
+    for (int y = 16; y < 32; ++y)
+        for (int x = 16; x < 32; ++x) {
+            const float* p = &a.pixels[(std::size_t(y) * a.width + x) * 4];
+            const glm::dvec4 want = expect(x, y);
+            for (int c = 0; c < 4; ++c)
+                worst = std::max(worst, std::abs(p[c] - want[c]) / std::max(std::abs(want[c]), 0.05));
+        }
+    return worst;
+}
+
+glm::dvec4 pixel4(const PassImage& img, int x, int y) {
+    const float* p = &img.pixels[(std::size_t(y) * img.width + x) * 4];
+    return {p[0], p[1], p[2], p[3]};
+}
+
+Material blend_of(Material m, float alpha) {
+    m.alpha = alpha;
+    m.blend = true;
+    return m;
+}
+
+}  // namespace
+
+TEST(ForwardPass, OneLayerAtOneSampleIsTheExactComposite) {
+    // A green pane of alpha 0.4 over the floor: the forward pass at ONE
+    // sample gives 0.4 pane + 0.6 floor, each lit as it is when opaque. The
+    // only differences are float rounding of the same arithmetic in another
+    // order (bound 1e-6 relative).
+    const Material green = diffuse(0.25f, 0.75f, 0.375f);
+    FrameResult floor_only = render_scene({}, 1);
+    FrameResult pane_opaque = render_scene({{green, 1.0}}, 1);
+    FrameResult forward = render_scene({{blend_of(green, 0.4f), 1.0}}, 1);
+    const PassImage& F = *floor_only.find(Pass::Combined);
+    const PassImage& P = *pane_opaque.find(Pass::Combined);
+    const double worst = worst_inside(*forward.find(Pass::Combined), [&](int x, int y) {
+        return 0.4 * pixel4(P, x, y) + 0.6 * pixel4(F, x, y);
+    });
+    std::printf("one layer, 1 sample: worst relative difference to 0.4 P + 0.6 F: %.2e (forward pass %.1f ms)\n",
+                worst, forward.timings.forward_ms);
+    EXPECT_LT(worst, 1e-6);
+    EXPECT_GT(forward.timings.forward_ms, 0.0);
+    EXPECT_EQ(floor_only.timings.forward_ms, 0.0);  // no Blend material: no forward pass
+}
+
+TEST(ForwardPass, EqualsStochasticTransparencyConverged) {
+    // The same pane with stochastic alpha (Cycles' way) at 256 samples
+    // converges to the same composite. Each pixel is the mean of 256
+    // Bernoulli(0.4) picks between pane and floor: its standard deviation is
+    // |P - F| sqrt(0.24 / 256) = 0.031 |P - F|; over the 256 pane pixels the
+    // mean's is 16 x smaller, 0.0019 |P - F|. Bound: 4 of those, on the
+    // mean over the pane, channel by channel. The world is black here: its
+    // light is itself a one-sample estimate, whose noise is not the subject.
+    const Material green = diffuse(0.25f, 0.75f, 0.375f);
+    FrameResult forward = render_scene({{blend_of(green, 0.4f), 1.0}}, 1, false, true, 0.0f);
+    Material hashed = green;
+    hashed.alpha = 0.4f;
+    FrameResult stochastic = render_scene({{hashed, 1.0}}, 256, false, true, 0.0f);
+    FrameResult floor_only = render_scene({}, 1, false, true, 0.0f);
+    FrameResult pane_opaque = render_scene({{green, 1.0}}, 1, false, true, 0.0f);
+    glm::dvec4 mean_f(0), mean_s(0), mean_diff(0);
+    for (int y = 16; y < 32; ++y)
+        for (int x = 16; x < 32; ++x) {
+            mean_f += pixel4(*forward.find(Pass::Combined), x, y) / 256.0;
+            mean_s += pixel4(*stochastic.find(Pass::Combined), x, y) / 256.0;
+            mean_diff += glm::abs(pixel4(*pane_opaque.find(Pass::Combined), x, y) -
+                                  pixel4(*floor_only.find(Pass::Combined), x, y)) / 256.0;
+        }
+    for (int c = 0; c < 3; ++c) {
+        std::printf("channel %d: forward %.5f, stochastic x256 %.5f (bound %.5f)\n", c, mean_f[c], mean_s[c],
+                    4 * 0.0019 * mean_diff[c]);
+        EXPECT_NEAR(mean_f[c], mean_s[c], 4 * 0.0019 * mean_diff[c] + 1e-6);
+    }
+}
+
+TEST(ForwardPass, PaneBehindAnOpaqueSurfaceIsHiddenExactly) {
+    // An opaque plane at z = 2 over a Blend pane at z = 1: the image is the
+    // same as without the pane, to the bit.
+    Material top = diffuse(0.5f, 0.5f, 0.8f);
+    FrameResult without = render_scene({{top, 2.0}}, 4);
+    FrameResult with = render_scene({{top, 2.0}, {blend_of(diffuse(0.9f, 0.9f, 0.1f), 0.5f), 1.0}}, 4);
+    const PassImage& a = *without.find(Pass::Combined);
+    const PassImage& b = *with.find(Pass::Combined);
+    double worst = 0;
+    for (std::size_t i = 0; i < a.pixels.size(); ++i) worst = std::max(worst, double(std::abs(a.pixels[i] - b.pixels[i])));
+    EXPECT_EQ(worst, 0.0);
+}
+
+TEST(ForwardPass, LayersAreCompositedBackToFront) {
+    // Two panes of alpha 0.5 (red at z = 1, blue at z = 2), added nearest
+    // first: 0.5 blue + 0.25 red + 0.25 floor.
+    const Material red = diffuse(0.75f, 0.125f, 0.125f), blue = diffuse(0.125f, 0.125f, 0.75f);
+    FrameResult F = render_scene({}, 1), R = render_scene({{red, 1.0}}, 1), B = render_scene({{blue, 2.0}}, 1);
+    FrameResult both = render_scene({{blend_of(red, 0.5f), 1.0}, {blend_of(blue, 0.5f), 2.0}}, 1);
+    const double worst = worst_inside(*both.find(Pass::Combined), [&](int x, int y) {
+        return 0.5 * pixel4(*B.find(Pass::Combined), x, y) + 0.25 * pixel4(*R.find(Pass::Combined), x, y) +
+               0.25 * pixel4(*F.find(Pass::Combined), x, y);
+    });
+    std::printf("two layers: worst relative difference %.2e\n", worst);
+    EXPECT_LT(worst, 1e-6);
+}
+
+TEST(ForwardPass, FilmTransparentAlphaIsOneMinusTransmittance) {
+    // Over nothing, with Film > Transparent: alpha 1 - (1 - 0.4)(1 - 0.5) = 0.7.
+    FrameResult f = render_scene({{blend_of(diffuse(0.5f, 0.5f, 0.5f), 0.4f), 1.0},
+                                  {blend_of(diffuse(0.5f, 0.5f, 0.5f), 0.5f), 2.0}},
+                                 1, /*film_transparent=*/true, /*with_floor=*/false);
+    const glm::dvec4 p = pixel4(*f.find(Pass::Combined), 24, 24);
+    EXPECT_NEAR(p.a, 0.7, 1e-6);
+    EXPECT_EQ(pixel4(*f.find(Pass::Combined), 2, 2).a, 0.0);  // outside the panes: transparent
+}

@@ -9,7 +9,7 @@ packages=(
   libepoxy-dev libglm-dev pybind11-dev libopenexr-dev libpng-dev libgtest-dev
   python3.11-dev python3-numpy python3-openimageio python3-matplotlib
   libegl-mesa0 libegl-dev libgl1-mesa-dri
-  blender
+  blender xvfb xauth
   slurmctld slurmd slurm-client munge
 )
 missing=()

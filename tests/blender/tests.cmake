@@ -55,10 +55,24 @@ add_test(NAME blender_native_missing
                  --python ${CMAKE_SOURCE_DIR}/tests/blender/test_native_missing.py
          WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
 
+# Blender's real UI under Xvfb (not -b): the engine's panels drawn by the
+# Properties editor (tests/blender/gui_panels.py).
+find_program(XVFB_RUN xvfb-run)
+set(_deferred_blender_gui)
+if(XVFB_RUN)
+  add_test(NAME blender_gui_panels
+           COMMAND ${XVFB_RUN} -a ${BLENDER_EXECUTABLE} --factory-startup --addons deferred_render
+                   --python ${CMAKE_SOURCE_DIR}/tests/blender/gui_panels.py
+           WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
+  set(_deferred_blender_gui gui_panels)
+else()
+  message(WARNING "xvfb-run not found: the Blender GUI tests are not registered (Debian: xvfb xauth)")
+endif()
+
 # The export benchmark (tests/blender/bench_export.py) is a script, not a
 # test: speed targets live in benchmarks (see README).
 
-set(_deferred_blender_all ${DEFERRED_BLENDER_TESTS} native_missing)
+set(_deferred_blender_all ${DEFERRED_BLENDER_TESTS} native_missing ${_deferred_blender_gui})
 list(TRANSFORM _deferred_blender_all PREPEND "blender_")
 set_tests_properties(${_deferred_blender_all} PROPERTIES
     ENVIRONMENT "BLENDER_USER_SCRIPTS=${DEFERRED_BLENDER_SCRIPTS};DEFERRED_TEST_OUT=${DEFERRED_BLENDER_TEST_OUT}"

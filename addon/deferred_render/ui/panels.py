@@ -3,7 +3,7 @@
 They show only what Blender has no suitable panel for when this engine is
 active: the add-on settings (samples, device), Film > Transparent, the pass
 checkboxes the renderer honours, the light settings it reads (incl. Cast
-Shadow) and the material pass index.
+Shadow), the material's Blend Mode and pass index.
 """
 
 import bpy
@@ -25,7 +25,9 @@ class _EnginePanel:
 
     def split_layout(self):
         """The panel's layout with labels on the left, as Blender's own panels."""
-        layout = self.split_layout()
+        layout = self.layout
+        layout.use_property_split = True
+        layout.use_property_decorate = False
         return layout
 
 
@@ -168,6 +170,15 @@ class DEFERRED_RENDER_PT_light(_EnginePanel, bpy.types.Panel):
         col.prop(light, "use_shadow", text="Cast Shadow")
 
 
+# What each Blend Mode does in this engine (README: Transparency).
+BLEND_MODE_HELP = {
+    'OPAQUE': ("Alpha as Cycles renders it: stochastic,", "converging over the samples"),
+    'HASHED': ("Alpha as Cycles renders it: stochastic,", "converging over the samples"),
+    'CLIP': ("Opaque where alpha is above the threshold,", "absent elsewhere (EEVEE's clip)"),
+    'BLEND': ("Forward pass: blended over what is behind,", "exact at one sample; layers sorted per object"),
+}
+
+
 class DEFERRED_RENDER_PT_material_settings(_EnginePanel, bpy.types.Panel):
     bl_label = "Settings"
     bl_context = "material"
@@ -179,7 +190,15 @@ class DEFERRED_RENDER_PT_material_settings(_EnginePanel, bpy.types.Panel):
 
     def draw(self, context):
         layout = self.split_layout()
-        layout.prop(context.material, "pass_index")
+        mat = context.material
+        layout.prop(mat, "blend_method", text="Blend Mode")
+        if mat.blend_method == 'CLIP':
+            layout.prop(mat, "alpha_threshold", text="Clip Threshold")
+        col = layout.column(align=True)
+        col.scale_y = 0.8
+        for line in BLEND_MODE_HELP[mat.blend_method]:
+            col.label(text=line)
+        layout.prop(mat, "pass_index")
 
 
 classes = (

@@ -701,6 +701,76 @@ def build_materials():
     save(scene, "materials")
 
 
+def leaf_image(size=128):
+    """A leaf cut-out (RGBA): green with a lighter midrib, alpha 1 inside an
+    almond-shaped blade and a stem, 0 outside; packed into the .blend."""
+    image = bpy.data.images.new("Leaf", size, size, alpha=True)
+    pixels = []
+    for j in range(size):
+        v = (j + 0.5) / size  # 0 at the stem end, 1 at the tip
+        for i in range(size):
+            u = (i + 0.5) / size * 2.0 - 1.0
+            half_width = 0.8 * math.sin(math.pi * min(max((v - 0.12) / 0.86, 0.0), 1.0)) ** 0.8
+            blade = abs(u) < half_width
+            stem = v < 0.14 and abs(u) < 0.04
+            rib = abs(u) < 0.03 + 0.02 * (1.0 - v)
+            g = 0.65 if rib else 0.45 + 0.1 * math.cos(12.0 * (v + abs(u)))
+            pixels += [0.15 if rib else 0.1, g, 0.08, 1.0 if (blade or stem) else 0.0]
+    image.pixels = pixels
+    image.pack()
+    return image
+
+
+def build_transparency():
+    """Transparency as Cycles renders it (issue: transparency): a floor and
+    coloured blocks under a sun, seen through a leaf cut-out (image alpha),
+    two panes of constant alpha 0.3 and 0.4, a sphere mixing Diffuse with a
+    Transparent BSDF, and two overlapping panes of alpha 0.5; their partial
+    shadows fall on the floor."""
+    scene = new_scene("Transparency", resolution=(320, 180))
+    set_world(scene, (0.08, 0.08, 0.1))
+    scene.cycles.transparent_max_bounces = 8  # Blender's default; this engine does not limit layers
+    upright = (math.pi / 2, 0.0, 0.0)
+    mesh_object("Floor", plane_mesh("Floor", 30, 30), material=principled("Floor", (0.7, 0.7, 0.7), roughness=0.8),
+                pass_index=1)
+    for k, colour in enumerate(((0.8, 0.15, 0.1), (0.1, 0.3, 0.8), (0.9, 0.7, 0.1), (0.2, 0.7, 0.3))):
+        primitive(bpy.ops.mesh.primitive_cube_add, f"Block{k}", principled(f"Block{k}", colour, roughness=0.4),
+                  pass_index=2, size=1.0, location=(-3.0 + 2.0 * k, 2.5, 0.5))
+
+    def leaf(nodes, links):
+        bsdf = _node(nodes, "ShaderNodeBsdfPrincipled", {"Roughness": 0.6})
+        tex = _node(nodes, "ShaderNodeTexImage", image=leaf_image())
+        links.new(tex.outputs["Color"], bsdf.inputs["Base Color"])
+        links.new(tex.outputs["Alpha"], bsdf.inputs["Alpha"])
+        return bsdf.outputs[0]
+
+    obj = mesh_object("Leaf", plane_mesh("Leaf", 1.6, 1.6), material=shader_material("Leaf", leaf),
+                      location=(-3.0, 0.0, 1.2), pass_index=3)
+    obj.rotation_euler = (upright[0], 0.0, math.radians(15))
+    for name, alpha, x, colour in (("Pane03", 0.3, -1.2, (0.2, 0.8, 0.9)), ("Pane04", 0.4, 0.4, (0.9, 0.3, 0.7))):
+        mat = principled(name, colour, roughness=0.3, inputs={"Alpha": alpha})
+        mesh_object(name, plane_mesh(name, 1.3, 1.6), material=mat, location=(x, 0.0, 0.9),
+                    pass_index=4).rotation_euler = upright
+
+    def mix(nodes, links):
+        diffuse = _node(nodes, "ShaderNodeBsdfDiffuse", {"Color": (0.9, 0.8, 0.2, 1.0)})
+        transparent = _node(nodes, "ShaderNodeBsdfTransparent")
+        mixer = _node(nodes, "ShaderNodeMixShader", {"Fac": 0.35})
+        links.new(diffuse.outputs[0], mixer.inputs[1])
+        links.new(transparent.outputs[0], mixer.inputs[2])
+        return mixer.outputs[0]
+
+    primitive(bpy.ops.mesh.primitive_uv_sphere_add, "MixSphere", shader_material("DiffuseTransparent", mix),
+              pass_index=5, smooth=True, radius=0.7, location=(1.9, 0.2, 0.75), segments=48, ring_count=24)
+    half = principled("Pane05", (0.3, 0.4, 0.9), roughness=0.3, inputs={"Alpha": 0.5})
+    for name, y in (("PaneA", -0.3), ("PaneB", 0.1)):
+        mesh_object(name, plane_mesh(name, 1.2, 1.6), material=half, location=(3.4, y, 0.9),
+                    pass_index=6).rotation_euler = upright
+    add_light("Sun", 'SUN', (0, 0, 10), 3.0, target=(-1.5, 3.0, 0.0), angle=math.radians(1.0))
+    add_camera(scene, location=(0.0, -8.0, 2.6), target=(0.2, 0.5, 0.8), lens=35.0)
+    save(scene, "transparency")
+
+
 def build_hdri_studio():
     """Lit only by one of Blender's bundled studio HDRIs (Environment
     Texture, rotated 60 degrees by a Mapping node): a floor, a diffuse and a
@@ -745,6 +815,7 @@ BUILDERS = {
     "instancing": build_instancing,
     "analytic": build_analytic,
     "turntable": build_turntable,
+    "transparency": build_transparency,
 }
 
 

@@ -101,6 +101,10 @@ PLANS = {
     # map-drawn occlusion directions); 256 samples show the convergence.
     "hdri_studio": {"ref_spp": 1024, "unocc_spp": 512, "ours": [1, 4, 16, 64, 256], "eevee": [1, 4, 16, 64],
                     "cycles": [1, 4, 16, 64, 256], "ours_noshadow": [64]},
+    # transparency: stochastic alpha (leaf cut-out, panes, a Transparent mix)
+    # converging with its partial shadows; 256 samples show the convergence.
+    "transparency": {"ref_spp": 1024, "unocc_spp": 256, "ours": [1, 4, 16, 64, 256], "eevee": [1, 4, 16, 64],
+                     "cycles": [1, 4, 16, 64, 256], "ours_noshadow": []},
 }
 DEFAULT_PLAN = {"ref_spp": 1024, "unocc_spp": 512, "ours": [1, 4, 16, 64], "eevee": [1, 4, 16],
                 "cycles": [1, 4, 16, 64], "ours_noshadow": [16, 64]}

@@ -11,6 +11,11 @@ and the engine's own stage timings per film sample: geometry pass (with
 the data-pass G-buffer when Depth is on), shadow maps, whole frame; the
 ratio to the opaque scene is what transparency costs. A second table: the
 same with the Depth pass on (Alpha Threshold data G-buffer per sample).
+A third: Blend mode (the forward pass) against stochastic alpha 0.5, the
+quads as one object and as GRID x GRID objects: the forward pass's time
+per sample, per transparent object and per covered pixel (pixels whose
+first hit is a quad; overdraw makes the per-pixel figure an upper bound of
+a single layer's cost).
 
     BLENDER_USER_SCRIPTS=build/blender_scripts blender -b --factory-startup \\
         --addons deferred_render -E DEFERRED_RENDER --python bench/transparency/bench_transparency.py
@@ -77,6 +82,68 @@ def quad_material(kind):
     return mat
 
 
+def covered_pixels(scene, mesh):
+    """Pixels whose first hit is a quad (Object Index of an opaque render)."""
+    sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "tests", "blender"))
+    import blender_test_utils as U
+    mesh.materials.clear()
+    mesh.materials.append(quad_material("opaque"))
+    layer = scene.view_layers[0]
+    layer.use_pass_object_index = True
+    for ob in scene.objects:
+        ob.pass_index = 7 if ob.data is mesh or getattr(ob.data, "name", "").startswith("quad") else 0
+    channels = U.read_exr(U.render_exr(os.path.join(tempfile.gettempdir(), "bench_transparency_index"), scene))
+    layer.use_pass_object_index = False
+    return int((channels["ViewLayer.IndexOB.X"] == 7).sum())
+
+
+def separate_quads(scene, mesh):
+    """The quads as GRID x GRID objects of one quad each (the forward pass
+    sorts and draws per object)."""
+    objects = []
+    for k, poly in enumerate(mesh.polygons):
+        verts = [tuple(mesh.vertices[v].co) for v in poly.vertices]
+        one = bpy.data.meshes.new(f"quad{k}")
+        one.from_pydata(verts, [], [(0, 1, 2, 3)])
+        one.uv_layers.new(name="UVMap")
+        ob = bpy.data.objects.new(f"quad{k}", one)
+        scene.collection.objects.link(ob)
+        objects.append(ob)
+    return objects
+
+
+def blend_table(scene, mesh):
+    """Blend mode (the forward pass): its cost per sample, per transparent
+    object and per covered pixel, against the stochastic constant alpha."""
+    covered = covered_pixels(scene, mesh)
+    rows = []
+    stochastic = quad_material("constant alpha")
+    blend = quad_material("constant alpha")
+    blend.blend_method = 'BLEND'
+    quads = bpy.data.objects["quads"]
+    for layout in ("one object", "separate objects"):
+        if layout == "separate objects":
+            quads.hide_render = True
+            parts = separate_quads(scene, mesh)
+        for name, mat in (("stochastic alpha 0.5", stochastic), ("Blend mode alpha 0.5", blend)):
+            targets = [mesh] if layout == "one object" else [ob.data for ob in parts]
+            for m in targets:
+                m.materials.clear()
+                m.materials.append(mat)
+            render_timings()
+            t = render_timings()
+            rows.append((layout, name, t.get("forward_ms", 0.0) / SAMPLES, t["total_ms"] / SAMPLES))
+    objects = {"one object": 1, "separate objects": GRID * GRID}
+    print(f"| quads ({covered} covered pixels) | material | forward pass ms / sample | per object us | "
+          "per covered pixel ns | frame ms / sample | frame vs stochastic |")
+    print("| --- | --- | --- | --- | --- | --- | --- |")
+    for i, (layout, name, forward, total) in enumerate(rows):
+        base = rows[i - 1][3] if i % 2 else total
+        per_object = f"{1000 * forward / objects[layout]:.1f}" if forward else "-"
+        per_pixel = f"{1e6 * forward / max(covered, 1):.1f}" if forward else "-"
+        print(f"| {layout} | {name} | {forward:.1f} | {per_object} | {per_pixel} | {total:.1f} | {total / base:.2f}x |")
+
+
 def render_timings():
     from deferred_render.engine import final
     bpy.ops.render.render(write_still=False)
@@ -100,6 +167,8 @@ def main():
         print("| --- | --- | --- | --- | --- |")
         for kind, geometry, shadow, total in rows:
             print(f"| {kind} | {geometry:.1f} | {shadow:.1f} | {total:.1f} | {total / rows[0][3]:.2f}x |")
+    scene.view_layers[0].use_pass_z = False
+    blend_table(scene, mesh)
     sys.stdout.flush()
 
 

@@ -25,6 +25,9 @@
 #define SSBO_ATTRIBUTES 15     /* node materials: the mesh's named per-corner attributes */
 #define SSBO_WORLD_CDF 16      /* the world map's sampling CDFs (world_lib.glsl) */
 #define SSBO_EMITTERS 17       /* emissive meshes' triangles (GpuEmitterTriangle, emitter_module.h) */
+#define SSBO_CRYPTO_INSTANCES 18 /* Cryptomatte: object and asset hash per instance (cryptomatte_module.h) */
+#define SSBO_CRYPTO_MATERIALS 19 /* ... the material's name hash per material id */
+#define SSBO_CRYPTO_SLOTS 20     /* ... per pixel and layer, Levels (hash, coverage bits) slots */
 
 /* Textures sampled by compute passes (G-buffer inputs) */
 #define TEX_DEPTH 0

@@ -334,9 +334,10 @@ void declare_renderer(py::module_& m) {
              "the current scene then counts as using it.")
         .def("add_graph_material",
              [](PyRenderer& self, const py::dict& graph, const py::object& pass_index, const py::object& light_emission,
-               bool blend) {
+               bool blend, std::uint32_t crypto) {
                  Material base;
                  base.blend = blend;
+                 base.crypto = crypto;
                  base.pass_index = index_from(pass_index, "add_graph_material: pass_index");
                  if (!light_emission.is_none()) base.emission = vec3_from(light_emission, "add_graph_material: light_emission");
                  MaterialGraph g = graph_from_python(graph);
@@ -344,7 +345,7 @@ void declare_renderer(py::module_& m) {
                  return self.get().add_graph_material(base, g);
              },
              py::arg("graph"), py::kw_only(), py::arg("pass_index") = 0, py::arg("light_emission") = py::none(),
-             py::arg("blend") = false,
+             py::arg("blend") = false, py::arg("crypto") = 0u,
              "A node material from the add-on's graph dict (materials/builder.py); returns the material id. "
              "light_emission: the radiance its surface emits when the graph makes it a constant (the mesh "
              "then lights other surfaces); the graph alone decides what its pixels show. blend: Blend mode, "
@@ -353,9 +354,11 @@ void declare_renderer(py::module_& m) {
              [](PyRenderer& self, const py::object& base_color, float metallic, float roughness, float specular,
                 float specular_tint, float sheen, float sheen_tint, float clearcoat, float clearcoat_roughness,
                 const py::object& emission, float emission_strength, float alpha, float diffuse_roughness,
-                int glossy_model, const py::object& pass_index, int mix_with, float mix_probability, bool blend) {
+                int glossy_model, const py::object& pass_index, int mix_with, float mix_probability, bool blend,
+                std::uint32_t crypto) {
                  Material mat;
                  mat.blend = blend;
+                 mat.crypto = crypto;
                  mat.base_color = vec3_from(base_color, "base_color");
                  mat.metallic = metallic;
                  mat.roughness = roughness;
@@ -381,11 +384,11 @@ void declare_renderer(py::module_& m) {
              py::arg("clearcoat_roughness") = 0.03f, py::arg("emission") = py::make_tuple(0.0, 0.0, 0.0),
              py::arg("emission_strength") = 1.0f, py::arg("alpha") = 1.0f, py::arg("diffuse_roughness") = -1.0f, py::arg("glossy_model") = 0,
              py::arg("pass_index") = 0, py::arg("mix_with") = -1, py::arg("mix_probability") = 0.0f,
-             py::arg("blend") = false)
+             py::arg("blend") = false, py::arg("crypto") = 0u)
         .def("add_instances",
              [](PyRenderer& self, const py::object& mesh_id_obj, const py::object& matrices,
                 const py::object& object_indices, const py::object& material_slots, bool cast_shadow,
-                const py::object& colors_obj, const py::object& randoms_obj) {
+                const py::object& colors_obj, const py::object& randoms_obj, const py::object& crypto_obj) {
                  const std::uint32_t mesh_id = index_from(mesh_id_obj, "add_instances: mesh_id");
                  py::ssize_t n = 0, k = 0;
                  const double* rows = borrow<double>(matrices, "matrices", {-1, 4, 4}, &n);
@@ -412,12 +415,17 @@ void declare_renderer(py::module_& m) {
                  const float* randoms = nullptr;
                  if (!colors_obj.is_none()) colors = borrow<float>(colors_obj, "colors", {n, 4});
                  if (!randoms_obj.is_none()) randoms = borrow<float>(randoms_obj, "randoms", {n});
+                 const std::uint32_t* crypto = nullptr;
+                 if (!crypto_obj.is_none()) crypto = borrow<std::uint32_t>(crypto_obj, "crypto", {n, 2});
                  py::gil_scoped_release release;
-                 self.get().add_instances(mesh_id, cols.data(), std::size_t(n), ids, slots, cast_shadow, colors, randoms);
+                 self.get().add_instances(mesh_id, cols.data(), std::size_t(n), ids, slots, cast_shadow, colors, randoms,
+                                          crypto);
              },
              py::arg("mesh_id"), py::arg("matrices"), py::kw_only(), py::arg("object_indices") = py::none(),
              py::arg("material_slots") = py::none(), py::arg("cast_shadow") = true, py::arg("colors") = py::none(),
-             py::arg("randoms") = py::none())
+             py::arg("randoms") = py::none(), py::arg("crypto") = py::none(),
+             "crypto: uint32 (n, 2), each instance's Cryptomatte object and asset hashes (MurmurHash3_32 of "
+             "the names).")
         .def("add_light",
              [](PyRenderer& self, const std::string& type, const py::object& matrix, const py::object& color,
                 float energy, float radius, float spot_size, float spot_blend, float angle, const std::string& shape,
@@ -468,7 +476,8 @@ void declare_renderer(py::module_& m) {
              [](PyRenderer& self, const Camera& camera, int width, int height, const std::vector<std::string>& passes,
                 bool film_transparent, float mist_start, float mist_depth, const std::string& mist_falloff,
                 int samples, float filter_width, bool light_culling, float light_threshold, bool shadows,
-                int shadow_resolution, float shadow_quality, float alpha_threshold) {
+                int shadow_resolution, float shadow_quality, float alpha_threshold,
+                const std::vector<std::string>& cryptomatte, int cryptomatte_levels) {
                  RenderSettings s;
                  s.width = width;
                  s.height = height;
@@ -492,6 +501,18 @@ void declare_renderer(py::module_& m) {
                  s.shadow_resolution = shadow_resolution;
                  s.shadow_quality = shadow_quality;
                  s.alpha_threshold = alpha_threshold;
+                 for (const std::string& name : cryptomatte) {
+                     bool known = false;
+                     for (CryptomatteKind k : {CryptomatteKind::Object, CryptomatteKind::Material, CryptomatteKind::Asset})
+                         if (name == cryptomatte_name(k)) {
+                             s.cryptomatte.push_back(k);
+                             known = true;
+                         }
+                     if (!known)
+                         throw py::value_error("render: unknown cryptomatte layer '" + name +
+                                               "' (CryptoObject, CryptoMaterial, CryptoAsset)");
+                 }
+                 s.cryptomatte_levels = cryptomatte_levels;
                  FrameResult frame;
                  {
                      py::gil_scoped_release release;
@@ -504,6 +525,23 @@ void declare_renderer(py::module_& m) {
                      const char* name = pass_info(img.pass).name;
                      out[name] = to_numpy(std::move(img));
                  }
+                 // Cryptomatte: Blender's passes <Layer>00, 01, ... of two ranks (id, coverage) each.
+                 for (const CryptomatteImage& c : frame.cryptomatte) {
+                     const int passes = (c.levels + 1) / 2;
+                     for (int p = 0; p < passes; ++p) {
+                         py::array_t<float> a({py::ssize_t(c.height), py::ssize_t(c.width), py::ssize_t(4)});
+                         float* dst = a.mutable_data();
+                         const std::size_t pixels = std::size_t(c.width) * std::size_t(c.height);
+                         for (std::size_t i = 0; i < pixels; ++i)
+                             for (int ch = 0; ch < 4; ++ch) {
+                                 const int value = 4 * p + ch;  // (id, coverage) pairs, rank by rank
+                                 dst[i * 4 + ch] = value < 2 * c.levels ? c.pixels[i * 2 * c.levels + value] : 0.0f;
+                             }
+                         char suffix[16];
+                         std::snprintf(suffix, sizeof suffix, "%02d", p);
+                         out[py::str(std::string(cryptomatte_name(c.kind)) + suffix)] = a;
+                     }
+                 }
                  return out;
              },
              py::arg("camera"), py::arg("width"), py::arg("height"), py::kw_only(),
@@ -511,7 +549,8 @@ void declare_renderer(py::module_& m) {
              py::arg("mist_start") = 5.0f, py::arg("mist_depth") = 25.0f, py::arg("mist_falloff") = "QUADRATIC",
              py::arg("samples") = 1, py::arg("filter_width") = 1.5f, py::arg("light_culling") = true,
              py::arg("light_threshold") = 1e-3f, py::arg("shadows") = true, py::arg("shadow_resolution") = 1024,
-             py::arg("shadow_quality") = 1.0f, py::arg("alpha_threshold") = 0.5f);
+             py::arg("shadow_quality") = 1.0f, py::arg("alpha_threshold") = 0.5f,
+             py::arg("cryptomatte") = std::vector<std::string>{}, py::arg("cryptomatte_levels") = 6);
 }
 
 }  // namespace deferred::python

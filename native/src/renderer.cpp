@@ -4,6 +4,7 @@
 #include <deferred/renderer.h>
 
 #include "camera.h"
+#include "cryptomatte_module.h"
 #include "egl_context.h"
 #include "emitter_module.h"
 #include "film.h"
@@ -97,6 +98,7 @@ struct Renderer::Impl {
     WorldModule world_module;
     EmitterModule emitters;
     ForwardModule forward;
+    CryptomatteModule cryptomatte;
     std::int32_t world_graph = -1;  // the world's node graph in `materials`, -1: a constant colour
     VertexArray empty_vao;
     Buffer dummy_ssbo;
@@ -120,6 +122,7 @@ struct Renderer::Impl {
             world_module.release();
             emitters.release();
             forward.release();
+            cryptomatte.release();
             scene.clear();
             materials.release_all();
             shaders.reset();
@@ -215,6 +218,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     features.smooth_normal = materials.uses_smooth_normal();
     features.ids = wanted.contains(Pass::IndexOB) || wanted.contains(Pass::IndexMA);
     features.uv = wanted.contains(Pass::UV);
+    features.crypto = !settings.cryptomatte.empty();
     const bool light_split = wanted.contains(Pass::DiffDir) || wanted.contains(Pass::GlossDir);
     const bool shadow_pass = wanted.contains(Pass::Shadow);
     if (settings.samples < 1 || settings.samples > 65536)
@@ -239,7 +243,8 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     std::size_t per_pixel = 4 + 16 + 8 + 8 + 4 + (features.params1 ? 8 : 0) + (features.ids ? 8 : 0) +
                             (features.uv ? 8 : 0) + (features.smooth_normal ? 4 : 0) + 16 + (light_split ? 32 : 0) + (shadow_pass ? 16 : 0);
     for (Pass p : wanted.list()) per_pixel += (p == Pass::Combined ? 0 : 16) + 4 * std::size_t(pass_info(p).channels);
-    check_settings(settings, pixels * per_pixel);
+    if (features.crypto) per_pixel += 16;  // the ids target grows to RGBA32UI
+    check_settings(settings, pixels * per_pixel + 2 * CryptomatteModule::bytes(settings));
 
     FrameResult result;
     StageTimer timer;
@@ -257,6 +262,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     std::vector<Bound> bounds;
     bounds.reserve(scene.instance_count());
     std::vector<std::uint32_t> slots;
+    std::vector<std::uint32_t> crypto_instances;  // object and asset hash per instance (Cryptomatte)
     // One per batch: its instances [first, first + count) and its slot map.
     struct Draw { std::uint32_t mesh, first, count; bool cast_shadow; std::uint32_t slot_offset, slot_count; };
     std::vector<Draw> draws;
@@ -287,6 +293,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
             g.color = {b.colors[i * 4], b.colors[i * 4 + 1], b.colors[i * 4 + 2], b.colors[i * 4 + 3]};
             g.info = {b.randoms[i], 0.0f, 0.0f, 0.0f};
             instances.push_back(g);
+            if (features.crypto) crypto_instances.insert(crypto_instances.end(), {b.crypto[2 * i], b.crypto[2 * i + 1]});
         }
     }
     std::vector<gpu::GpuMaterial> gpu_materials;
@@ -309,6 +316,12 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     Buffer slot_buffer = make_storage_buffer(slots.data(), slots.size() * sizeof(std::uint32_t), "material slots");
     Buffer material_buffer = make_storage_buffer(gpu_materials.data(), gpu_materials.size() * sizeof(gpu::GpuMaterial), "materials");
     this->materials.upload_constants();
+    {
+        std::vector<std::uint32_t> crypto_materials;
+        if (features.crypto)
+            for (const Material& m : scene.materials()) crypto_materials.push_back(m.crypto);
+        cryptomatte.begin(settings, crypto_instances, crypto_materials);
+    }
     shadows.begin_frame(cam, settings.shadow_resolution, settings.shadow_quality, memory_budget_bytes() / 4);
     // A world node tree: baked into its environment map (with the sampling
     // distribution) before anything asks whether the world lights the scene.
@@ -393,6 +406,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     ShaderVariant base_variant;
     if (features.params1) base_variant.defines.push_back("GBUF_PARAMS1");
     if (features.ids) base_variant.defines.push_back("GBUF_IDS");
+    if (features.crypto) base_variant.defines.push_back("GBUF_CRYPTO");
     if (features.uv) base_variant.defines.push_back("GBUF_UV");
     if (features.smooth_normal) base_variant.defines.push_back("GBUF_SMOOTH_NORMAL");
     // Stochastic transparency, only when some constant material is partly
@@ -913,6 +927,10 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
 
         // Other passes (the data passes came from their own G-buffer above).
         run_passes(sample, false);
+        if (cryptomatte.active()) {
+            gbuffer.bind_textures();
+            cryptomatte.accumulate(*shaders, settings.samples, groups_x, groups_y);
+        }
         check_gl("passes");
         passes_ms += timer.lap_ms();
     }
@@ -948,6 +966,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     };
     read(film.get(), Pass::Combined);
     for (auto& [p, image] : pass_images) read(image.get(), p);
+    result.cryptomatte = cryptomatte.finish();
     check_gl("readback");
     result.timings.readback_ms = timer.lap_ms();
     result.timings.geometry_ms = geometry_ms;
@@ -1040,10 +1059,11 @@ std::uint32_t Renderer::add_graph_material(const Material& base, const MaterialG
 
 void Renderer::add_instances(std::uint32_t mesh_id, const double* matrices, std::size_t count,
                              const std::uint32_t* object_indices, const std::vector<std::uint32_t>& material_slots,
-                             bool cast_shadow, const float* colors, const float* randoms) {
+                             bool cast_shadow, const float* colors, const float* randoms,
+                             const std::uint32_t* crypto) {
     impl_->thread.run([&] {
         impl_->scene.add_instances(mesh_id, matrices, count, object_indices, material_slots, cast_shadow, colors,
-                                   randoms);
+                                   randoms, crypto);
     });
 }
 

@@ -317,7 +317,8 @@ std::uint32_t SceneStore::add_material(const Material& m) {
 
 void SceneStore::add_instances(std::uint32_t mesh_id, const double* matrices, std::size_t count,
                                const std::uint32_t* object_indices, const std::vector<std::uint32_t>& slots,
-                               bool cast_shadow, const float* colors, const float* randoms) {
+                               bool cast_shadow, const float* colors, const float* randoms,
+                               const std::uint32_t* crypto) {
     if (mesh_id >= meshes_.size())
         invalid("add_instances: mesh id " + std::to_string(mesh_id) + " does not exist (" +
                 std::to_string(meshes_.size()) + " meshes)");
@@ -343,6 +344,7 @@ void SceneStore::add_instances(std::uint32_t mesh_id, const double* matrices, st
                                       : std::vector<std::uint32_t>(count, 0u);
     b.colors = colors ? std::vector<float>(colors, colors + count * 4) : std::vector<float>(count * 4, 1.0f);
     b.randoms = randoms ? std::vector<float>(randoms, randoms + count) : std::vector<float>(count, 0.0f);
+    b.crypto = crypto ? std::vector<std::uint32_t>(crypto, crypto + count * 2) : std::vector<std::uint32_t>(count * 2, 0u);
     if (slots.empty()) {
         if (materials_.empty()) invalid("add_instances: no materials exist; add one first");
         for (std::uint32_t i = 0; i < materials_.size(); ++i) b.material_slots.push_back(i);

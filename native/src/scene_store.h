@@ -80,6 +80,7 @@ struct InstanceBatch {
     bool cast_shadow = true;                   // drawn into shadow and world occlusion maps
     std::vector<float> colors;                 // RGBA per instance (Object Info)
     std::vector<float> randoms;                // one per instance (Object Info Random)
+    std::vector<std::uint32_t> crypto;         // two per instance: Cryptomatte object and asset hashes
 };
 
 class SceneStore {
@@ -89,7 +90,8 @@ public:
     std::uint32_t add_material(const Material& m);
     void add_instances(std::uint32_t mesh_id, const double* matrices, std::size_t count,
                        const std::uint32_t* object_indices, const std::vector<std::uint32_t>& slots,
-                       bool cast_shadow = true, const float* colors = nullptr, const float* randoms = nullptr);
+                       bool cast_shadow = true, const float* colors = nullptr, const float* randoms = nullptr,
+                       const std::uint32_t* crypto = nullptr);
     void add_light(const Light& light);
     void set_world(const World& world);
 

@@ -25,6 +25,7 @@ import traceback
 from .. import native
 from . import session
 from ..export import camera as camera_export
+from ..export import cryptomatte as crypto_export
 from ..export import world as world_export
 from ..export import export_scene
 from .frame import FrameRect, flatten_passes
@@ -286,7 +287,9 @@ class FinalRender:
         self.status(f"rendering {frame.full_width}x{frame.full_height}, {samples} samples, "
                     f"{len(requested)} passes", 0.35)
         t_render = time.perf_counter()
+        crypto_layers, crypto_levels = crypto_export.enabled_layers(self.view_layer)
         kwargs = dict(passes=requested, film_transparent=bool(scene.render.film_transparent),
+                      cryptomatte=crypto_layers, cryptomatte_levels=crypto_levels or 6,
                       samples=samples, filter_width=_filter_width(scene),
                       alpha_threshold=_alpha_threshold(self.view_layer),
                       **_light_settings(scene), **mist)
@@ -304,6 +307,13 @@ class FinalRender:
         if missing:
             self.warn("passes not produced by the renderer (left at zero): " + ", ".join(missing))
         layer.passes.foreach_set("rect", flat)
+        if crypto_layers and stats.cryptomatte is not None:
+            # The manifests, where the compositor's Cryptomatte node and EXR
+            # readers find them: on the render's own result (get_result, as
+            # Cycles' stamp_view_layer_metadata), not this tile's.
+            final_result = engine.get_result()
+            for key, value in stats.cryptomatte.metadata(self.view_layer.name):
+                final_result.stamp_data_add_field(key, value)
         engine.update_result(result)
 
         try:

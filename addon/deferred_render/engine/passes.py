@@ -8,6 +8,8 @@ the renderer produces it *and* its checkbox is on, so the compositor's
 Render Layers node shows exactly the passes that will hold pixels.
 """
 
+from ..export import cryptomatte as crypto_export
+
 # name -> (type for register_pass, ViewLayer flag; None = always registered)
 PASS_TABLE = {
     "Combined": ("COLOR", None),
@@ -62,12 +64,25 @@ def supported_passes(native_passes):
     return specs
 
 
+def cryptomatte_passes(view_layer):
+    """PassSpecs of the Cryptomatte layers the view layer asks for:
+    CryptoObject00, 01, ... (two ranks each, Levels of them), with Cycles'
+    lowercase channel ids (cycles/engine.py), which the EXR keeps as the
+    Cryptomatte convention wants."""
+    layers, levels = crypto_export.enabled_layers(view_layer)
+    flags = dict(crypto_export.KINDS)
+    return [PassSpec(name, "rgba", 4, "COLOR", flags[layer])
+            for layer in layers for name in crypto_export.pass_names(layer, levels)]
+
+
 def enabled_passes(view_layer, native_passes):
     """PassSpecs to register for ``view_layer`` (Combined always first)."""
     specs = []
     for spec in supported_passes(native_passes):
         if spec.flag is None or (view_layer is not None and getattr(view_layer, spec.flag, False)):
             specs.append(spec)
+    if native_passes is not COMBINED_ONLY:
+        specs += cryptomatte_passes(view_layer)
     if not specs or specs[0].name != "Combined":
         combined = [s for s in specs if s.name == "Combined"]
         others = [s for s in specs if s.name != "Combined"]

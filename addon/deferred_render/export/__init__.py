@@ -7,6 +7,7 @@ point the engine uses. The exporter talks to any object with the native
 """
 
 from . import camera, light, material, mesh, world  # noqa: F401
+from . import cryptomatte as crypto_export
 from .instances import ExportStats, SceneExporter  # noqa: F401
 
 
@@ -17,8 +18,11 @@ def export_scene(depsgraph, renderer, warn=None, test_break=None):
     once; ``test_break()`` is polled during the walk.
     """
     renderer.clear_scene()
-    exporter = SceneExporter(renderer, warn=warn, test_break=test_break)
+    layers, _ = crypto_export.enabled_layers(getattr(depsgraph, "view_layer", None))
+    exporter = SceneExporter(renderer, warn=warn, test_break=test_break,
+                             cryptomatte=crypto_export.Manifests(layers))
     completed = exporter.sync(depsgraph)
     if completed:
         world.export_world(depsgraph.scene.world, renderer, exporter.image_registry, warn)
+    exporter.stats.cryptomatte = exporter.cryptomatte
     return exporter.stats, not completed

@@ -31,6 +31,7 @@ import time
 
 import numpy as np
 
+from . import cryptomatte as crypto_export
 from . import light as light_export
 from . import material as material_export
 from . import mesh as mesh_export
@@ -54,6 +55,7 @@ class ExportStats:
         self.skipped_objects = 0
         self.mesh_bytes = 0
         self.seconds = 0.0
+        self.cryptomatte = None     # cryptomatte.Manifests of the export (export_scene sets it)
 
     def summary(self):
         return (f"{self.instances} instances of {self.meshes} meshes "
@@ -104,7 +106,7 @@ def object_random(inst, ob):
 
 class _Group:
     __slots__ = ("mesh_id", "material_ids", "cast_shadow", "matrices", "object_indices", "names", "colors",
-                 "randoms")
+                 "randoms", "crypto")
 
     def __init__(self, mesh_id, material_ids, cast_shadow):
         self.mesh_id = mesh_id
@@ -115,6 +117,7 @@ class _Group:
         self.names = []
         self.colors = []
         self.randoms = []
+        self.crypto = []    # (object hash, asset hash) per instance, when Cryptomatte is asked for
 
 
 class SceneExporter:
@@ -122,8 +125,10 @@ class SceneExporter:
     (add_mesh, add_material, add_instances, add_light): the native renderer,
     or a recorder in the tests."""
 
-    def __init__(self, renderer, warn=None, test_break=None):
+    def __init__(self, renderer, warn=None, test_break=None, cryptomatte=None):
         self.renderer = renderer
+        # Cryptomatte names and hashes (cryptomatte.Manifests); none asked: no hashing.
+        self.cryptomatte = cryptomatte if cryptomatte is not None else crypto_export.Manifests(())
         self.warn = warn or (lambda message: None)
         self.test_break = test_break or (lambda: False)
         self.stats = ExportStats()
@@ -150,8 +155,9 @@ class SceneExporter:
         else:
             key = None
         mat_id = self._material_ids.get(key)
+        crypto = self._material_crypto(material) if mat_id is None else 0
         if mat_id is None and material is not None:
-            mat_id = self._graph_material_id(material, key)
+            mat_id = self._graph_material_id(material, key, crypto)
             if mat_id is not None:
                 self._material_ids[key] = mat_id
                 self.stats.materials += 1
@@ -160,15 +166,25 @@ class SceneExporter:
             if notes:
                 self._warn_once(("material", key), material_export.warning_text(material, notes))
             params = material_export.apply_blend_mode(params, material)
+            if crypto:
+                params = material_export.with_param(params, "crypto", crypto)
             try:
                 mat_id = material_export.add_materials(self.renderer.add_material, params)
             except ValueError as ex:  # refused by the native validation: default surface
                 name = material.name if material is not None else "<default>"
                 self._warn_once(("material-refused", key), f"Material '{name}': {ex} (rendered with the default surface)")
-                mat_id = self.renderer.add_material(**material_export.DEFAULT_SURFACE)
+                mat_id = self.renderer.add_material(**material_export.DEFAULT_SURFACE,
+                                                    **({"crypto": crypto} if crypto else {}))
             self._material_ids[key] = mat_id
             self.stats.materials += 1
         return mat_id
+
+    def _material_crypto(self, material):
+        """The material's Cryptomatte hash (Cycles names a missing material
+        'default_surface'); 0 when no Cryptomatte is asked for."""
+        if not self.cryptomatte.wants("CryptoMaterial"):
+            return 0
+        return self.cryptomatte.hash("CryptoMaterial", material.name if material is not None else "default_surface")
 
     def image_registry(self):
         """The export's ImageRegistry (one upload per image for materials and world)."""
@@ -177,7 +193,7 @@ class SceneExporter:
                                                      getattr(self.renderer, "find_image", None))
         return self._images
 
-    def _graph_material_id(self, material, key):
+    def _graph_material_id(self, material, key, crypto=0):
         """A node material when the tree does not reduce to one constant
         parameter set (material.py); None to take the constant path."""
         if not material.use_nodes or material.node_tree is None:
@@ -200,6 +216,8 @@ class SceneExporter:
             graph_builder.apply_alpha_clip(graph, threshold)
         try:
             kwargs = {"pass_index": int(material.pass_index), "blend": mode == "blend"}
+            if crypto:
+                kwargs["crypto"] = crypto
             if getattr(graph, "light_emission", None) is not None:
                 kwargs["light_emission"] = graph.light_emission  # its meshes light other surfaces
             mat_id = self.renderer.add_graph_material(graph.ir, **kwargs)
@@ -322,6 +340,9 @@ class SceneExporter:
         group.names.append(ob.name)
         group.colors.append(tuple(ob.color))
         group.randoms.append(object_random(inst, ob))
+        if self.cryptomatte.layers:
+            group.crypto.append((self.cryptomatte.hash("CryptoObject", ob.name),
+                                 self.cryptomatte.hash("CryptoAsset", crypto_export.asset_object(inst, ob).name)))
         self.stats.instances += 1
         self.stats.instanced_triangles += triangles
 
@@ -348,6 +369,8 @@ class SceneExporter:
             if self._material_attributes:  # Object Info for node materials
                 extras = {"colors": np.ascontiguousarray(group.colors, dtype=np.float32).reshape(-1, 4),
                           "randoms": np.ascontiguousarray(group.randoms, dtype=np.float32)}
+            if group.crypto:
+                extras["crypto"] = np.ascontiguousarray(group.crypto, dtype=np.uint32).reshape(-1, 2)
             try:
                 self.renderer.add_instances(group.mesh_id, matrices,
                                             object_indices=object_indices,

@@ -495,6 +495,14 @@ def blend_mode(material):
     return "stochastic", 0.0
 
 
+def with_param(params, key, value):
+    """add_material keyword arguments (and a chain's components) with key=value."""
+    out = dict(params, **{key: value})
+    if params.get("components"):
+        out["components"] = [(dict(p, **{key: value}), w) for p, w in params["components"]]
+    return out
+
+
 def apply_blend_mode(params, material):
     """add_material keyword arguments (and a chain's components) with the
     material's Blend Mode: Clip turns each constant alpha into 0 or 1, Blend

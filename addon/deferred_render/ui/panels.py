@@ -135,6 +135,11 @@ class DEFERRED_RENDER_PT_passes(_EnginePanel, bpy.types.Panel):
         # Combined is always produced (Blender's image output needs it).
         for flag in pass_table.supported_flags(mod.PASSES):
             col.prop(view_layer, flag, text=_PASS_LABELS.get(flag, flag))
+        col = layout.column(heading="Cryptomatte", align=True)
+        col.prop(view_layer, "use_pass_cryptomatte_object", text="Object")
+        col.prop(view_layer, "use_pass_cryptomatte_material", text="Material")
+        col.prop(view_layer, "use_pass_cryptomatte_asset", text="Asset")
+        layout.prop(view_layer, "pass_cryptomatte_depth", text="Levels")
 
 
 class DEFERRED_RENDER_PT_light(_EnginePanel, bpy.types.Panel):

@@ -49,6 +49,12 @@ struct GLInfo {
     std::string device_note;  // a fallback taken choosing the device (CUDA_VISIBLE_DEVICES), or ""
 };
 
+// What a Cryptomatte layer names: the object (its name), the material
+// (the slot's material name) or the asset (the top-most parent's name).
+// The hashes are the caller's (MurmurHash3_32 of the name, as Cycles).
+enum class CryptomatteKind : std::uint32_t { Object = 0, Material = 1, Asset = 2 };
+const char* cryptomatte_name(CryptomatteKind kind);  // "CryptoObject", ...
+
 struct RenderSettings {
     int width = 640;
     int height = 480;
@@ -85,6 +91,19 @@ struct RenderSettings {
     // indices come from the first surface whose alpha reaches it (Cycles'
     // film_write_data_passes; 0: the first surface whatever its alpha).
     float alpha_threshold = 0.5f;
+    // Cryptomatte (cryptomatte_module.h): the kinds asked for (none: no
+    // cryptomatte work at all) and the view layer's Levels, the ids kept
+    // per pixel (Cycles' pass_cryptomatte_depth, 1..16).
+    std::vector<CryptomatteKind> cryptomatte;
+    int cryptomatte_levels = 6;
+};
+
+// One Cryptomatte layer of a finished frame: per pixel `levels` pairs
+// (id as Cycles' float, coverage), most coverage first; rows bottom-up.
+struct CryptomatteImage {
+    CryptomatteKind kind;
+    int width = 0, height = 0, levels = 0;
+    std::vector<float> pixels;  // width * height * levels * 2
 };
 
 // One pass of a finished frame: rows bottom-up (row 0 is the bottom of the
@@ -125,6 +144,7 @@ struct FrameTimings {
 
 struct FrameResult {
     std::vector<PassImage> passes;
+    std::vector<CryptomatteImage> cryptomatte;
     FrameTimings timings;
     // What the frame could not render as asked, e.g. a node material whose
     // program failed to compile (drawn with the default surface instead).
@@ -158,7 +178,8 @@ public:
     void add_instances(std::uint32_t mesh_id, const double* matrices, std::size_t count,
                        const std::uint32_t* object_indices,
                        const std::vector<std::uint32_t>& material_slots, bool cast_shadow = true,
-                       const float* colors = nullptr, const float* randoms = nullptr);
+                       const float* colors = nullptr, const float* randoms = nullptr,
+                       const std::uint32_t* crypto = nullptr);
     // Node materials: an image texture nodes sample (returns its id), and a
     // material evaluated from a graph (material_graph.h). `base` gives what
     // the graph does not: the pass index. Returns the material id.

@@ -83,6 +83,8 @@ struct Material {
     // for one layer at any sample count. Off: alpha is stochastic coverage
     // (Cycles' behaviour, converging over samples).
     bool blend = false;
+    // Cryptomatte: MurmurHash3_32 of the material's name (the caller's).
+    std::uint32_t crypto = 0;
 };
 constexpr int kMaxMixChain = 16;
 

@@ -1,0 +1,130 @@
+#include "cryptomatte_module.h"
+
+#include "shader_library.h"
+
+#include "../../shaders/shader_defines.h"
+
+#include <algorithm>
+#include <cstring>
+#include <string>
+
+namespace deferred {
+
+const char* cryptomatte_name(CryptomatteKind kind) {
+    switch (kind) {
+        case CryptomatteKind::Object: return "CryptoObject";
+        case CryptomatteKind::Material: return "CryptoMaterial";
+        case CryptomatteKind::Asset: return "CryptoAsset";
+    }
+    return "Crypto";
+}
+
+float cryptomatte_hash_to_float(std::uint32_t hash) {
+    // intern/cycles/util/hash.h, util_hash_to_float.
+    const std::uint32_t mantissa = hash & ((1u << 23) - 1u);
+    std::uint32_t exponent = (hash >> 23) & 0xFFu;
+    exponent = std::min(std::max(exponent, 1u), 254u) << 23;
+    const std::uint32_t sign = (hash >> 31) << 31;
+    const std::uint32_t bits = sign | exponent | mantissa;
+    float f;
+    std::memcpy(&f, &bits, sizeof f);
+    return f;
+}
+
+std::size_t CryptomatteModule::bytes(const RenderSettings& s) {
+    if (s.cryptomatte.empty()) return 0;
+    return std::size_t(s.width) * std::size_t(s.height) * s.cryptomatte.size() *
+           std::size_t(std::clamp(s.cryptomatte_levels, 1, kMaxLevels)) * 8;
+}
+
+void CryptomatteModule::begin(const RenderSettings& s, const std::vector<std::uint32_t>& instance_hashes,
+                              const std::vector<std::uint32_t>& material_hashes) {
+    release();
+    if (s.cryptomatte.empty()) return;
+    if (s.cryptomatte.size() > 3) throw InvalidInput("cryptomatte: at most the three kinds (object, material, asset)");
+    if (s.cryptomatte_levels < 1 || s.cryptomatte_levels > kMaxLevels)
+        throw InvalidInput("cryptomatte_levels must be in 1.." + std::to_string(kMaxLevels) + ", got " +
+                           std::to_string(s.cryptomatte_levels));
+    kinds_ = s.cryptomatte;
+    levels_ = s.cryptomatte_levels;
+    width_ = s.width;
+    height_ = s.height;
+    slots_ = make_storage_buffer(nullptr, bytes(s), "cryptomatte slots");
+    const std::uint32_t zero = 0;
+    glClearNamedBufferData(slots_.get(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+    const std::uint32_t none[2] = {0, 0};  // a buffer is never empty
+    instances_ = instance_hashes.empty()
+        ? make_storage_buffer(none, sizeof none, "cryptomatte instance hashes")
+        : make_storage_buffer(instance_hashes.data(), instance_hashes.size() * 4, "cryptomatte instance hashes");
+    materials_ = material_hashes.empty()
+        ? make_storage_buffer(none, sizeof none, "cryptomatte material hashes")
+        : make_storage_buffer(material_hashes.data(), material_hashes.size() * 4, "cryptomatte material hashes");
+    check_gl("cryptomatte buffers");
+}
+
+void CryptomatteModule::accumulate(ShaderLibrary& shaders, int samples, unsigned groups_x, unsigned groups_y) {
+    if (!active()) return;
+    ShaderVariant v;
+    v.defines.push_back("CRYPTO_LEVELS " + std::to_string(levels_));
+    v.defines.push_back("CRYPTO_LAYERS " + std::to_string(kinds_.size()));
+    for (std::size_t i = 0; i < 3; ++i)
+        v.defines.push_back("CRYPTO_KIND_" + std::to_string(i) + " " +
+                            std::to_string(i < kinds_.size() ? int(kinds_[i]) : 0));
+    glUseProgram(shaders.compute_program("cryptomatte_comp.glsl", v));
+    glUniform1f(0, 1.0f / float(samples));
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_CRYPTO_INSTANCES, instances_.get());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_CRYPTO_MATERIALS, materials_.get());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_CRYPTO_SLOTS, slots_.get());
+    glDispatchCompute(groups_x, groups_y, 1);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+    check_gl("cryptomatte accumulation");
+}
+
+std::vector<CryptomatteImage> CryptomatteModule::finish() {
+    std::vector<CryptomatteImage> out;
+    if (!active()) return out;
+    const std::size_t pixels = std::size_t(width_) * std::size_t(height_);
+    const std::size_t layers = kinds_.size(), levels = std::size_t(levels_);
+    std::vector<std::uint32_t> slots(pixels * layers * levels * 2);
+    glGetNamedBufferSubData(slots_.get(), 0, GLsizeiptr(slots.size() * 4), slots.data());
+    check_gl("reading the cryptomatte slots");
+    struct Entry { std::uint32_t id; float coverage; };
+    std::vector<Entry> entries(levels);
+    for (std::size_t layer = 0; layer < layers; ++layer) {
+        CryptomatteImage img;
+        img.kind = kinds_[layer];
+        img.width = width_;
+        img.height = height_;
+        img.levels = levels_;
+        img.pixels.assign(pixels * levels * 2, 0.0f);
+        for (std::size_t p = 0; p < pixels; ++p) {
+            const std::uint32_t* s = &slots[((p * layers) + layer) * levels * 2];
+            for (std::size_t k = 0; k < levels; ++k) {
+                float coverage;
+                std::memcpy(&coverage, &s[2 * k + 1], sizeof coverage);
+                entries[k] = {s[2 * k], coverage};
+            }
+            // Most coverage first (Cycles' cryptomatte_post sorts the same way).
+            std::stable_sort(entries.begin(), entries.end(),
+                             [](const Entry& a, const Entry& b) { return a.coverage > b.coverage; });
+            float* o = &img.pixels[p * levels * 2];
+            for (std::size_t k = 0; k < levels; ++k) {
+                if (!(entries[k].coverage > 0.0f)) break;  // empty slots stay (0, 0)
+                o[2 * k] = cryptomatte_hash_to_float(entries[k].id);
+                o[2 * k + 1] = entries[k].coverage;
+            }
+        }
+        out.push_back(std::move(img));
+    }
+    release();
+    return out;
+}
+
+void CryptomatteModule::release() {
+    slots_.reset();
+    instances_.reset();
+    materials_.reset();
+    kinds_.clear();
+}
+
+}  // namespace deferred

@@ -134,7 +134,11 @@ def apply_cycles(scene, settings):
     cy.use_animated_seed = False
     cy.max_bounces = 0
     cy.diffuse_bounces = cy.glossy_bounces = cy.transmission_bounces = 0
-    cy.volume_bounces = cy.transparent_max_bounces = 0
+    cy.volume_bounces = 0
+    # Transparent surfaces do not count against max_bounces (REFERENCE.md);
+    # they have their own limit, which at 0 makes them black. Blender's
+    # default, as the engine does not limit layers.
+    cy.transparent_max_bounces = 8
     cy.caustics_reflective = cy.caustics_refractive = False
     cy.use_light_tree = False if hasattr(cy, "use_light_tree") else None
     for key, value in (settings or {}).items():

@@ -50,6 +50,7 @@ TESTS = {
     "transparency": (ANALYTIC, True),
     "bump_lighting": (ANALYTIC, True),
     "world_map": (ANALYTIC, True),
+    "cryptomatte": (ANALYTIC, True),
     "emissive": (ANALYTIC, True),
 }
 BENCHMARKS = {"bench_export": (None, True)}

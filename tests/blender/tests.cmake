@@ -37,6 +37,7 @@ set(DEFERRED_BLENDER_TESTS
     transparency
     bump_lighting
     world_map
+    cryptomatte
 )
 
 foreach(_name IN LISTS DEFERRED_BLENDER_TESTS)

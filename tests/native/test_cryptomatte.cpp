@@ -1,0 +1,91 @@
+// Cryptomatte (cryptomatte_module.h): ids as Cycles' floats, coverage per
+// film sample, ranked per pixel.
+#include "cryptomatte_module.h"
+
+#include "test_helpers.h"
+
+#include <gtest/gtest.h>
+
+#include <cstring>
+
+using namespace deferred;
+using namespace deferred::testing;
+
+namespace {
+std::uint32_t bits(float f) {
+    std::uint32_t b;
+    std::memcpy(&b, &f, sizeof b);
+    return b;
+}
+}  // namespace
+
+TEST(Cryptomatte, HashToFloatIsCycles) {
+    // A normal float keeps its bits (SphereB's hash in Cycles' own EXR).
+    EXPECT_EQ(bits(cryptomatte_hash_to_float(0x89000f97u)), 0x89000f97u);
+    // Exponent 0 and 255 (denormal, inf/NaN) are clamped to 1 and 254.
+    EXPECT_EQ(bits(cryptomatte_hash_to_float(0x00000005u)), 0x00800005u);
+    EXPECT_EQ(bits(cryptomatte_hash_to_float(0xFF812345u)), 0xFF012345u);
+}
+
+TEST(Cryptomatte, CoverageSplitsAtEdgesAndIsRankedPerPixel) {
+    // Two planes meeting along x = 0 (object hashes 11 and 22, material
+    // hashes 33 and 44) over a black world, seen from above; pixel centres
+    // straddle the seam. Interior pixels: one id with coverage 1; seam
+    // pixels: two ids whose coverages add up to 1, the larger first;
+    // outside both planes nothing.
+    Renderer r;
+    set_world_color(r, 0, 0, 0);
+    tools::MeshArrays plane = tools::make_plane(1.0f, 1);
+    const std::uint32_t mesh = r.add_mesh(plane.view());
+    Material a, b;
+    a.crypto = 33;
+    b.crypto = 44;
+    const std::uint32_t ma = r.add_material(a), mb = r.add_material(b);
+    const Mat4d left = tools::translation(-1.0, 0, 0), right = tools::translation(1.0, 0, 0);
+    const std::uint32_t ids_a[2] = {11, 111}, ids_b[2] = {22, 222};
+    r.add_instances(mesh, left.data(), 1, nullptr, {ma}, true, nullptr, nullptr, ids_a);
+    r.add_instances(mesh, right.data(), 1, nullptr, {mb}, true, nullptr, nullptr, ids_b);
+    RenderSettings s;
+    s.width = 33;  // odd: the seam runs through the middle column
+    s.height = 8;
+    s.samples = 64;
+    s.cryptomatte = {CryptomatteKind::Object, CryptomatteKind::Material, CryptomatteKind::Asset};
+    s.cryptomatte_levels = 4;
+    FrameResult f = r.render(top_down_ortho(5.0, 4.4f), s);  // 4.4 m wide: 0.2 m beyond each plane's edge
+    ASSERT_EQ(f.cryptomatte.size(), 3u);
+    const CryptomatteImage& obj = f.cryptomatte[0];
+    ASSERT_EQ(obj.kind, CryptomatteKind::Object);
+    ASSERT_EQ(obj.levels, 4);
+    auto at = [&](const CryptomatteImage& img, int x, int y, int rank) {
+        const float* p = &img.pixels[(std::size_t(y) * img.width + x) * img.levels * 2 + rank * 2];
+        return std::pair<std::uint32_t, float>(bits(p[0]), p[1]);
+    };
+    const int y = 4;
+    EXPECT_EQ(at(obj, 8, y, 0).first, bits(cryptomatte_hash_to_float(11)));
+    EXPECT_NEAR(at(obj, 8, y, 0).second, 1.0f, 1e-5);
+    EXPECT_EQ(at(obj, 8, y, 1).second, 0.0f);
+    EXPECT_EQ(at(f.cryptomatte[1], 8, y, 0).first, bits(cryptomatte_hash_to_float(33)));
+    EXPECT_EQ(at(f.cryptomatte[2], 24, y, 0).first, bits(cryptomatte_hash_to_float(222)));
+    // The seam column: both ids, ranked, summing to 1.
+    const auto first = at(obj, 16, y, 0), second = at(obj, 16, y, 1);
+    EXPECT_GT(first.second, 0.2f);
+    EXPECT_GT(second.second, 0.2f);
+    EXPECT_GE(first.second, second.second);
+    EXPECT_NEAR(first.second + second.second, 1.0f, 1e-5);
+    EXPECT_NE(first.first, second.first);
+    // Beyond the planes (the outermost column sees background only).
+    EXPECT_EQ(at(obj, 0, y, 0).second, 0.0f);
+    EXPECT_EQ(at(obj, 0, y, 0).first, 0u);
+}
+
+TEST(Cryptomatte, NothingAskedNothingMade) {
+    Renderer r;
+    add_plane(r, Material{});
+    RenderSettings s;
+    s.width = s.height = 8;
+    FrameResult f = r.render(top_down_ortho(5.0, 4.0f), s);
+    EXPECT_TRUE(f.cryptomatte.empty());
+    s.cryptomatte = {CryptomatteKind::Object};
+    s.cryptomatte_levels = 17;
+    EXPECT_THROW(r.render(top_down_ortho(5.0, 4.0f), s), InvalidInput);
+}

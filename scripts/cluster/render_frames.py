@@ -85,22 +85,18 @@ def write_json_atomically(path, data):
     os.replace(tmp, path)
 
 
-def render_errors_since(start):
+def engine_module():
+    try:
+        from deferred_render.engine import final
+    except ImportError:
+        return None
+    return final
+
+
+def render_errors(final):
     """Errors the engine reported during the last render (it reports rather
     than raises, so that Blender never crashes)."""
-    try:
-        from deferred_render.engine import final
-    except ImportError:
-        return []
-    return [text for level, text in list(final.last_messages)[start:] if level == 'ERROR']
-
-
-def engine_state():
-    try:
-        from deferred_render.engine import final
-        return len(final.last_messages), dict(final.last_device)
-    except ImportError:
-        return 0, {}
+    return [text for level, text in final.last_messages if level == 'ERROR'] if final else []
 
 
 def main():
@@ -137,19 +133,25 @@ def main():
         if os.path.exists(written):
             os.remove(written)  # left by a killed attempt of this task
         print(f"render_frames: frame {frame} started", flush=True)
-        start_messages, _ = engine_state()
+        final = engine_module()
+        if final is not None:
+            final.last_messages.clear()  # a bounded deque: this frame's reports only
         t0 = time.time()
-        bpy.ops.render.render(animation=True)
+        try:
+            bpy.ops.render.render(animation=True)
+            errors = []
+        except RuntimeError as ex:  # Blender refused the render (no camera, ...)
+            errors = [str(ex)]
         seconds = time.time() - t0
         render.filepath = args.output
-        errors = render_errors_since(start_messages)
+        errors += render_errors(final)
         if errors or not os.path.isfile(written):
             reason = "; ".join(errors) if errors else f"Blender wrote no file at {written}"
             print(f"render_frames: frame {frame} FAILED: {reason}", file=sys.stderr, flush=True)
             raise SystemExit(1)
         # The record first, then the frame: a record whose file is missing is
         # an unfinished frame (farm_summary.py), never the other way round.
-        _, device = engine_state()
+        device = dict(final.last_device) if final is not None else {}
         write_json_atomically(os.path.join(records, f"{frame}.json"), {
             "frame": frame,
             "file": os.path.basename(final_path),

@@ -248,7 +248,7 @@ void main() {
     /* Geometric normal from the triangle's winding, in world space. Cycles
      * flips the normals of a surface hit from behind; a mirrored instance
      * (negative determinant) reverses the screen winding, hence the xor. */
-    const bool back = gl_FrontFacing == (v_mirrored != 0u);
+    const bool back = gl_FrontFacing == ((v_mirrored & 1u) != 0u);
     vec3 Ng = normalize(cross(dFdx(v_position), dFdy(v_position)));
 #ifdef MATERIAL_GRAPH
     /* Node materials read Ng (True Normal, flat Normal Map): exact from the
@@ -308,6 +308,20 @@ void main() {
     float surf_alpha = clamp(isnan(m.mix.w) ? 1.0 : m.mix.w, 0.0, 1.0);
 #endif
 #ifndef SHADOW_PASS
+#ifndef MATERIAL_GRAPH
+    const bool holdout_material = m.base_diffuse.a > 3.5; /* kClosureHoldout */
+#else
+    const bool holdout_material = false;
+#endif
+    if ((v_mirrored & 2u) != 0u || holdout_material) {
+        /* A holdout (Cycles' holdout closure or the object's Holdout flag): a
+         * hole, black with alpha 0; the lighting pass adds nothing where
+         * emission.a is 0, and the colour passes read zeros. */
+        surf_emission = vec4(0.0);
+        surf_base = vec4(0.0, 0.0, 0.0, -1.0);
+        surf_params0 = vec4(0.0);
+        surf_params1 = vec4(0.0);
+    }
 #ifdef FORWARD_PASS
     if (surf_alpha <= 0.0) discard;
     out_forward = vec4(forward_light(surf_emission, surf_base, surf_params0, surf_params1, shading_normal, N) *

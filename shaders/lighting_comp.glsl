@@ -89,6 +89,15 @@ void main() {
         return;
     }
 
+    /* A holdout (geometry_frag.glsl writes emission.a 0): a hole, black with
+     * alpha 0 behind whatever Blend-mode layers lie in front of it. */
+    vec4 emission = texelFetch(gbuf_emission, pixel, 0);
+    if (emission.a <= 0.0) {
+        if (first_batch)
+            imageStore(film, pixel, imageLoad(film, pixel) + behind_forward_layer(pixel, vec4(0.0), true) * share);
+        return;
+    }
+
     vec4 params1 = vec4(0.0);
 #ifdef GBUF_PARAMS1
     params1 = texelFetch(gbuf_params1, pixel, 0);
@@ -147,7 +156,7 @@ void main() {
 #endif
     }
 
-    vec4 emission = first_batch ? texelFetch(gbuf_emission, pixel, 0) : vec4(0.0);
+    if (!first_batch) emission = vec4(0.0);
     vec4 sample_value = vec4(emission.rgb + total.diffuse + total.glossy, emission.a);
     imageStore(film, pixel, imageLoad(film, pixel) + behind_forward_layer(pixel, sample_value, first_batch) * share);
 #ifdef OUT_SHADOW

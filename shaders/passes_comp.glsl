@@ -76,6 +76,11 @@ void main() {
 #else
     float depth = texelFetch(gbuf_depth, pixel, 0).r;
     bool background = depth <= 0.0;
+#if PASS_ID >= PASS_DEPTH && PASS_ID <= PASS_INDEX_MA
+    /* A holdout surface (emission.a 0, geometry_frag.glsl) writes no data
+     * pass, as in Cycles, where the holdout ends the path before them. */
+    if (!background && texelFetch(gbuf_emission, pixel, 0).a <= 0.0) background = true;
+#endif
     vec4 value = vec4(0.0);
     vec3 P = background ? vec3(0.0) : frame_position_from_depth(pixel, depth);
 

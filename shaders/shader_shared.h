@@ -97,7 +97,8 @@ SHARED_ASSERT_SIZE(GpuMaterial, 80);
  *   model         : object -> camera-relative world
  *   normal_matrix : inverse transpose of model's 3x3 (w column unused)
  *   ids           : x object pass index, y offset of its material slot map in
- *                   the slot buffer, z slot count, w 1 if mirrored (negative determinant)
+ *                   the slot buffer, z slot count, w flags: 1 mirrored (negative
+ *                   determinant), 2 holdout (Object > Visibility > Holdout)
  *   color         : Object > Viewport Display colour (Object Info Color, Alpha)
  *   info          : x Object Info Random (Cycles' per-object/per-instance value), yzw unused */
 SHARED_STRUCT(GpuInstance) {

@@ -355,10 +355,11 @@ void declare_renderer(py::module_& m) {
                 float specular_tint, float sheen, float sheen_tint, float clearcoat, float clearcoat_roughness,
                 const py::object& emission, float emission_strength, float alpha, float diffuse_roughness,
                 int glossy_model, const py::object& pass_index, int mix_with, float mix_probability, bool blend,
-                std::uint32_t crypto) {
+                std::uint32_t crypto, bool holdout) {
                  Material mat;
                  mat.blend = blend;
                  mat.crypto = crypto;
+                 mat.holdout = holdout;
                  mat.base_color = vec3_from(base_color, "base_color");
                  mat.metallic = metallic;
                  mat.roughness = roughness;
@@ -384,11 +385,12 @@ void declare_renderer(py::module_& m) {
              py::arg("clearcoat_roughness") = 0.03f, py::arg("emission") = py::make_tuple(0.0, 0.0, 0.0),
              py::arg("emission_strength") = 1.0f, py::arg("alpha") = 1.0f, py::arg("diffuse_roughness") = -1.0f, py::arg("glossy_model") = 0,
              py::arg("pass_index") = 0, py::arg("mix_with") = -1, py::arg("mix_probability") = 0.0f,
-             py::arg("blend") = false, py::arg("crypto") = 0u)
+             py::arg("blend") = false, py::arg("crypto") = 0u, py::arg("holdout") = false)
         .def("add_instances",
              [](PyRenderer& self, const py::object& mesh_id_obj, const py::object& matrices,
                 const py::object& object_indices, const py::object& material_slots, bool cast_shadow,
-                const py::object& colors_obj, const py::object& randoms_obj, const py::object& crypto_obj) {
+                const py::object& colors_obj, const py::object& randoms_obj, const py::object& crypto_obj,
+                bool holdout) {
                  const std::uint32_t mesh_id = index_from(mesh_id_obj, "add_instances: mesh_id");
                  py::ssize_t n = 0, k = 0;
                  const double* rows = borrow<double>(matrices, "matrices", {-1, 4, 4}, &n);
@@ -419,13 +421,13 @@ void declare_renderer(py::module_& m) {
                  if (!crypto_obj.is_none()) crypto = borrow<std::uint32_t>(crypto_obj, "crypto", {n, 2});
                  py::gil_scoped_release release;
                  self.get().add_instances(mesh_id, cols.data(), std::size_t(n), ids, slots, cast_shadow, colors, randoms,
-                                          crypto);
+                                          crypto, holdout);
              },
              py::arg("mesh_id"), py::arg("matrices"), py::kw_only(), py::arg("object_indices") = py::none(),
              py::arg("material_slots") = py::none(), py::arg("cast_shadow") = true, py::arg("colors") = py::none(),
-             py::arg("randoms") = py::none(), py::arg("crypto") = py::none(),
+             py::arg("randoms") = py::none(), py::arg("crypto") = py::none(), py::arg("holdout") = false,
              "crypto: uint32 (n, 2), each instance's Cryptomatte object and asset hashes (MurmurHash3_32 of "
-             "the names).")
+             "the names). holdout: the instances are holes in the image (Object > Visibility > Holdout).")
         .def("add_light",
              [](PyRenderer& self, const std::string& type, const py::object& matrix, const py::object& color,
                 float energy, float radius, float spot_size, float spot_blend, float angle, const std::string& shape,

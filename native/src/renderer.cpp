@@ -43,6 +43,9 @@ constexpr std::uint32_t kLightShapePoints = 16;
 // (quadrature + light points); llvmpipe ends all loops of an invocation after
 // 65535 iterations in total, so 512 lights per dispatch stay well inside.
 constexpr std::uint32_t kLightBatch = 512;
+// GpuMaterial.base_diffuse.w of a Holdout material (the closure model codes
+// of gbuffer_lib.glsl end at 3); geometry_frag.glsl turns it into a hole.
+constexpr float kClosureHoldout = 4.0f;
 // Below this many lights, building tile lists costs more than it saves
 // (deferred_bench_lights: 1 light 117 ms culled vs 38 ms brute force,
 // 16 lights 90 vs 225 ms, at 480x270 on llvmpipe).
@@ -289,7 +292,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
             g.model = to_gpu(model);
             g.normal_matrix = to_gpu(glm::dmat4(nm));
             g.ids = {b.object_indices[i], slot_offset, static_cast<std::uint32_t>(b.material_slots.size()),
-                     det < 0 ? 1u : 0u};
+                     (det < 0 ? 1u : 0u) | (b.holdout ? 2u : 0u)};
             g.color = {b.colors[i * 4], b.colors[i * 4 + 1], b.colors[i * 4 + 2], b.colors[i * 4 + 3]};
             g.info = {b.randoms[i], 0.0f, 0.0f, 0.0f};
             instances.push_back(g);
@@ -310,6 +313,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
                       m.emission[2] * m.emission_strength, float(m.pass_index)};
         const float constants = m.graph >= 0 ? float(materials.constants_offset(std::uint32_t(m.graph))) : 0.0f;
         g.mix = {float(m.mix_with), m.mix_probability, constants, m.alpha};
+        if (m.holdout) g.base_diffuse.w = kClosureHoldout;
         gpu_materials.push_back(g);
     }
     Buffer instance_buffer = make_storage_buffer(instances.data(), instances.size() * sizeof(gpu::GpuInstance), "instances");
@@ -1060,10 +1064,10 @@ std::uint32_t Renderer::add_graph_material(const Material& base, const MaterialG
 void Renderer::add_instances(std::uint32_t mesh_id, const double* matrices, std::size_t count,
                              const std::uint32_t* object_indices, const std::vector<std::uint32_t>& material_slots,
                              bool cast_shadow, const float* colors, const float* randoms,
-                             const std::uint32_t* crypto) {
+                             const std::uint32_t* crypto, bool holdout) {
     impl_->thread.run([&] {
         impl_->scene.add_instances(mesh_id, matrices, count, object_indices, material_slots, cast_shadow, colors,
-                                   randoms, crypto);
+                                   randoms, crypto, holdout);
     });
 }
 

@@ -51,6 +51,7 @@ TESTS = {
     "bump_lighting": (ANALYTIC, True),
     "world_map": (ANALYTIC, True),
     "cryptomatte": (ANALYTIC, True),
+    "holdout": (ANALYTIC, True),
     "emissive": (ANALYTIC, True),
 }
 BENCHMARKS = {"bench_export": (None, True)}

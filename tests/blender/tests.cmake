@@ -38,6 +38,7 @@ set(DEFERRED_BLENDER_TESTS
     bump_lighting
     world_map
     cryptomatte
+    holdout
 )
 
 foreach(_name IN LISTS DEFERRED_BLENDER_TESTS)

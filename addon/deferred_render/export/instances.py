@@ -93,6 +93,23 @@ def _hash_uint2(kx, ky):
     return c
 
 
+def holdout_collection_objects(view_layer):
+    """Names of the objects in the view layer's collections marked Holdout
+    (Outliner, per view layer; a child collection inherits it)."""
+    names = set()
+    if view_layer is None:
+        return names
+
+    def visit(layer_collection, inherited):
+        holdout = inherited or bool(getattr(layer_collection, "holdout", False))
+        if holdout:
+            names.update(ob.name for ob in layer_collection.collection.objects)
+        for child in layer_collection.children:
+            visit(child, holdout)
+    visit(view_layer.layer_collection, False)
+    return names
+
+
 def object_random(inst, ob):
     """Object Info > Random as Cycles computes it (blender/object.cpp: the
     instance's random_id, or hash_uint2(hash_string(name), 0) for an object
@@ -105,13 +122,14 @@ def object_random(inst, ob):
 
 
 class _Group:
-    __slots__ = ("mesh_id", "material_ids", "cast_shadow", "matrices", "object_indices", "names", "colors",
-                 "randoms", "crypto")
+    __slots__ = ("mesh_id", "material_ids", "cast_shadow", "holdout", "matrices", "object_indices", "names",
+                 "colors", "randoms", "crypto")
 
-    def __init__(self, mesh_id, material_ids, cast_shadow):
+    def __init__(self, mesh_id, material_ids, cast_shadow, holdout=False):
         self.mesh_id = mesh_id
         self.material_ids = material_ids
         self.cast_shadow = cast_shadow
+        self.holdout = holdout
         self.matrices = []
         self.object_indices = []
         self.names = []
@@ -140,6 +158,7 @@ class SceneExporter:
         self.graph_materials = 0
         self._warned = set()
         self.cancelled = False
+        self._holdout_objects = set()  # names of objects in the view layer's holdout collections
 
     # -- warnings ---------------------------------------------------------
     def _warn_once(self, key, message):
@@ -293,6 +312,7 @@ class SceneExporter:
     def sync(self, depsgraph):
         """Visit every object instance; returns False if cancelled."""
         start = time.perf_counter()
+        self._holdout_objects = holdout_collection_objects(getattr(depsgraph, "view_layer", None))
         for count, inst in enumerate(depsgraph.object_instances):
             if count % 256 == 0 and self.test_break():
                 self.cancelled = True
@@ -331,10 +351,13 @@ class SceneExporter:
         # Object > Visibility > Ray Visibility > Shadow: off, the object
         # blocks no light (Cycles' shadow rays pass it) and no world light.
         cast_shadow = bool(getattr(ob, "visible_shadow", True))
-        group_key = (mesh_id, material_ids, cast_shadow)
+        # Object > Visibility > Holdout, or a holdout collection of the view
+        # layer: a hole in the image (Cycles' SD_OBJECT_HOLDOUT_MASK).
+        holdout = bool(getattr(ob, "is_holdout", False)) or ob.original.name in self._holdout_objects
+        group_key = (mesh_id, material_ids, cast_shadow, holdout)
         group = self._groups.get(group_key)
         if group is None:
-            group = self._groups[group_key] = _Group(mesh_id, material_ids, cast_shadow)
+            group = self._groups[group_key] = _Group(mesh_id, material_ids, cast_shadow, holdout)
         group.matrices.append(matrix)
         group.object_indices.append(ob.pass_index)
         group.names.append(ob.name)
@@ -375,7 +398,7 @@ class SceneExporter:
                 self.renderer.add_instances(group.mesh_id, matrices,
                                             object_indices=object_indices,
                                             material_slots=list(group.material_ids),
-                                            cast_shadow=group.cast_shadow, **extras)
+                                            cast_shadow=group.cast_shadow, holdout=group.holdout, **extras)
             except ValueError as ex:  # refused by the native validation
                 names = ", ".join(f"'{n}'" for n in group.names[:3]) + (" ..." if len(group.names) > 3 else "")
                 self.warn(f"{len(group.names)} object(s) skipped ({names}): {ex}")

@@ -463,6 +463,11 @@ def material_params(material):
         notes.append("Volume (not rendered)")
     if output.inputs.get("Displacement") is not None and output.inputs["Displacement"].is_linked:
         notes.append("Displacement (not rendered)")
+    if shader.bl_idname == "ShaderNodeHoldout":
+        # The whole surface a holdout (Cycles' holdout closure at full
+        # weight): a hole in the image. A Holdout mixed with other shaders
+        # is not reduced here (the node path warns about it).
+        return dict(DEFAULT_SURFACE, holdout=True, pass_index=int(material.pass_index)), notes
 
     try:
         params = _reduce(shader, notes)

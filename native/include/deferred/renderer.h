@@ -179,7 +179,7 @@ public:
                        const std::uint32_t* object_indices,
                        const std::vector<std::uint32_t>& material_slots, bool cast_shadow = true,
                        const float* colors = nullptr, const float* randoms = nullptr,
-                       const std::uint32_t* crypto = nullptr);
+                       const std::uint32_t* crypto = nullptr, bool holdout = false);
     // Node materials: an image texture nodes sample (returns its id), and a
     // material evaluated from a graph (material_graph.h). `base` gives what
     // the graph does not: the pass index. Returns the material id.

@@ -85,6 +85,9 @@ struct Material {
     bool blend = false;
     // Cryptomatte: MurmurHash3_32 of the material's name (the caller's).
     std::uint32_t crypto = 0;
+    // A Holdout shader (Cycles' holdout closure, the whole surface): a hole
+    // in the image, black with alpha 0, with no light and no colour passes.
+    bool holdout = false;
 };
 constexpr int kMaxMixChain = 16;
 

@@ -2,6 +2,8 @@
  * SHADOW_PASS (node materials that drive alpha only): a shadow-map caster
  * instead, evaluating the graph for its alpha and writing what
  * shadow_frag.glsl writes.
+ * AOV_PASS (node materials with AOV Output nodes, aov_module.h): one of
+ * the graph's shader AOVs where the G-buffer sees the surface.
  * FORWARD_PASS (materials in Blend mode, forward_module.h): the surface is
  * lit here, by the lighting pass's own code (lighting_lib.glsl), in front
  * of the opaque depth, and blended over the forward layer with its alpha. */
@@ -32,6 +34,13 @@ layout(location = 0) out vec2 out_depths;
 #else
 layout(location = 0) out float out_distance;
 #endif
+#elif defined(AOV_PASS)
+/* One shader AOV (aov_module.h): the graph's AOV slot `aov_slot` of the
+ * surface this sample's G-buffer holds (depth test EQUAL), blended into the
+ * AOV's accumulation with the constant 1 / samples. */
+layout(location = 23) uniform int aov_slot;
+layout(location = 24) uniform int aov_color; /* 1: a Color AOV (rgb, a coverage), 0: a Value AOV (a) */
+layout(location = 0) out vec4 out_aov;
 #elif defined(FORWARD_PASS)
 /* Premultiplied light and alpha; blended ONE, ONE_MINUS_SRC_ALPHA (alpha:
  * ZERO, ONE_MINUS_SRC_ALPHA), so the target's a is the transmittance. */
@@ -45,7 +54,7 @@ layout(location = OUT_NORMAL) out vec2 out_normal;
 layout(location = OUT_SMOOTH_NORMAL) out vec2 out_smooth_normal;
 #endif
 #endif
-#ifndef FORWARD_PASS
+#if !defined(FORWARD_PASS) && !defined(AOV_PASS)
 #ifdef GBUF_PARAMS1
 layout(location = OUT_PARAMS1) out vec4 out_params1;
 #endif
@@ -275,7 +284,10 @@ void main() {
 #if defined(MATERIAL_ALPHA) && !defined(FORWARD_PASS)
     if (transparent_here(clamp(finite_or(c.alpha, 1.0), 0.0, 1.0))) discard;
 #endif
-#ifdef SHADOW_PASS
+#ifdef AOV_PASS
+    vec4 aov = g_aov[clamp(aov_slot, 0, MAX_GRAPH_AOVS - 1)];
+    out_aov = aov_color != 0 ? vec4(finite_or(aov.rgb, vec3(0.0)), 1.0) : vec4(0.0, 0.0, 0.0, finite_or(aov.a, 0.0));
+#elif defined(SHADOW_PASS)
     float d = caster_depth(v_position, caster_origin, caster_axis);
 #ifdef WORLD_MAP
     out_depths = vec2(-d, d);
@@ -297,7 +309,7 @@ void main() {
                                    finite_or(c.clearcoat_roughness, 0.0)), vec4(0.0), vec4(1.0));
     uint surf_material_index = uint(materials[v_material].emission.w);
     float surf_alpha = clamp(finite_or(c.alpha, 1.0), 0.0, 1.0);
-#endif  /* SHADOW_PASS */
+#endif  /* AOV_PASS, SHADOW_PASS */
 #else
     vec3 shading_normal = N;
     vec4 surf_emission = vec4(min(m.emission.rgb, vec3(65504.0)), 1.0);
@@ -307,7 +319,7 @@ void main() {
     uint surf_material_index = uint(m.emission.w);
     float surf_alpha = clamp(isnan(m.mix.w) ? 1.0 : m.mix.w, 0.0, 1.0);
 #endif
-#ifndef SHADOW_PASS
+#if !defined(SHADOW_PASS) && !defined(AOV_PASS)
 #ifndef MATERIAL_GRAPH
     const bool holdout_material = m.base_diffuse.a > 3.5; /* kClosureHoldout */
 #else
@@ -341,10 +353,10 @@ void main() {
 #endif
 #endif
 #endif
-#if defined(GBUF_SMOOTH_NORMAL) && !defined(SHADOW_PASS) && !defined(FORWARD_PASS)
+#if defined(GBUF_SMOOTH_NORMAL) && !defined(SHADOW_PASS) && !defined(FORWARD_PASS) && !defined(AOV_PASS)
     out_smooth_normal = octahedral_encode(N);
 #endif
-#if defined(GBUF_UV) && !defined(FORWARD_PASS)
+#if defined(GBUF_UV) && !defined(FORWARD_PASS) && !defined(AOV_PASS)
     out_uv = v_uv;
 #endif
 }

@@ -58,6 +58,10 @@ ShadingPoint g_sd;
 /* The uniform number Mix/Add Shader draw their choice from, rescaled after
  * each choice so nested mixes stay stratified over the film's samples. */
 float g_mix_u;
+/* Shader AOVs: what the graph's AOV Output nodes write (slot k: rgb Color,
+ * a Value), read by the AOV pass (geometry_frag.glsl AOV_PASS). */
+#define MAX_GRAPH_AOVS 8
+vec4 g_aov[MAX_GRAPH_AOVS];
 int g_const_base;
 
 layout(std430, binding = SSBO_MATERIAL_CONSTANTS) readonly buffer MaterialConstants { float material_constants[]; };

@@ -104,6 +104,7 @@ MaterialGraph graph_from_python(const py::dict& d) {
     if (d.contains("name")) g.name = d["name"].cast<std::string>();
     if (d.contains("alpha")) g.alpha = d["alpha"].cast<bool>();
     if (d.contains("closure_normal")) g.closure_normal = d["closure_normal"].cast<bool>();
+    if (d.contains("aovs")) g.aovs = d["aovs"].cast<std::vector<std::string>>();
     const py::list nodes = d["nodes"].cast<py::list>();
     for (std::size_t i = 0; i < nodes.size(); ++i) {
         const py::dict n = nodes[i].cast<py::dict>();
@@ -479,7 +480,8 @@ void declare_renderer(py::module_& m) {
                 bool film_transparent, float mist_start, float mist_depth, const std::string& mist_falloff,
                 int samples, float filter_width, bool light_culling, float light_threshold, bool shadows,
                 int shadow_resolution, float shadow_quality, float alpha_threshold,
-                const std::vector<std::string>& cryptomatte, int cryptomatte_levels) {
+                const std::vector<std::string>& cryptomatte, int cryptomatte_levels,
+                const std::vector<std::pair<std::string, std::string>>& aovs) {
                  RenderSettings s;
                  s.width = width;
                  s.height = height;
@@ -515,6 +517,11 @@ void declare_renderer(py::module_& m) {
                                                "' (CryptoObject, CryptoMaterial, CryptoAsset)");
                  }
                  s.cryptomatte_levels = cryptomatte_levels;
+                 for (const auto& [name, type] : aovs) {
+                     if (type != "COLOR" && type != "VALUE")
+                         throw py::value_error("render: AOV '" + name + "' type '" + type + "' is not COLOR or VALUE");
+                     s.aovs.push_back({name, type == "COLOR"});
+                 }
                  FrameResult frame;
                  {
                      py::gil_scoped_release release;
@@ -544,6 +551,13 @@ void declare_renderer(py::module_& m) {
                          out[py::str(std::string(cryptomatte_name(c.kind)) + suffix)] = a;
                      }
                  }
+                 // Shader AOVs: by their names, RGBA or one channel.
+                 for (AovImage& a : frame.aovs) {
+                     const py::ssize_t channels = a.color ? 4 : 1;
+                     py::array_t<float> arr({py::ssize_t(a.height), py::ssize_t(a.width), channels});
+                     std::copy(a.pixels.begin(), a.pixels.end(), arr.mutable_data());
+                     out[py::str(a.name)] = arr;
+                 }
                  return out;
              },
              py::arg("camera"), py::arg("width"), py::arg("height"), py::kw_only(),
@@ -552,7 +566,8 @@ void declare_renderer(py::module_& m) {
              py::arg("samples") = 1, py::arg("filter_width") = 1.5f, py::arg("light_culling") = true,
              py::arg("light_threshold") = 1e-3f, py::arg("shadows") = true, py::arg("shadow_resolution") = 1024,
              py::arg("shadow_quality") = 1.0f, py::arg("alpha_threshold") = 0.5f,
-             py::arg("cryptomatte") = std::vector<std::string>{}, py::arg("cryptomatte_levels") = 6);
+             py::arg("cryptomatte") = std::vector<std::string>{}, py::arg("cryptomatte_levels") = 6,
+             py::arg("aovs") = std::vector<std::pair<std::string, std::string>>{});
 }
 
 }  // namespace deferred::python

@@ -146,6 +146,13 @@ void validate_material_graph(const MaterialGraph& g) {
             }
         }
     }
+    if (g.aovs.size() > std::size_t(kMaxGraphAovs))
+        invalid(std::to_string(g.aovs.size()) + " AOV outputs exceed the limit of " + std::to_string(kMaxGraphAovs));
+    for (const GraphNode& node : g.nodes)
+        if (node.func == "node_aov_output" &&
+            (node.args.empty() || node.args[0].kind != GraphArg::Kind::Int || node.args[0].value < 0 ||
+             std::size_t(node.args[0].value) >= g.aovs.size()))
+            invalid("an AOV output names no AOV slot of the graph");
     if (g.surface_node >= 0) {
         if (std::size_t(g.surface_node) >= n) invalid("surface node " + std::to_string(g.surface_node) + " does not exist");
         const GraphNode& s = g.nodes[std::size_t(g.surface_node)];
@@ -159,6 +166,7 @@ std::string material_graph_glsl(const MaterialGraph& g) {
     std::ostringstream out;
     out << "/* Generated from a node material graph (material_codegen.cpp). */\n";
     out << "void material_graph_eval(out Closure surface) {\n";
+    if (!g.aovs.empty()) out << "    for (int k = 0; k < MAX_GRAPH_AOVS; ++k) g_aov[k] = vec4(0.0);\n";
     for (std::size_t i = 0; i < g.nodes.size(); ++i) {
         const GraphNode& node = g.nodes[i];
         for (std::size_t o = 0; o < node.outputs.size(); ++o)

@@ -46,6 +46,8 @@ public:
     std::uint32_t constants_offset(std::uint32_t graph) const { return graphs_[graph].constants_offset; }
     const std::string& name(std::uint32_t graph) const { return graphs_[graph].graph.name; }
     bool alpha(std::uint32_t graph) const { return graphs_[graph].graph.alpha; }
+    // The AOV names the graph's AOV Output slots write.
+    const std::vector<std::string>& aovs(std::uint32_t graph) const { return graphs_[graph].graph.aovs; }
     // True if some graph can produce sheen or clearcoat (the G-buffer's params1).
     bool uses_params1() const;
     // True if some graph gives a closure another normal than the smooth one

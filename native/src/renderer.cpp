@@ -3,6 +3,7 @@
 // passes (compute) -> readback. All GL work happens on the render thread.
 #include <deferred/renderer.h>
 
+#include "aov_module.h"
 #include "camera.h"
 #include "cryptomatte_module.h"
 #include "egl_context.h"
@@ -102,6 +103,7 @@ struct Renderer::Impl {
     EmitterModule emitters;
     ForwardModule forward;
     CryptomatteModule cryptomatte;
+    AovModule aovs;
     std::int32_t world_graph = -1;  // the world's node graph in `materials`, -1: a constant colour
     VertexArray empty_vao;
     Buffer dummy_ssbo;
@@ -126,6 +128,7 @@ struct Renderer::Impl {
             emitters.release();
             forward.release();
             cryptomatte.release();
+            aovs.release();
             scene.clear();
             materials.release_all();
             shaders.reset();
@@ -247,7 +250,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
                             (features.uv ? 8 : 0) + (features.smooth_normal ? 4 : 0) + 16 + (light_split ? 32 : 0) + (shadow_pass ? 16 : 0);
     for (Pass p : wanted.list()) per_pixel += (p == Pass::Combined ? 0 : 16) + 4 * std::size_t(pass_info(p).channels);
     if (features.crypto) per_pixel += 16;  // the ids target grows to RGBA32UI
-    check_settings(settings, pixels * per_pixel + 2 * CryptomatteModule::bytes(settings));
+    check_settings(settings, pixels * per_pixel + 2 * CryptomatteModule::bytes(settings) + AovModule::bytes(settings));
 
     FrameResult result;
     StageTimer timer;
@@ -583,6 +586,29 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         lighting_variant.defines.push_back("FORWARD_LAYER");
     }
     const GLuint lighting = shaders->compute_program("lighting_comp.glsl", lighting_variant);
+    // Shader AOVs: the AOV program of every graph material that writes one
+    // of the asked AOVs, with its slot for each (material id -> (AOV, slot)).
+    std::map<std::uint32_t, GLuint> aov_programs;
+    std::vector<std::vector<std::pair<std::uint32_t, int>>> aov_writers(settings.aovs.size());
+    if (!settings.aovs.empty()) {
+        ShaderVariant aov_variant = base_variant;
+        aov_variant.defines.push_back("AOV_PASS");
+        for (auto& [id, program] : graph_programs) {
+            const std::vector<std::string>& names = this->materials.aovs(std::uint32_t(scene.materials()[id].graph));
+            for (std::size_t k = 0; k < settings.aovs.size(); ++k)
+                for (std::size_t slot = 0; slot < names.size(); ++slot)
+                    if (names[slot] == settings.aovs[k].name) aov_writers[k].emplace_back(id, int(slot));
+            if (names.empty()) continue;
+            try {
+                aov_programs[id] =
+                    this->materials.program(*shaders, std::uint32_t(scene.materials()[id].graph), aov_variant);
+            } catch (const Error& e) {
+                result.warnings.push_back("Material " + std::to_string(id) +
+                                          ": its AOV program did not compile (its AOVs stay 0): " + e.what());
+            }
+        }
+        aovs.begin(settings.aovs, settings.width, settings.height, gbuffer.depth_texture());
+    }
     // Draws the slot ranges of the visible instances that use node material `id`.
     auto draw_graph_material = [&](std::uint32_t id, GLuint program) {
         const Material& material = scene.materials()[id];
@@ -873,6 +899,22 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         glDisable(GL_BLEND);
         draw_scene();
         glBindFramebuffer(GL_FRAMEBUFFER, 0);
+        // Shader AOVs of the surfaces this G-buffer holds (the camera's
+        // instances are still the culled set).
+        if (aovs.active()) {
+            this->materials.bind_constants();
+            for (std::size_t k = 0; k < aovs.count(); ++k) {
+                aovs.bind(k, settings.samples);
+                for (auto& [id, slot] : aov_writers[k]) {
+                    auto program = aov_programs.find(id);
+                    if (program == aov_programs.end()) continue;
+                    glProgramUniform1i(program->second, 23, slot);
+                    glProgramUniform1i(program->second, 24, settings.aovs[k].color ? 1 : 0);
+                    draw_graph_material(id, program->second);
+                }
+            }
+            aovs.end_draws();
+        }
         check_gl("geometry pass");
         geometry_ms += timer.lap_ms();
 
@@ -971,6 +1013,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     read(film.get(), Pass::Combined);
     for (auto& [p, image] : pass_images) read(image.get(), p);
     result.cryptomatte = cryptomatte.finish();
+    result.aovs = aovs.finish();
     check_gl("readback");
     result.timings.readback_ms = timer.lap_ms();
     result.timings.geometry_ms = geometry_ms;

@@ -100,6 +100,12 @@ void node_bsdf_transparent(vec3 color, out Closure c) {
  * diffuse and metallic lobes (linear in the base colour); the dielectric
  * specular weight scales F0, which leaves the grazing-angle Fresnel rise
  * unscaled. */
+/* AOV Output (Cycles' svm_node_aov_color / svm_node_aov_value): the values
+ * of the view layer's AOV of this slot at this shading point. */
+void node_aov_output(int slot, vec3 color, float value) {
+    g_aov[slot] = vec4(color, value);
+}
+
 /* Material > Blend Mode: Alpha Clip (EEVEE's; Cycles has no such mode): the
  * surface is there where its alpha is above the threshold and absent
  * elsewhere (EEVEE: alpha <= threshold discards). The exporter appends it

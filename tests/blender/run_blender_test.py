@@ -52,6 +52,7 @@ TESTS = {
     "world_map": (ANALYTIC, True),
     "cryptomatte": (ANALYTIC, True),
     "holdout": (ANALYTIC, True),
+    "aovs": (ANALYTIC, True),
     "emissive": (ANALYTIC, True),
 }
 BENCHMARKS = {"bench_export": (None, True)}

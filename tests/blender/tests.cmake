@@ -39,6 +39,7 @@ set(DEFERRED_BLENDER_TESTS
     world_map
     cryptomatte
     holdout
+    aovs
 )
 
 foreach(_name IN LISTS DEFERRED_BLENDER_TESTS)

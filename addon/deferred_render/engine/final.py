@@ -27,7 +27,7 @@ from . import session
 from ..export import camera as camera_export
 from ..export import cryptomatte as crypto_export
 from ..export import world as world_export
-from ..export import export_scene
+from ..export import export_scene, requested_aovs
 from .frame import FrameRect, flatten_passes
 
 LOG_PREFIX = "Deferred"
@@ -290,6 +290,7 @@ class FinalRender:
         crypto_layers, crypto_levels = crypto_export.enabled_layers(self.view_layer)
         kwargs = dict(passes=requested, film_transparent=bool(scene.render.film_transparent),
                       cryptomatte=crypto_layers, cryptomatte_levels=crypto_levels or 6,
+                      aovs=requested_aovs(self.view_layer),
                       samples=samples, filter_width=_filter_width(scene),
                       alpha_threshold=_alpha_threshold(self.view_layer),
                       **_light_settings(scene), **mist)

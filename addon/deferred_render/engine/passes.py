@@ -75,6 +75,14 @@ def cryptomatte_passes(view_layer):
             for layer in layers for name in crypto_export.pass_names(layer, levels)]
 
 
+def aov_passes(view_layer):
+    """PassSpecs of the view layer's shader AOVs, as Cycles registers them
+    (cycles/engine.py: a Color AOV is RGBA, a Value AOV X)."""
+    from ..export import requested_aovs
+    return [PassSpec(name, "RGBA", 4, "COLOR", None) if kind == 'COLOR' else PassSpec(name, "X", 1, "VALUE", None)
+            for name, kind in requested_aovs(view_layer)]
+
+
 def enabled_passes(view_layer, native_passes):
     """PassSpecs to register for ``view_layer`` (Combined always first)."""
     specs = []
@@ -83,6 +91,7 @@ def enabled_passes(view_layer, native_passes):
             specs.append(spec)
     if native_passes is not COMBINED_ONLY:
         specs += cryptomatte_passes(view_layer)
+        specs += aov_passes(view_layer)
     if not specs or specs[0].name != "Combined":
         combined = [s for s in specs if s.name == "Combined"]
         others = [s for s in specs if s.name != "Combined"]

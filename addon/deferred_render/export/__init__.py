@@ -11,6 +11,13 @@ from . import cryptomatte as crypto_export
 from .instances import ExportStats, SceneExporter  # noqa: F401
 
 
+def requested_aovs(view_layer):
+    """(name, 'COLOR' | 'VALUE') of the view layer's valid shader AOVs."""
+    if view_layer is None:
+        return []
+    return [(a.name, a.type) for a in getattr(view_layer, "aovs", ()) if a.is_valid and a.name]
+
+
 def export_scene(depsgraph, renderer, warn=None, test_break=None):
     """Clear ``renderer`` and sync the evaluated scene into it.
 
@@ -19,8 +26,10 @@ def export_scene(depsgraph, renderer, warn=None, test_break=None):
     """
     renderer.clear_scene()
     layers, _ = crypto_export.enabled_layers(getattr(depsgraph, "view_layer", None))
+    view_layer = getattr(depsgraph, "view_layer", None)
     exporter = SceneExporter(renderer, warn=warn, test_break=test_break,
-                             cryptomatte=crypto_export.Manifests(layers))
+                             cryptomatte=crypto_export.Manifests(layers),
+                             aovs_requested=bool(requested_aovs(view_layer)))
     completed = exporter.sync(depsgraph)
     if completed:
         world.export_world(depsgraph.scene.world, renderer, exporter.image_registry, warn)

@@ -143,8 +143,11 @@ class SceneExporter:
     (add_mesh, add_material, add_instances, add_light): the native renderer,
     or a recorder in the tests."""
 
-    def __init__(self, renderer, warn=None, test_break=None, cryptomatte=None):
+    def __init__(self, renderer, warn=None, test_break=None, cryptomatte=None, aovs_requested=False):
         self.renderer = renderer
+        # The view layer asks for shader AOVs: materials with AOV Output
+        # nodes take the node path (only programs write AOVs).
+        self.aovs_requested = aovs_requested
         # Cryptomatte names and hashes (cryptomatte.Manifests); none asked: no hashing.
         self.cryptomatte = cryptomatte if cryptomatte is not None else crypto_export.Manifests(())
         self.warn = warn or (lambda message: None)
@@ -220,7 +223,8 @@ class SceneExporter:
         if not hasattr(self.renderer, "add_graph_material"):
             return None
         _, notes = material_export.material_params(material)
-        if all(material_export.is_clamp_note(n) for n in notes):
+        writes_aovs = self.aovs_requested and graph_builder.aov_output_nodes(material.node_tree)
+        if all(material_export.is_clamp_note(n) for n in notes) and not writes_aovs:
             return None  # the constant parameter set represents it: no program needed
         try:
             graph = graph_builder.build_material_graph(material, self.image_registry())

@@ -452,6 +452,36 @@ def apply_alpha_clip(graph, threshold):
     return graph
 
 
+MAX_AOVS = 8  # kMaxGraphAovs
+
+
+def aov_output_nodes(tree):
+    """The tree's AOV Output nodes that write an AOV (named, not muted)."""
+    return [n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputAOV" and n.name and not n.mute]
+
+
+def _emit_aov_outputs(g, tree):
+    """node_aov_output calls for the tree's AOV Output nodes (Cycles'
+    svm_node_aov_color/value: the Color and Value inputs at the shading
+    point); returns the AOV name of each slot. Nodes inside groups are not
+    read (noted)."""
+    names = []
+    for node in aov_output_nodes(tree):
+        if node.name in names:
+            continue  # Cycles writes one value per AOV and sample: the first
+        if len(names) >= MAX_AOVS:
+            g.note(f"more than {MAX_AOVS} AOV outputs (AOV '{node.name}' stays 0)")
+            continue
+        b = NodeBuilder(g, node, ())
+        color, value = b.input("Color", "color"), b.input("Value", "float")
+        g.append_node("node_aov_output", [("int", len(names)), color, value], [])
+        names.append(node.name)
+    for group in (n for n in tree.nodes if n.bl_idname == "ShaderNodeGroup" and n.node_tree is not None):
+        if any(m.bl_idname == "ShaderNodeOutputAOV" for m in group.node_tree.nodes):
+            g.note(f"AOV Output nodes inside the group '{group.name}' are not rendered")
+    return names
+
+
 def build_world_graph(world, images=None):
     """MaterialGraph of a world's node tree: its surface closure's emission is
     the background radiance along each direction (the world module bakes it,
@@ -489,6 +519,7 @@ def _build(material, images, world=False):
             s = output.inputs.get(name)
             if s is not None and s.is_linked:
                 g.note(f"{name} (not rendered)")
+    aovs = [] if world else _emit_aov_outputs(g, tree)
     light_emission = None
     if not world and _graph_emits(g):
         light_emission = _constant_emission(g, surface)
@@ -503,7 +534,7 @@ def _build(material, images, world=False):
             g.note("mesh attributes read in the world (" + ", ".join(g.attributes) + ") are 0")
     ir = {"name": material.name, "nodes": g.nodes, "surface": surface, "constants": g.constants,
           "images": g.images, "attributes": g.attributes, "alpha": g.uses_alpha,
-          "closure_normal": g.closure_normal}
+          "closure_normal": g.closure_normal, "aovs": aovs}
     graph = MaterialGraph(ir, g.notes, list(g.attributes), g.sun_lamps)
     graph.light_emission = light_emission
     return graph

@@ -57,7 +57,11 @@ struct MaterialGraph {
     // Some closure's normal is not the smooth normal (Bump, Normal Map, any
     // vector): the lighting then also needs the smooth one (G-buffer).
     bool closure_normal = false;
+    // Shader AOVs: slot k (node_aov_output's first argument) writes the
+    // view layer's AOV of this name.
+    std::vector<std::string> aovs;
 };
+constexpr int kMaxGraphAovs = 8;  // MAX_GRAPH_AOVS in material_lib.glsl
 
 // An image for texture nodes: RGBA, row 0 at the bottom (Blender's order).
 // 8-bit data is kept 8-bit on the GPU (RGBA8, read as value/255), float data

@@ -55,6 +55,13 @@ struct GLInfo {
 enum class CryptomatteKind : std::uint32_t { Object = 0, Material = 1, Asset = 2 };
 const char* cryptomatte_name(CryptomatteKind kind);  // "CryptoObject", ...
 
+// A view layer AOV to fill (aov_module.h): its name, which AOV Output nodes
+// of node materials name (MaterialGraph::aovs), and its type.
+struct AovRequest {
+    std::string name;
+    bool color = true;  // Color (RGBA) or Value (one channel)
+};
+
 struct RenderSettings {
     int width = 640;
     int height = 480;
@@ -96,6 +103,17 @@ struct RenderSettings {
     // per pixel (Cycles' pass_cryptomatte_depth, 1..16).
     std::vector<CryptomatteKind> cryptomatte;
     int cryptomatte_levels = 6;
+    // Shader AOVs to fill (none: no AOV work at all).
+    std::vector<AovRequest> aovs;
+};
+
+// One shader AOV of a finished frame: RGBA (colour) or one channel per
+// pixel, rows bottom-up.
+struct AovImage {
+    std::string name;
+    bool color = true;
+    int width = 0, height = 0;
+    std::vector<float> pixels;
 };
 
 // One Cryptomatte layer of a finished frame: per pixel `levels` pairs
@@ -145,6 +163,7 @@ struct FrameTimings {
 struct FrameResult {
     std::vector<PassImage> passes;
     std::vector<CryptomatteImage> cryptomatte;
+    std::vector<AovImage> aovs;
     FrameTimings timings;
     // What the frame could not render as asked, e.g. a node material whose
     // program failed to compile (drawn with the default surface instead).

@@ -14,7 +14,7 @@ layout(local_size_x = LIGHTING_GROUP_SIZE, local_size_y = LIGHTING_GROUP_SIZE) i
 layout(location = 0) uniform float sample_weight; /* 1 / samples */
 
 layout(binding = TEX_DEPTH) uniform sampler2D gbuf_depth;
-layout(binding = TEX_GBUF_IDS) uniform usampler2D gbuf_ids; /* z: instance, w: material id (GBUF_CRYPTO) */
+layout(binding = TEX_GBUF_IDS) uniform usampler2D gbuf_ids; /* z: instance, w: material id (GBUF_INSTANCE_IDS) */
 layout(std430, binding = SSBO_CRYPTO_INSTANCES) readonly buffer CryptoInstances { uint crypto_instances[]; };
 layout(std430, binding = SSBO_CRYPTO_MATERIALS) readonly buffer CryptoMaterials { uint crypto_materials[]; };
 layout(std430, binding = SSBO_CRYPTO_SLOTS) buffer CryptoSlots { uvec2 slots[]; }; /* (id, coverage bits) */

@@ -17,7 +17,7 @@
  *                              0.0037 deg max error), facing the viewer
  *  params1       RGBA16F       sheen, sheen tint, clearcoat, clearcoat rough.     scene has sheen/clearcoat (GBUF_PARAMS1)
  *  ids           RG32UI        object pass index, material pass index             IndexOB/IndexMA (GBUF_IDS)
- *                (RGBA32UI)    ... z instance, w material id                      Cryptomatte (GBUF_CRYPTO)
+ *                (RGBA32UI)    ... z instance, w material id                      Cryptomatte (GBUF_INSTANCE_IDS)
  *  uv            RG32F         active UV map                                      UV pass (GBUF_UV)
  *  smooth normal RG16 unorm    the interpolated (smooth) normal, octahedral,      a node material bends its
  *                              when closures take another (Bump, Normal Map):     closure normals

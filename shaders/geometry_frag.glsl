@@ -58,7 +58,7 @@ layout(location = OUT_SMOOTH_NORMAL) out vec2 out_smooth_normal;
 #ifdef GBUF_PARAMS1
 layout(location = OUT_PARAMS1) out vec4 out_params1;
 #endif
-#ifdef GBUF_CRYPTO
+#ifdef GBUF_INSTANCE_IDS
 layout(location = OUT_IDS) out uvec4 out_ids; /* + instance and material id for Cryptomatte */
 #elif defined(GBUF_IDS)
 layout(location = OUT_IDS) out uvec2 out_ids;
@@ -346,7 +346,7 @@ void main() {
 #ifdef GBUF_PARAMS1
     out_params1 = surf_params1;
 #endif
-#ifdef GBUF_CRYPTO
+#ifdef GBUF_INSTANCE_IDS
     out_ids = uvec4(v_object_index, surf_material_index, v_instance, v_material);
 #elif defined(GBUF_IDS)
     out_ids = uvec2(v_object_index, surf_material_index);

@@ -40,6 +40,35 @@ layout(binding = TEX_GBUF_SMOOTH_NORMAL) uniform sampler2D gbuf_smooth_normal;
 layout(binding = TEX_FORWARD_LAYER) uniform sampler2D forward_layer;
 #endif
 
+#ifdef LIGHT_GROUPS
+/* Light groups (LIGHT_GROUPS of them): each light's, each emissive
+ * surface's and the world's light also goes to its group's layer (Cycles'
+ * Combined_<group> passes; the groups' sum is Combined where every source
+ * has a group). */
+layout(std430, binding = SSBO_LIGHT_GROUPS) readonly buffer LightGroups { uint light_groups[]; };
+layout(std430, binding = SSBO_INSTANCE_GROUPS) readonly buffer InstanceGroups { uint instance_groups[]; };
+layout(binding = TEX_GBUF_IDS) uniform usampler2D gbuf_ids; /* z: instance (GBUF_INSTANCE_IDS) */
+layout(binding = IMG_LIGHT_GROUPS, rgba32f) uniform image2DArray group_images;
+layout(location = 1) uniform uint world_group;
+vec3 group_sums[LIGHT_GROUPS];
+void add_to_group(uint group, vec3 value) {
+    if (group > 0u && group <= uint(LIGHT_GROUPS)) group_sums[group - 1u] += value;
+}
+/* This invocation's group sums added to the layers, seen through the Blend
+ * layers in front (their own light is in no group). */
+void store_groups(ivec2 pixel, float share) {
+    float T = 1.0;
+#ifdef FORWARD_LAYER
+    T = texelFetch(forward_layer, pixel, 0).a;
+#endif
+    for (int g = 0; g < LIGHT_GROUPS; ++g) {
+        if (group_sums[g] == vec3(0.0)) continue;
+        ivec3 at = ivec3(pixel, g);
+        imageStore(group_images, at, imageLoad(group_images, at) + vec4(group_sums[g] * (T * share), 0.0));
+    }
+}
+#endif
+
 layout(binding = IMG_FILM, rgba32f) uniform image2D film;
 #ifdef OUT_SHADOW
 layout(binding = IMG_SHADOW, rgba32f) uniform image2D shadow_light;
@@ -68,6 +97,9 @@ vec4 behind_forward_layer(ivec2 pixel, vec4 value, bool first_batch) {
 void main() {
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(pixel, ivec2(frame.viewport.xy)))) return;
+#ifdef LIGHT_GROUPS
+    for (int g = 0; g < LIGHT_GROUPS; ++g) group_sums[g] = vec3(0.0);
+#endif
 
     /* Each sample adds its share (1/samples) to the accumulations. */
     float share = 1.0 / float(max(frame.counts.w, 1u));
@@ -86,6 +118,10 @@ void main() {
 #endif
         vec4 bg = transparent ? vec4(0.0) : vec4(world, 1.0);
         imageStore(film, pixel, imageLoad(film, pixel) + behind_forward_layer(pixel, bg, true) * share);
+#ifdef LIGHT_GROUPS
+        add_to_group(world_group, bg.rgb);
+        store_groups(pixel, share);
+#endif
         return;
     }
 
@@ -117,6 +153,9 @@ void main() {
     total.glossy = vec3(0.0);
     float ao = 1.0;
     if (first_batch) total = world_light(w, s, P, N, V, pixel, ao);
+#ifdef LIGHT_GROUPS
+    if (first_batch) add_to_group(world_group, total.diffuse + total.glossy);
+#endif
 #ifdef OUT_AO
     if (first_batch) imageStore(ao_image, pixel, imageLoad(ao_image, pixel) + vec4(vec3(ao), 0.0) * share);
 #endif
@@ -149,6 +188,9 @@ void main() {
         LightContribution c = shade_light(lights[i], s, w, P, N, V, visible);
         total.diffuse += c.diffuse * visible;
         total.glossy += c.glossy * visible;
+#ifdef LIGHT_GROUPS
+        add_to_group(light_groups[i], (c.diffuse + c.glossy) * visible);
+#endif
 #ifdef OUT_SHADOW
         float lum = dot(c.diffuse + c.glossy, luminance);
         lum_unshadowed += lum;
@@ -157,6 +199,10 @@ void main() {
     }
 
     if (!first_batch) emission = vec4(0.0);
+#ifdef LIGHT_GROUPS
+    add_to_group(instance_groups[texelFetch(gbuf_ids, pixel, 0).z], emission.rgb);
+    store_groups(pixel, share);
+#endif
     vec4 sample_value = vec4(emission.rgb + total.diffuse + total.glossy, emission.a);
     imageStore(film, pixel, imageLoad(film, pixel) + behind_forward_layer(pixel, sample_value, first_batch) * share);
 #ifdef OUT_SHADOW

@@ -28,6 +28,8 @@
 #define SSBO_CRYPTO_INSTANCES 18 /* Cryptomatte: object and asset hash per instance (cryptomatte_module.h) */
 #define SSBO_CRYPTO_MATERIALS 19 /* ... the material's name hash per material id */
 #define SSBO_CRYPTO_SLOTS 20     /* ... per pixel and layer, Levels (hash, coverage bits) slots */
+#define SSBO_LIGHT_GROUPS 21     /* light groups: each packed light's group, 0 none (light_module.h) */
+#define SSBO_INSTANCE_GROUPS 22  /* ... each instance's group, for its emission */
 
 /* Textures sampled by compute passes (G-buffer inputs) */
 #define TEX_DEPTH 0
@@ -61,6 +63,7 @@
 #define IMG_SHADOW 4      /* x shadowed, y unshadowed direct-light luminance (Shadow pass) */
 #define IMG_AO 5          /* AO pass accumulation (lighting pass, first batch) */
 #define IMG_WORLD_BAKE 6  /* the world map being baked (world_bake_comp.glsl) */
+#define IMG_LIGHT_GROUPS 7 /* light groups: one layer of accumulated light per group (rgba32f array) */
 
 /* The world map's sampling density: this fraction uniform on the sphere, the
  * rest by luminance (defensive importance sampling: every direction keeps a

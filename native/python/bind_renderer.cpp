@@ -391,7 +391,7 @@ void declare_renderer(py::module_& m) {
              [](PyRenderer& self, const py::object& mesh_id_obj, const py::object& matrices,
                 const py::object& object_indices, const py::object& material_slots, bool cast_shadow,
                 const py::object& colors_obj, const py::object& randoms_obj, const py::object& crypto_obj,
-                bool holdout) {
+                bool holdout, std::uint32_t light_group) {
                  const std::uint32_t mesh_id = index_from(mesh_id_obj, "add_instances: mesh_id");
                  py::ssize_t n = 0, k = 0;
                  const double* rows = borrow<double>(matrices, "matrices", {-1, 4, 4}, &n);
@@ -422,18 +422,20 @@ void declare_renderer(py::module_& m) {
                  if (!crypto_obj.is_none()) crypto = borrow<std::uint32_t>(crypto_obj, "crypto", {n, 2});
                  py::gil_scoped_release release;
                  self.get().add_instances(mesh_id, cols.data(), std::size_t(n), ids, slots, cast_shadow, colors, randoms,
-                                          crypto, holdout);
+                                          crypto, holdout, light_group);
              },
              py::arg("mesh_id"), py::arg("matrices"), py::kw_only(), py::arg("object_indices") = py::none(),
              py::arg("material_slots") = py::none(), py::arg("cast_shadow") = true, py::arg("colors") = py::none(),
              py::arg("randoms") = py::none(), py::arg("crypto") = py::none(), py::arg("holdout") = false,
+             py::arg("light_group") = 0u,
              "crypto: uint32 (n, 2), each instance's Cryptomatte object and asset hashes (MurmurHash3_32 of "
              "the names). holdout: the instances are holes in the image (Object > Visibility > Holdout).")
         .def("add_light",
              [](PyRenderer& self, const std::string& type, const py::object& matrix, const py::object& color,
                 float energy, float radius, float spot_size, float spot_blend, float angle, const std::string& shape,
-                float size, float size_y, bool cast_shadow) {
+                float size, float size_y, bool cast_shadow, std::uint32_t light_group) {
                  Light l;
+                 l.light_group = light_group;
                  if (type == "POINT") l.type = LightType::Point;
                  else if (type == "SPOT") l.type = LightType::Spot;
                  else if (type == "SUN") l.type = LightType::Sun;
@@ -460,9 +462,11 @@ void declare_renderer(py::module_& m) {
              py::arg("color") = py::make_tuple(1.0, 1.0, 1.0), py::arg("energy") = 10.0f, py::arg("radius") = 0.25f,
              py::arg("spot_size") = 0.785398f, py::arg("spot_blend") = 0.15f, py::arg("angle") = 0.00918043f,
              py::arg("shape") = "SQUARE", py::arg("size") = 0.25f, py::arg("size_y") = 0.25f,
-             py::arg("cast_shadow") = true)
-        .def("set_world", [](PyRenderer& self, const py::object& color, const py::object& graph) {
+             py::arg("cast_shadow") = true, py::arg("light_group") = 0u)
+        .def("set_world", [](PyRenderer& self, const py::object& color, const py::object& graph,
+                             std::uint32_t light_group) {
             World w;
+            w.light_group = light_group;
             w.color = vec3_from(color, "set_world: color");
             if (graph.is_none()) {
                 self.get().set_world(w);
@@ -472,7 +476,7 @@ void declare_renderer(py::module_& m) {
             MaterialGraph g = graph_from_python(graph.cast<py::dict>());
             py::gil_scoped_release release;
             self.get().set_world(w, &g);
-        }, py::kw_only(), py::arg("color"), py::arg("graph") = py::none(),
+        }, py::kw_only(), py::arg("color"), py::arg("graph") = py::none(), py::arg("light_group") = 0u,
         "The world: a constant colour, or (graph) a world node tree's graph dict "
         "(materials/builder.py build_world_graph), baked into an environment map.")
         .def("render",
@@ -481,7 +485,7 @@ void declare_renderer(py::module_& m) {
                 int samples, float filter_width, bool light_culling, float light_threshold, bool shadows,
                 int shadow_resolution, float shadow_quality, float alpha_threshold,
                 const std::vector<std::string>& cryptomatte, int cryptomatte_levels,
-                const std::vector<std::pair<std::string, std::string>>& aovs) {
+                const std::vector<std::pair<std::string, std::string>>& aovs, int light_groups) {
                  RenderSettings s;
                  s.width = width;
                  s.height = height;
@@ -522,6 +526,7 @@ void declare_renderer(py::module_& m) {
                          throw py::value_error("render: AOV '" + name + "' type '" + type + "' is not COLOR or VALUE");
                      s.aovs.push_back({name, type == "COLOR"});
                  }
+                 s.light_groups = light_groups;
                  FrameResult frame;
                  {
                      py::gil_scoped_release release;
@@ -551,6 +556,15 @@ void declare_renderer(py::module_& m) {
                          out[py::str(std::string(cryptomatte_name(c.kind)) + suffix)] = a;
                      }
                  }
+                 // Light groups: "#lightgroup<k>" (k from 1, the groups' indices), RGB.
+                 for (std::size_t g = 0; g < frame.light_groups.size(); ++g) {
+                     const std::vector<float>& rgba = frame.light_groups[g];
+                     py::array_t<float> arr({py::ssize_t(height), py::ssize_t(width), py::ssize_t(3)});
+                     float* dst = arr.mutable_data();
+                     for (std::size_t i = 0; i < rgba.size() / 4; ++i)
+                         for (int c = 0; c < 3; ++c) dst[i * 3 + c] = rgba[i * 4 + c];
+                     out[py::str("#lightgroup" + std::to_string(g + 1))] = arr;
+                 }
                  // Shader AOVs: by their names, RGBA or one channel.
                  for (AovImage& a : frame.aovs) {
                      const py::ssize_t channels = a.color ? 4 : 1;
@@ -567,7 +581,7 @@ void declare_renderer(py::module_& m) {
              py::arg("light_threshold") = 1e-3f, py::arg("shadows") = true, py::arg("shadow_resolution") = 1024,
              py::arg("shadow_quality") = 1.0f, py::arg("alpha_threshold") = 0.5f,
              py::arg("cryptomatte") = std::vector<std::string>{}, py::arg("cryptomatte_levels") = 6,
-             py::arg("aovs") = std::vector<std::pair<std::string, std::string>>{});
+             py::arg("aovs") = std::vector<std::pair<std::string, std::string>>{}, py::arg("light_groups") = 0);
 }
 
 }  // namespace deferred::python

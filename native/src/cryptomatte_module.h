@@ -7,7 +7,7 @@
 // add-on's too.
 //
 // Per sample the geometry pass writes each pixel's instance and material id
-// into the ids target (GBUF_CRYPTO makes it RGBA32UI), and
+// into the ids target (GBUF_INSTANCE_IDS makes it RGBA32UI), and
 // shaders/cryptomatte_comp.glsl adds the sample's coverage to the pixel's
 // slots; the slots are read back once, sorted on the CPU. Nothing exists
 // when no layer is asked for.

@@ -114,6 +114,7 @@ std::size_t EmitterModule::sync(const SceneStore& scene, const glm::dvec3& camer
             MeshLight light;
             light.first = std::uint32_t(triangles_.size());
             light.cast_shadow = batch.cast_shadow;
+            light.light_group = batch.light_group;
             // A mirroring transform turns the winding (and the outside) over.
             light.side = glm::determinant(glm::dmat3(model)) < 0.0 ? -mesh_side : mesh_side;
             glm::dvec3 lo(1e300), hi(-1e300);

@@ -36,6 +36,7 @@ struct MeshLight {
     double power = 0.0;                  // sum of area x luminance of the radiance
     double max_radiance = 0.0;           // largest radiance channel
     bool cast_shadow = true;
+    std::uint32_t light_group = 0;       // the instance's light group
     // Which side emits: 0 both (an open mesh, as Cycles' emission); +1 or -1
     // the side the triangles' winding normal points to, for a closed mesh,
     // whose other side faces its own inside (lighting nothing but adding

@@ -24,7 +24,7 @@ void GBuffer::ensure(int width, int height, const GBufferFeatures& f) {
     make(params0_, GL_RGBA16F, "gbuffer params0");
     make(normal_, GL_RG16, "gbuffer normal");
     if (f.params1) make(params1_, GL_RGBA16F, "gbuffer params1");
-    if (f.ids || f.crypto) make(ids_, f.crypto ? GL_RGBA32UI : GL_RG32UI, "gbuffer ids");
+    if (f.ids || f.instance_ids) make(ids_, f.instance_ids ? GL_RGBA32UI : GL_RG32UI, "gbuffer ids");
     if (f.uv) make(uv_, GL_RG32F, "gbuffer uv");
     if (f.smooth_normal) make(smooth_normal_, GL_RG16, "gbuffer smooth normal");
 

@@ -13,10 +13,10 @@ namespace deferred {
 
 struct GBufferFeatures {
     bool params1 = false, ids = false, uv = false, smooth_normal = false;
-    bool crypto = false;  // ids also hold the instance and material ids (RGBA32UI; Cryptomatte)
+    bool instance_ids = false;  // ids also hold the instance and material ids (RGBA32UI; Cryptomatte, light groups)
     bool operator==(const GBufferFeatures& o) const {
         return params1 == o.params1 && ids == o.ids && uv == o.uv && smooth_normal == o.smooth_normal &&
-               crypto == o.crypto;
+               instance_ids == o.instance_ids;
     }
 };
 

@@ -70,6 +70,7 @@ void LightModule::sync(const std::vector<Light>& lights, const glm::dvec3& camer
     std::vector<gpu::GpuLight>& packed = packed_;
     packed.clear();
     packed.reserve(lights.size());
+    groups_.clear();
     for (auto& t : has_type_) t = false;
     for (const Light& l : lights) {
         // Lights that cannot contribute are dropped here, not in the shader.
@@ -78,6 +79,7 @@ void LightModule::sync(const std::vector<Light>& lights, const glm::dvec3& camer
                                           (l.shape == AreaShape::Ellipse && l.size_y <= 0)))
             continue;  // zero-size area light: no emitting surface (Cycles renders nothing either)
         packed.push_back(pack_light(l, camera_position, threshold));
+        groups_.push_back(l.light_group);
         if (shadows) shadows->offer(packed.size() - 1, l, packed.back());
         has_type_[static_cast<int>(l.type)] = true;
     }
@@ -95,6 +97,7 @@ void LightModule::sync(const std::vector<Light>& lights, const glm::dvec3& camer
                                                  : -1.0;
             g.params = {float(m.area), m.cast_shadow ? 1.0f : 0.0f, float(reach), -1.0f};
             packed.push_back(g);
+            groups_.push_back(m.light_group);
             if (shadows && m.cast_shadow)
                 shadows->offer_mesh(packed.size() - 1, packed.back(), m.power * M_PI);
             has_type_[LIGHT_MESH] = true;
@@ -105,6 +108,9 @@ void LightModule::sync(const std::vector<Light>& lights, const glm::dvec3& camer
         for (std::size_t i = 0; i < packed.size(); ++i) packed[i].params.w = float(shadow_index[i]);
     }
     count_ = static_cast<std::uint32_t>(packed.size());
+    const std::uint32_t no_group = 0;  // a buffer is never empty
+    groups_buffer_ = groups_.empty() ? make_storage_buffer(&no_group, 4, "light groups")
+                                     : make_storage_buffer(groups_.data(), groups_.size() * 4, "light groups");
     if (first_mesh_ < packed.size()) {
         // Mesh lights change every sample (their shared point): a buffer updated in place.
         buffer_ = make_storage_buffer(nullptr, packed.size() * sizeof(gpu::GpuLight), "lights");
@@ -137,5 +143,9 @@ void LightModule::add_defines(ShaderVariant& variant) const {
 }
 
 void LightModule::bind() const { glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_LIGHTS, buffer_.get()); }
+
+void LightModule::bind_groups() const {
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_LIGHT_GROUPS, groups_buffer_.get());
+}
 
 }  // namespace deferred

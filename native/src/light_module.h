@@ -45,12 +45,18 @@ public:
     void add_defines(ShaderVariant& variant) const;
     void bind() const;
     std::uint32_t count() const { return count_; }
+    // Each packed light's light group (0 none), for the light-group passes;
+    // bound at SSBO_LIGHT_GROUPS by bind_groups().
+    const std::vector<std::uint32_t>& groups() const { return groups_; }
+    void bind_groups() const;
 
 private:
     Buffer buffer_;
     std::uint32_t count_ = 0;
     bool has_type_[5] = {false, false, false, false, false};
     std::vector<gpu::GpuLight> packed_;
+    std::vector<std::uint32_t> groups_;
+    Buffer groups_buffer_;
     std::size_t first_mesh_ = 0;  // packed index of the first mesh light
 };
 

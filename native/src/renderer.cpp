@@ -47,6 +47,9 @@ constexpr std::uint32_t kLightBatch = 512;
 // GpuMaterial.base_diffuse.w of a Holdout material (the closure model codes
 // of gbuffer_lib.glsl end at 3); geometry_frag.glsl turns it into a hole.
 constexpr float kClosureHoldout = 4.0f;
+// Light groups per render (layers of the accumulation, LIGHT_GROUPS sums in
+// the lighting pass's registers).
+constexpr int kMaxLightGroups = 32;
 // Below this many lights, building tile lists costs more than it saves
 // (deferred_bench_lights: 1 light 117 ms culled vs 38 ms brute force,
 // 16 lights 90 vs 225 ms, at 480x270 on llvmpipe).
@@ -224,7 +227,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     features.smooth_normal = materials.uses_smooth_normal();
     features.ids = wanted.contains(Pass::IndexOB) || wanted.contains(Pass::IndexMA);
     features.uv = wanted.contains(Pass::UV);
-    features.crypto = !settings.cryptomatte.empty();
+    features.instance_ids = !settings.cryptomatte.empty() || settings.light_groups > 0;
     const bool light_split = wanted.contains(Pass::DiffDir) || wanted.contains(Pass::GlossDir);
     const bool shadow_pass = wanted.contains(Pass::Shadow);
     if (settings.samples < 1 || settings.samples > 65536)
@@ -249,7 +252,11 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     std::size_t per_pixel = 4 + 16 + 8 + 8 + 4 + (features.params1 ? 8 : 0) + (features.ids ? 8 : 0) +
                             (features.uv ? 8 : 0) + (features.smooth_normal ? 4 : 0) + 16 + (light_split ? 32 : 0) + (shadow_pass ? 16 : 0);
     for (Pass p : wanted.list()) per_pixel += (p == Pass::Combined ? 0 : 16) + 4 * std::size_t(pass_info(p).channels);
-    if (features.crypto) per_pixel += 16;  // the ids target grows to RGBA32UI
+    if (features.instance_ids) per_pixel += 16;  // the ids target grows to RGBA32UI
+    if (settings.light_groups < 0 || settings.light_groups > kMaxLightGroups)
+        throw InvalidInput("light_groups must be in 0.." + std::to_string(kMaxLightGroups) + ", got " +
+                           std::to_string(settings.light_groups));
+    per_pixel += 16 * std::size_t(settings.light_groups) + (settings.light_groups > 0 ? 16 : 0);
     check_settings(settings, pixels * per_pixel + 2 * CryptomatteModule::bytes(settings) + AovModule::bytes(settings));
 
     FrameResult result;
@@ -269,6 +276,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     bounds.reserve(scene.instance_count());
     std::vector<std::uint32_t> slots;
     std::vector<std::uint32_t> crypto_instances;  // object and asset hash per instance (Cryptomatte)
+    std::vector<std::uint32_t> instance_groups;   // light group per instance (light-group passes)
     // One per batch: its instances [first, first + count) and its slot map.
     struct Draw { std::uint32_t mesh, first, count; bool cast_shadow; std::uint32_t slot_offset, slot_count; };
     std::vector<Draw> draws;
@@ -299,7 +307,9 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
             g.color = {b.colors[i * 4], b.colors[i * 4 + 1], b.colors[i * 4 + 2], b.colors[i * 4 + 3]};
             g.info = {b.randoms[i], 0.0f, 0.0f, 0.0f};
             instances.push_back(g);
-            if (features.crypto) crypto_instances.insert(crypto_instances.end(), {b.crypto[2 * i], b.crypto[2 * i + 1]});
+            if (!settings.cryptomatte.empty())
+                crypto_instances.insert(crypto_instances.end(), {b.crypto[2 * i], b.crypto[2 * i + 1]});
+            if (settings.light_groups > 0) instance_groups.push_back(b.light_group);
         }
     }
     std::vector<gpu::GpuMaterial> gpu_materials;
@@ -325,7 +335,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     this->materials.upload_constants();
     {
         std::vector<std::uint32_t> crypto_materials;
-        if (features.crypto)
+        if (!settings.cryptomatte.empty())
             for (const Material& m : scene.materials()) crypto_materials.push_back(m.crypto);
         cryptomatte.begin(settings, crypto_instances, crypto_materials);
     }
@@ -404,6 +414,20 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     }
     Texture shadow_light;
     if (shadow_pass) shadow_light = accumulation("shadow light");
+    // Light groups: one layer per group, and each instance's group.
+    Texture group_light;
+    Buffer instance_group_buffer;
+    if (settings.light_groups > 0) {
+        GLuint t = 0;
+        glCreateTextures(GL_TEXTURE_2D_ARRAY, 1, &t);
+        group_light = Texture(t);
+        glTextureStorage3D(t, 1, GL_RGBA32F, settings.width, settings.height, settings.light_groups);
+        glClearTexImage(t, 0, GL_RGBA, GL_FLOAT, zero);
+        const std::uint32_t none = 0;
+        instance_group_buffer = instance_groups.empty()
+            ? make_storage_buffer(&none, 4, "instance light groups")
+            : make_storage_buffer(instance_groups.data(), instance_groups.size() * 4, "instance light groups");
+    }
     std::vector<std::pair<Pass, Texture>> pass_images;
     for (Pass p : wanted.list())
         if (p != Pass::Combined) pass_images.emplace_back(p, accumulation(pass_info(p).name));
@@ -413,7 +437,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     ShaderVariant base_variant;
     if (features.params1) base_variant.defines.push_back("GBUF_PARAMS1");
     if (features.ids) base_variant.defines.push_back("GBUF_IDS");
-    if (features.crypto) base_variant.defines.push_back("GBUF_CRYPTO");
+    if (features.instance_ids) base_variant.defines.push_back("GBUF_INSTANCE_IDS");
     if (features.uv) base_variant.defines.push_back("GBUF_UV");
     if (features.smooth_normal) base_variant.defines.push_back("GBUF_SMOOTH_NORMAL");
     // Stochastic transparency, only when some constant material is partly
@@ -431,6 +455,8 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     if (shadows.world_index() >= 0) lighting_variant.defines.push_back("HAS_WORLD_OCCLUSION");
     world_module.add_defines(lighting_variant);
     if (ao_pass) lighting_variant.defines.push_back("OUT_AO");
+    if (settings.light_groups > 0)
+        lighting_variant.defines.push_back("LIGHT_GROUPS " + std::to_string(settings.light_groups));
     if (shadow_pass) lighting_variant.defines.push_back("OUT_SHADOW");
     ShaderVariant geometry_variant = base_variant;
     if (scene_alpha) geometry_variant.defines.push_back("SCENE_ALPHA");
@@ -958,6 +984,12 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
             glBindImageTexture(IMG_SHADOW, shadow_light.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
         for (auto& [p, image] : pass_images)
             if (p == Pass::AO) glBindImageTexture(IMG_AO, image.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
+        if (group_light) {
+            glBindImageTexture(IMG_LIGHT_GROUPS, group_light.get(), 0, GL_TRUE, 0, GL_READ_WRITE, GL_RGBA32F);
+            lights.bind_groups();
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_INSTANCE_GROUPS, instance_group_buffer.get());
+            glUniform1ui(1, world.light_group);
+        }
         if (light_split) {
             glBindImageTexture(IMG_DIFF_LIGHT, diffuse_light.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
             glBindImageTexture(IMG_GLOSS_LIGHT, glossy_light.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
@@ -1014,6 +1046,13 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     for (auto& [p, image] : pass_images) read(image.get(), p);
     result.cryptomatte = cryptomatte.finish();
     result.aovs = aovs.finish();
+    if (group_light) {
+        std::vector<float> all(pixels * 4 * std::size_t(settings.light_groups));
+        glGetTextureImage(group_light.get(), 0, GL_RGBA, GL_FLOAT, GLsizei(all.size() * 4), all.data());
+        for (int g = 0; g < settings.light_groups; ++g)
+            result.light_groups.emplace_back(all.begin() + long(pixels * 4 * g), all.begin() + long(pixels * 4 * (g + 1)));
+        check_gl("reading the light groups");
+    }
     check_gl("readback");
     result.timings.readback_ms = timer.lap_ms();
     result.timings.geometry_ms = geometry_ms;
@@ -1107,10 +1146,10 @@ std::uint32_t Renderer::add_graph_material(const Material& base, const MaterialG
 void Renderer::add_instances(std::uint32_t mesh_id, const double* matrices, std::size_t count,
                              const std::uint32_t* object_indices, const std::vector<std::uint32_t>& material_slots,
                              bool cast_shadow, const float* colors, const float* randoms,
-                             const std::uint32_t* crypto, bool holdout) {
+                             const std::uint32_t* crypto, bool holdout, std::uint32_t light_group) {
     impl_->thread.run([&] {
         impl_->scene.add_instances(mesh_id, matrices, count, object_indices, material_slots, cast_shadow, colors,
-                                   randoms, crypto, holdout);
+                                   randoms, crypto, holdout, light_group);
     });
 }
 

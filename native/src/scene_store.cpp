@@ -318,7 +318,7 @@ std::uint32_t SceneStore::add_material(const Material& m) {
 void SceneStore::add_instances(std::uint32_t mesh_id, const double* matrices, std::size_t count,
                                const std::uint32_t* object_indices, const std::vector<std::uint32_t>& slots,
                                bool cast_shadow, const float* colors, const float* randoms,
-                               const std::uint32_t* crypto, bool holdout) {
+                               const std::uint32_t* crypto, bool holdout, std::uint32_t light_group) {
     if (mesh_id >= meshes_.size())
         invalid("add_instances: mesh id " + std::to_string(mesh_id) + " does not exist (" +
                 std::to_string(meshes_.size()) + " meshes)");
@@ -340,6 +340,7 @@ void SceneStore::add_instances(std::uint32_t mesh_id, const double* matrices, st
     b.mesh_id = mesh_id;
     b.cast_shadow = cast_shadow;
     b.holdout = holdout;
+    b.light_group = light_group;
     b.matrices.assign(matrices, matrices + count * 16);
     b.object_indices = object_indices ? std::vector<std::uint32_t>(object_indices, object_indices + count)
                                       : std::vector<std::uint32_t>(count, 0u);

@@ -79,6 +79,7 @@ struct InstanceBatch {
     std::vector<std::uint32_t> material_slots; // slot -> material id
     bool cast_shadow = true;                   // drawn into shadow and world occlusion maps
     bool holdout = false;                      // a hole in the image: black, alpha 0 (Cycles' holdout)
+    std::uint32_t light_group = 0;             // its emission's light group, 0 none
     std::vector<float> colors;                 // RGBA per instance (Object Info)
     std::vector<float> randoms;                // one per instance (Object Info Random)
     std::vector<std::uint32_t> crypto;         // two per instance: Cryptomatte object and asset hashes
@@ -92,7 +93,8 @@ public:
     void add_instances(std::uint32_t mesh_id, const double* matrices, std::size_t count,
                        const std::uint32_t* object_indices, const std::vector<std::uint32_t>& slots,
                        bool cast_shadow = true, const float* colors = nullptr, const float* randoms = nullptr,
-                       const std::uint32_t* crypto = nullptr, bool holdout = false);
+                       const std::uint32_t* crypto = nullptr, bool holdout = false,
+                       std::uint32_t light_group = 0);
     void add_light(const Light& light);
     void set_world(const World& world);
 

@@ -53,6 +53,7 @@ TESTS = {
     "cryptomatte": (ANALYTIC, True),
     "holdout": (ANALYTIC, True),
     "aovs": (ANALYTIC, True),
+    "light_groups": (ANALYTIC, True),
     "emissive": (ANALYTIC, True),
 }
 BENCHMARKS = {"bench_export": (None, True)}

@@ -40,6 +40,7 @@ set(DEFERRED_BLENDER_TESTS
     cryptomatte
     holdout
     aovs
+    light_groups
 )
 
 foreach(_name IN LISTS DEFERRED_BLENDER_TESTS)

@@ -27,7 +27,7 @@ from . import session
 from ..export import camera as camera_export
 from ..export import cryptomatte as crypto_export
 from ..export import world as world_export
-from ..export import export_scene, requested_aovs
+from ..export import export_scene, light_group_indices, requested_aovs
 from .frame import FrameRect, flatten_passes
 
 LOG_PREFIX = "Deferred"
@@ -288,9 +288,11 @@ class FinalRender:
                     f"{len(requested)} passes", 0.35)
         t_render = time.perf_counter()
         crypto_layers, crypto_levels = crypto_export.enabled_layers(self.view_layer)
+        light_groups = light_group_indices(self.view_layer)
         kwargs = dict(passes=requested, film_transparent=bool(scene.render.film_transparent),
                       cryptomatte=crypto_layers, cryptomatte_levels=crypto_levels or 6,
                       aovs=requested_aovs(self.view_layer),
+                      light_groups=len(light_groups),
                       samples=samples, filter_width=_filter_width(scene),
                       alpha_threshold=_alpha_threshold(self.view_layer),
                       **_light_settings(scene), **mist)
@@ -298,6 +300,9 @@ class FinalRender:
             images = self._render_cancellable(renderer, mod, camera, frame, kwargs)
         except ValueError as ex:  # size/settings validation: the message says it all
             raise RenderSettingsError(str(ex)) from ex
+        for name, index in light_groups.items():  # the renderer names them by index
+            if f"#lightgroup{index}" in images:
+                images[f"Combined_{name}"] = images.pop(f"#lightgroup{index}")
         t_render = time.perf_counter() - t_render
         for message in getattr(renderer, "last_warnings", ()):
             self.warn(message)

@@ -83,6 +83,12 @@ def aov_passes(view_layer):
             for name, kind in requested_aovs(view_layer)]
 
 
+def light_group_passes(view_layer):
+    """PassSpecs of the view layer's light groups: Combined_<name>, RGB (Cycles')."""
+    from ..export import light_group_indices
+    return [PassSpec(f"Combined_{name}", "RGB", 3, "COLOR", None) for name in light_group_indices(view_layer)]
+
+
 def enabled_passes(view_layer, native_passes):
     """PassSpecs to register for ``view_layer`` (Combined always first)."""
     specs = []
@@ -92,6 +98,7 @@ def enabled_passes(view_layer, native_passes):
     if native_passes is not COMBINED_ONLY:
         specs += cryptomatte_passes(view_layer)
         specs += aov_passes(view_layer)
+        specs += light_group_passes(view_layer)
     if not specs or specs[0].name != "Combined":
         combined = [s for s in specs if s.name == "Combined"]
         others = [s for s in specs if s.name != "Combined"]

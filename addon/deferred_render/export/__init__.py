@@ -18,6 +18,13 @@ def requested_aovs(view_layer):
     return [(a.name, a.type) for a in getattr(view_layer, "aovs", ()) if a.is_valid and a.name]
 
 
+def light_group_indices(view_layer):
+    """{light group name: its index from 1} of the view layer's light groups."""
+    if view_layer is None:
+        return {}
+    return {g.name: k + 1 for k, g in enumerate(getattr(view_layer, "lightgroups", ())) if g.name}
+
+
 def export_scene(depsgraph, renderer, warn=None, test_break=None):
     """Clear ``renderer`` and sync the evaluated scene into it.
 
@@ -29,9 +36,12 @@ def export_scene(depsgraph, renderer, warn=None, test_break=None):
     view_layer = getattr(depsgraph, "view_layer", None)
     exporter = SceneExporter(renderer, warn=warn, test_break=test_break,
                              cryptomatte=crypto_export.Manifests(layers),
-                             aovs_requested=bool(requested_aovs(view_layer)))
+                             aovs_requested=bool(requested_aovs(view_layer)),
+                             light_groups=light_group_indices(view_layer))
     completed = exporter.sync(depsgraph)
     if completed:
-        world.export_world(depsgraph.scene.world, renderer, exporter.image_registry, warn)
+        scene_world = depsgraph.scene.world
+        world.export_world(scene_world, renderer, exporter.image_registry, warn,
+                           light_group=exporter.light_group_of(scene_world))
     exporter.stats.cryptomatte = exporter.cryptomatte
     return exporter.stats, not completed

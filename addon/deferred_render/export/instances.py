@@ -122,14 +122,15 @@ def object_random(inst, ob):
 
 
 class _Group:
-    __slots__ = ("mesh_id", "material_ids", "cast_shadow", "holdout", "matrices", "object_indices", "names",
-                 "colors", "randoms", "crypto")
+    __slots__ = ("mesh_id", "material_ids", "cast_shadow", "holdout", "light_group", "matrices", "object_indices",
+                 "names", "colors", "randoms", "crypto")
 
     def __init__(self, mesh_id, material_ids, cast_shadow, holdout=False):
         self.mesh_id = mesh_id
         self.material_ids = material_ids
         self.cast_shadow = cast_shadow
         self.holdout = holdout
+        self.light_group = 0
         self.matrices = []
         self.object_indices = []
         self.names = []
@@ -143,8 +144,11 @@ class SceneExporter:
     (add_mesh, add_material, add_instances, add_light): the native renderer,
     or a recorder in the tests."""
 
-    def __init__(self, renderer, warn=None, test_break=None, cryptomatte=None, aovs_requested=False):
+    def __init__(self, renderer, warn=None, test_break=None, cryptomatte=None, aovs_requested=False,
+                 light_groups=None):
         self.renderer = renderer
+        # The view layer's light groups, name -> index from 1 (none: {}).
+        self.light_groups = light_groups or {}
         # The view layer asks for shader AOVs: materials with AOV Output
         # nodes take the node path (only programs write AOVs).
         self.aovs_requested = aovs_requested
@@ -207,6 +211,13 @@ class SceneExporter:
         if not self.cryptomatte.wants("CryptoMaterial"):
             return 0
         return self.cryptomatte.hash("CryptoMaterial", material.name if material is not None else "default_surface")
+
+    def light_group_of(self, datablock):
+        """The light-group index of an object or world (its Light Group
+        field), 0 when it has none or the view layer has no such group."""
+        if not self.light_groups or datablock is None:
+            return 0
+        return self.light_groups.get(getattr(datablock, "lightgroup", ""), 0)
 
     def image_registry(self):
         """The export's ImageRegistry (one upload per image for materials and world)."""
@@ -358,10 +369,12 @@ class SceneExporter:
         # Object > Visibility > Holdout, or a holdout collection of the view
         # layer: a hole in the image (Cycles' SD_OBJECT_HOLDOUT_MASK).
         holdout = bool(getattr(ob, "is_holdout", False)) or ob.original.name in self._holdout_objects
-        group_key = (mesh_id, material_ids, cast_shadow, holdout)
+        light_group = self.light_group_of(ob)
+        group_key = (mesh_id, material_ids, cast_shadow, holdout, light_group)
         group = self._groups.get(group_key)
         if group is None:
             group = self._groups[group_key] = _Group(mesh_id, material_ids, cast_shadow, holdout)
+            group.light_group = light_group
         group.matrices.append(matrix)
         group.object_indices.append(ob.pass_index)
         group.names.append(ob.name)
@@ -381,6 +394,9 @@ class SceneExporter:
             return
         if params is None:
             return
+        light_group = self.light_group_of(ob)
+        if light_group:
+            params["light_group"] = light_group
         try:
             self.renderer.add_light(**params)
         except ValueError as ex:  # refused by the native validation
@@ -398,11 +414,15 @@ class SceneExporter:
                           "randoms": np.ascontiguousarray(group.randoms, dtype=np.float32)}
             if group.crypto:
                 extras["crypto"] = np.ascontiguousarray(group.crypto, dtype=np.uint32).reshape(-1, 2)
+            if group.holdout:
+                extras["holdout"] = True
+            if group.light_group:
+                extras["light_group"] = group.light_group
             try:
                 self.renderer.add_instances(group.mesh_id, matrices,
                                             object_indices=object_indices,
                                             material_slots=list(group.material_ids),
-                                            cast_shadow=group.cast_shadow, holdout=group.holdout, **extras)
+                                            cast_shadow=group.cast_shadow, **extras)
             except ValueError as ex:  # refused by the native validation
                 names = ", ".join(f"'{n}'" for n in group.names[:3]) + (" ..." if len(group.names) > 3 else "")
                 self.warn(f"{len(group.names)} object(s) skipped ({names}): {ex}")

@@ -38,15 +38,17 @@ def _linked(socket):
     return None if node.mute else node
 
 
-def export_world(world, renderer, image_registry, warn=None):
+def export_world(world, renderer, image_registry, warn=None, light_group=0):
     """Hand the world to ``renderer``: set_world(color=..., graph=IR or None).
 
     ``image_registry()`` gives the export's ImageRegistry (texture uploads).
     A graph the compiler cannot take falls back to the viewport colour with
-    a warning naming why."""
+    a warning naming why. ``light_group``: the world's light group (its sky
+    sun lamps too), 0 none."""
     def note(message):
         if warn:
             warn(message)
+    group = {"light_group": light_group} if light_group else {}
 
     if world is not None and _needs_graph(world) and hasattr(renderer, "set_world"):
         from ..materials import builder as graph_builder
@@ -59,21 +61,21 @@ def export_world(world, renderer, image_registry, warn=None):
                 note(f"World '{world.name}': " + "; ".join(graph.notes))
             try:
                 # The colour is the fallback if the native bake fails (warned).
-                renderer.set_world(color=_finite_color(world.color), graph=graph.ir)
+                renderer.set_world(color=_finite_color(world.color), graph=graph.ir, **group)
                 for direction, irradiance, angle in graph.sun_lamps:
-                    _add_sun_lamp(renderer, direction, irradiance, angle, note)
+                    _add_sun_lamp(renderer, direction, irradiance, angle, note, group)
                 return
             except ValueError as ex:  # refused by the native validation
                 note(f"World '{world.name}': {ex} (rendered with the viewport colour)")
-        renderer.set_world(color=_finite_color(world.color))
+        renderer.set_world(color=_finite_color(world.color), **group)
         return
     color, warnings = world_color(world)
     for message in warnings:
         note(message)
-    renderer.set_world(color=color)
+    renderer.set_world(color=color, **group)
 
 
-def _add_sun_lamp(renderer, direction, irradiance, angle, note):
+def _add_sun_lamp(renderer, direction, irradiance, angle, note, group=None):
     """A sky's sun disc as a sun lamp: light from ``direction`` (world, unit)
     with ``irradiance`` (RGB, W/m^2) over a disc of ``angle`` (radians)."""
     import numpy as np
@@ -91,7 +93,7 @@ def _add_sun_lamp(renderer, direction, irradiance, angle, note):
     peak = max(irradiance)
     energy = min(peak, MAX_WORLD)
     renderer.add_light(type="SUN", matrix=matrix, color=tuple(c / peak for c in irradiance), energy=energy,
-                       angle=float(angle), cast_shadow=True)
+                       angle=float(angle), cast_shadow=True, **(group or {}))
 
 
 def _finite_color(value):

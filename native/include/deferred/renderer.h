@@ -105,6 +105,10 @@ struct RenderSettings {
     int cryptomatte_levels = 6;
     // Shader AOVs to fill (none: no AOV work at all).
     std::vector<AovRequest> aovs;
+    // Light groups: how many (Light/World::light_group and the instances'
+    // index them from 1); each gets a Combined-like RGB image of the light
+    // its members give (lights, emissive surfaces, the world). 0: none.
+    int light_groups = 0;
 };
 
 // One shader AOV of a finished frame: RGBA (colour) or one channel per
@@ -164,6 +168,7 @@ struct FrameResult {
     std::vector<PassImage> passes;
     std::vector<CryptomatteImage> cryptomatte;
     std::vector<AovImage> aovs;
+    std::vector<std::vector<float>> light_groups;  // RGBA per pixel, rows bottom-up, one per group
     FrameTimings timings;
     // What the frame could not render as asked, e.g. a node material whose
     // program failed to compile (drawn with the default surface instead).
@@ -198,7 +203,8 @@ public:
                        const std::uint32_t* object_indices,
                        const std::vector<std::uint32_t>& material_slots, bool cast_shadow = true,
                        const float* colors = nullptr, const float* randoms = nullptr,
-                       const std::uint32_t* crypto = nullptr, bool holdout = false);
+                       const std::uint32_t* crypto = nullptr, bool holdout = false,
+                       std::uint32_t light_group = 0);
     // Node materials: an image texture nodes sample (returns its id), and a
     // material evaluated from a graph (material_graph.h). `base` gives what
     // the graph does not: the pass index. Returns the material id.

@@ -110,6 +110,8 @@ struct Light {
     float size = 0.25f;             // area X size, m
     float size_y = 0.25f;           // area Y size (RECTANGLE/ELLIPSE), m
     bool cast_shadow = true;
+    // Light group (the view layer's light groups): 0 none, k the k-th group.
+    std::uint32_t light_group = 0;
 };
 
 enum class CameraType : std::uint32_t { Perspective = 0, Orthographic = 1 };
@@ -135,6 +137,7 @@ struct Camera {
 
 struct World {
     Vec3 color{0.05f, 0.05f, 0.05f};  // Background colour x strength
+    std::uint32_t light_group = 0;     // its light group (background and world light), 0 none
 };
 
 // Blender's mist settings (World > Mist Pass).

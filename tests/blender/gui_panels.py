@@ -1,6 +1,7 @@
 """The engine's panels drawn by Blender's real UI (not -b): under Xvfb, with
 the engine active, the Properties editor is switched to each tab that has a
-panel of ours (Render, View Layer, Material with every Blend Mode, Light) and
+panel of ours (Render, View Layer, Material with every Blend Mode, Light,
+Object, World) and
 the window is redrawn; every panel of ours must have drawn without an
 exception (their draw methods are wrapped, re-registered, to record what
 happened; the drawing itself is Blender's).
@@ -82,6 +83,10 @@ def steps():
         yield
     view_layer.objects.active = light
     show('DATA')
+    yield
+    show('OBJECT')
+    yield
+    show('WORLD')
     yield
     for name in names:
         print(f"  {name}: {RESULTS.get(name, 'never drawn')}")

@@ -140,6 +140,20 @@ class DEFERRED_RENDER_PT_passes(_EnginePanel, bpy.types.Panel):
         col.prop(view_layer, "use_pass_cryptomatte_material", text="Material")
         col.prop(view_layer, "use_pass_cryptomatte_asset", text="Asset")
         layout.prop(view_layer, "pass_cryptomatte_depth", text="Levels")
+        # Shader AOVs and light groups: Blender's own lists and operators.
+        layout.label(text="Shader AOV")
+        row = layout.row()
+        row.template_list("VIEWLAYER_UL_aov", "aovs", view_layer, "aovs", view_layer, "active_aov_index", rows=2)
+        col = row.column(align=True)
+        col.operator("scene.view_layer_add_aov", icon='ADD', text="")
+        col.operator("scene.view_layer_remove_aov", icon='REMOVE', text="")
+        layout.label(text="Light Groups")
+        row = layout.row()
+        row.template_list("UI_UL_list", "lightgroups", view_layer, "lightgroups", view_layer,
+                          "active_lightgroup_index", rows=2)
+        col = row.column(align=True)
+        col.operator("scene.view_layer_add_lightgroup", icon='ADD', text="")
+        col.operator("scene.view_layer_remove_lightgroup", icon='REMOVE', text="")
 
 
 class DEFERRED_RENDER_PT_light(_EnginePanel, bpy.types.Panel):
@@ -206,6 +220,34 @@ class DEFERRED_RENDER_PT_material_settings(_EnginePanel, bpy.types.Panel):
         layout.prop(mat, "pass_index")
 
 
+class DEFERRED_RENDER_PT_object_light_group(_EnginePanel, bpy.types.Panel):
+    bl_label = "Light Group"
+    bl_context = "object"
+    bl_options = {'DEFAULT_CLOSED'}
+
+    @classmethod
+    def poll(cls, context):
+        return context.object is not None and context.engine in cls.COMPAT_ENGINES
+
+    def draw(self, context):
+        layout = self.split_layout()
+        layout.prop_search(context.object, "lightgroup", context.view_layer, "lightgroups", text="Light Group")
+
+
+class DEFERRED_RENDER_PT_world_light_group(_EnginePanel, bpy.types.Panel):
+    bl_label = "Light Group"
+    bl_context = "world"
+    bl_options = {'DEFAULT_CLOSED'}
+
+    @classmethod
+    def poll(cls, context):
+        return context.world is not None and context.engine in cls.COMPAT_ENGINES
+
+    def draw(self, context):
+        layout = self.split_layout()
+        layout.prop_search(context.world, "lightgroup", context.view_layer, "lightgroups", text="Light Group")
+
+
 classes = (
     DEFERRED_RENDER_PT_sampling,
     DEFERRED_RENDER_PT_lights,
@@ -214,4 +256,6 @@ classes = (
     DEFERRED_RENDER_PT_passes,
     DEFERRED_RENDER_PT_light,
     DEFERRED_RENDER_PT_material_settings,
+    DEFERRED_RENDER_PT_object_light_group,
+    DEFERRED_RENDER_PT_world_light_group,
 )

@@ -140,6 +140,17 @@ def set_all_passes(view_layer, on=True):
         setattr(view_layer, flag, on)
 
 
+def comparison_setup(scene, size=(160, 90), samples=16):
+    """A small render to compare the engines on: ``size`` at 100 %, one
+    sample count for Cycles and ours, every pass off; returns the view layer."""
+    scene.render.resolution_x, scene.render.resolution_y = size
+    scene.render.resolution_percentage = 100
+    scene.cycles.samples = scene.deferred_render.samples = samples
+    layer = scene.view_layers[0]
+    set_all_passes(layer, False)
+    return layer
+
+
 def render_exr(path_without_ext, scene=None):
     """F12 + save as 32-bit multilayer EXR; returns the file path."""
     scene = scene or bpy.context.scene

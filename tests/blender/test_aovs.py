@@ -61,11 +61,7 @@ def add_aov_outputs(material, pattern):
 
 
 def setup(scene):
-    scene.render.resolution_x, scene.render.resolution_y = 160, 90
-    scene.render.resolution_percentage = 100
-    scene.cycles.samples = scene.deferred_render.samples = 16
-    layer = scene.view_layers[0]
-    U.set_all_passes(layer, False)
+    layer = U.comparison_setup(scene)
     layer.use_pass_object_index = True
     for name, kind in (("pattern", 'COLOR'), ("height", 'VALUE')):
         aov = layer.aovs.add()

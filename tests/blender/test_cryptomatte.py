@@ -35,12 +35,8 @@ SAMPLES = 32
 
 
 def setup(scene):
-    scene.render.resolution_x, scene.render.resolution_y = 160, 90
-    scene.render.resolution_percentage = 100
-    scene.cycles.samples = SAMPLES
+    layer = U.comparison_setup(scene, samples=SAMPLES)
     scene.cycles.seed = 5
-    scene.deferred_render.samples = SAMPLES
-    layer = scene.view_layers[0]
     layer.use_pass_cryptomatte_object = True
     layer.use_pass_cryptomatte_material = True
     layer.use_pass_cryptomatte_asset = True

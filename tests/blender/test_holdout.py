@@ -32,11 +32,7 @@ OUT = U.out_dir("holdout")
 
 
 def setup(scene):
-    scene.render.resolution_x, scene.render.resolution_y = 160, 90
-    scene.render.resolution_percentage = 100
-    scene.cycles.samples = scene.deferred_render.samples = 16
-    layer = scene.view_layers[0]
-    U.set_all_passes(layer, False)
+    layer = U.comparison_setup(scene)
     layer.use_pass_diffuse_color = True
     layer.use_pass_z = True
     bpy.data.objects["SphereB"].is_holdout = True

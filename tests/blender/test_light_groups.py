@@ -30,13 +30,9 @@ GROUPS = ("key", "fill", "env", "glow")
 
 
 def setup(scene):
-    scene.render.resolution_x, scene.render.resolution_y = 160, 90
-    scene.render.resolution_percentage = 100
-    scene.cycles.samples = 256
+    layer = U.comparison_setup(scene, samples=64)
+    scene.cycles.samples = 256  # the reference
     scene.cycles.seed = 7
-    scene.deferred_render.samples = 64
-    layer = scene.view_layers[0]
-    U.set_all_passes(layer, False)
     for name in GROUPS + ("empty",):
         layer.lightgroups.add(name=name)
     bpy.data.objects["Sun"].lightgroup = "key"

@@ -220,32 +220,34 @@ class DEFERRED_RENDER_PT_material_settings(_EnginePanel, bpy.types.Panel):
         layout.prop(mat, "pass_index")
 
 
-class DEFERRED_RENDER_PT_object_light_group(_EnginePanel, bpy.types.Panel):
+class _LightGroupPanel(_EnginePanel):
+    """The Light Group field of the tab's datablock (object or world)."""
     bl_label = "Light Group"
+    bl_options = {'DEFAULT_CLOSED'}
+
+    @classmethod
+    def poll(cls, context):
+        return cls.datablock(context) is not None and context.engine in cls.COMPAT_ENGINES
+
+    def draw(self, context):
+        self.split_layout().prop_search(self.datablock(context), "lightgroup", context.view_layer, "lightgroups",
+                                        text="Light Group")
+
+
+class DEFERRED_RENDER_PT_object_light_group(_LightGroupPanel, bpy.types.Panel):
     bl_context = "object"
-    bl_options = {'DEFAULT_CLOSED'}
 
-    @classmethod
-    def poll(cls, context):
-        return context.object is not None and context.engine in cls.COMPAT_ENGINES
-
-    def draw(self, context):
-        layout = self.split_layout()
-        layout.prop_search(context.object, "lightgroup", context.view_layer, "lightgroups", text="Light Group")
+    @staticmethod
+    def datablock(context):
+        return context.object
 
 
-class DEFERRED_RENDER_PT_world_light_group(_EnginePanel, bpy.types.Panel):
-    bl_label = "Light Group"
+class DEFERRED_RENDER_PT_world_light_group(_LightGroupPanel, bpy.types.Panel):
     bl_context = "world"
-    bl_options = {'DEFAULT_CLOSED'}
 
-    @classmethod
-    def poll(cls, context):
-        return context.world is not None and context.engine in cls.COMPAT_ENGINES
-
-    def draw(self, context):
-        layout = self.split_layout()
-        layout.prop_search(context.world, "lightgroup", context.view_layer, "lightgroups", text="Light Group")
+    @staticmethod
+    def datablock(context):
+        return context.world
 
 
 classes = (

@@ -140,6 +140,24 @@ def set_all_passes(view_layer, on=True):
         setattr(view_layer, flag, on)
 
 
+def bare_setup(scene, world=False):
+    """A scene built by a test: a new camera as the scene's, every pass off,
+    Cycles on the CPU with direct light only and no denoiser; with ``world``
+    a new node World. Returns (camera object, view layer)."""
+    cam = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
+    scene.collection.objects.link(cam)
+    scene.camera = cam
+    if world:
+        scene.world = bpy.data.worlds.new("World")
+        scene.world.use_nodes = True
+    layer = scene.view_layers[0]
+    set_all_passes(layer, False)
+    scene.cycles.max_bounces = 0
+    scene.cycles.use_denoising = False
+    scene.cycles.device = 'CPU'
+    return cam, layer
+
+
 def comparison_setup(scene, size=(160, 90), samples=16):
     """A small render to compare the engines on: ``size`` at 100 %, one
     sample count for Cycles and ours, every pass off; returns the view layer."""

@@ -85,19 +85,10 @@ def reset_scene():
     scene.render.engine = 'CYCLES'
     scene.render.resolution_percentage = 100
     scene.render.film_transparent = False
-    scene.cycles.device = 'CPU'
     scene.cycles.samples = 1
     scene.cycles.use_adaptive_sampling = False
-    scene.cycles.use_denoising = False
     scene.cycles.filter_width = 0.01
-    scene.cycles.max_bounces = 0
-    cam = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
-    scene.collection.objects.link(cam)
-    scene.camera = cam
-    scene.world = bpy.data.worlds.new("World")
-    scene.world.use_nodes = True
-    layer = scene.view_layers[0]
-    U.set_all_passes(layer, False)
+    U.bare_setup(scene, world=True)
     return scene
 
 

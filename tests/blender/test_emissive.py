@@ -87,17 +87,10 @@ def build(shape, strength=5.0, textured=False, graph=False):
         bpy.context.object.data.materials.append(material("emitter", emit=(1.0, 0.9, 0.7, 1.0), strength=strength,
                                                           textured=textured, graph=graph))
         bpy.context.object.pass_index = 3
-    cam = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
-    scene.collection.objects.link(cam)
-    scene.camera = cam
+    cam, layer = U.bare_setup(scene)
     cam.location = (0.0, -6.0, 3.5)
     cam.rotation_euler = (math.radians(62), 0.0, 0.0)
-    layer = scene.view_layers[0]
-    U.set_all_passes(layer, False)
     layer.use_pass_object_index = True
-    scene.cycles.max_bounces = 0
-    scene.cycles.use_denoising = False
-    scene.cycles.device = 'CPU'
     return scene
 
 

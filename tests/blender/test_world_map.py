@@ -54,17 +54,8 @@ def reset_scene(width=200, height=134):
     scene.render.engine = U.ENGINE
     scene.render.resolution_x, scene.render.resolution_y = width, height
     scene.render.resolution_percentage = 100
-    cam = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
-    scene.collection.objects.link(cam)
-    scene.camera = cam
-    scene.world = bpy.data.worlds.new("World")
-    scene.world.use_nodes = True
-    layer = scene.view_layers[0]
-    U.set_all_passes(layer, False)
+    _, layer = U.bare_setup(scene, world=True)
     layer.use_pass_object_index = True
-    scene.cycles.max_bounces = 0
-    scene.cycles.use_denoising = False
-    scene.cycles.device = 'CPU'
     return scene
 
 

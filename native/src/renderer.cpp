@@ -607,6 +607,19 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         result.warnings.push_back("Blend-mode materials are lit by the first " + std::to_string(kLightBatch) +
                                   " of the scene's " + std::to_string(lights.count()) + " lights");
     if (forward_pass) {
+        // What the forward pass does not write (forward_module.h): said, not silent.
+        std::vector<std::string> skipped;
+        for (Pass p : wanted.list())
+            if (p != Pass::Combined) skipped.push_back(pass_info(p).name);
+        if (!settings.cryptomatte.empty()) skipped.push_back("Cryptomatte");
+        if (!settings.aovs.empty()) skipped.push_back("shader AOVs");
+        if (settings.light_groups > 0) skipped.push_back("light groups");
+        if (!skipped.empty()) {
+            std::string list;
+            for (const std::string& name : skipped) list += (list.empty() ? "" : ", ") + name;
+            result.warnings.push_back("Blend-mode materials reach Combined only; " + list +
+                                      " show what is behind them");
+        }
         forward.ensure(settings.width, settings.height);
         result.timings.gbuffer_bytes += forward.bytes();
         lighting_variant.defines.push_back("FORWARD_LAYER");

@@ -358,7 +358,7 @@ float math_compatible_sign(float a)
 /* kernel/svm/math_util.h: svm_math (3.4, no floored modulo yet) */
 float node_math_eval(int op, float a, float b, float c)
 {
-  const float M_PI_F = 3.1415926535897932;
+  const float MATH_PI = 3.1415926535897932; /* not M_PI_F: bsdf_lib.glsl defines that macro (forward pass) */
   const float FLT_EPSILON = 1.192092896e-07;
   switch (op) {
     case NODE_MATH_ADD: return a + b;
@@ -370,8 +370,8 @@ float node_math_eval(int op, float a, float b, float c)
     case NODE_MATH_SQRT: return math_safe_sqrt(a);
     case NODE_MATH_INVERSE_SQRT: return math_inverse_sqrt(a);
     case NODE_MATH_ABSOLUTE: return abs(a);
-    case NODE_MATH_RADIANS: return a * (M_PI_F / 180.0);
-    case NODE_MATH_DEGREES: return a * (180.0 / M_PI_F);
+    case NODE_MATH_RADIANS: return a * (MATH_PI / 180.0);
+    case NODE_MATH_DEGREES: return a * (180.0 / MATH_PI);
     case NODE_MATH_MINIMUM: return math_min(a, b);
     case NODE_MATH_MAXIMUM: return math_max(a, b);
     case NODE_MATH_LESS_THAN: return (a < b) ? 1.0 : 0.0;

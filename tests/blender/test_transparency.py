@@ -248,6 +248,12 @@ def blend_mode(checks, scene, cycles):
             bpy.data.materials[name].blend_method = 'OPAQUE'
         scene.deferred_render.samples = OURS_SAMPLES
     checks.check(forward_ms > 0.0, "the forward pass ran", f"{forward_ms:.1f} ms")
+    fallbacks = [m for _, m in final.last_messages if "Blend-mode (forward) program did not compile" in m]
+    checks.check(not fallbacks, "every Blend material's forward program compiled (no stochastic fallback)",
+                 f"{fallbacks[:1]}")
+    warned = [m for _, m in final.last_messages if "Blend-mode materials reach Combined only" in m]
+    checks.check(bool(warned) and "IndexOB" in warned[0],
+                 "the passes Blend surfaces do not write are named in a warning", f"{warned[:1]}")
     h, w = cycles.shape[:2]
     rows = slice(int(h * 0.2), int(h * 0.8))
     for label, cols in (("alpha 0.4 pane", (0.08, 0.30)), ("checker alpha pane", (0.30, 0.48)),

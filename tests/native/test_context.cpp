@@ -1,6 +1,7 @@
 // Headless context: creation, device selection errors, repeated create/destroy,
 // shader error messages.
 #include "gl_test_context.h"
+#include "shader_sources.h"
 
 #include "builtin_scenes.h"
 
@@ -103,4 +104,37 @@ TEST_F(ShaderErrors, EveryShipedVariantFamilyCompiles) {
     EXPECT_NE(shaders().graphics_program("geometry_vert.glsl", "shadow_frag.glsl", casters), 0u);
     casters.defines.push_back("WORLD_MAP");
     EXPECT_NE(shaders().graphics_program("geometry_vert.glsl", "shadow_frag.glsl", casters), 0u);
+}
+
+TEST_F(ShaderErrors, EveryNodeFileCompilesInEveryGraphVariant) {
+    // A graph program includes the node library files its nodes call; the
+    // forward pass adds the lighting library to the same program. Every
+    // node file together, in every variant a graph is compiled in, so that
+    // no name of one library collides with the other's (a Math node's local
+    // M_PI_F once did with bsdf_lib.glsl's macro, in the forward pass only).
+    std::string source = "#include \"material_lib.glsl\"\n";
+    for (const ShaderSource& s : embedded_shader_sources()) {
+        const std::string name = s.name;
+        if (name.rfind("nodes/", 0) == 0 && name.size() > 5 && name.substr(name.size() - 5) == ".glsl")
+            source += "#include \"" + name + "\"\n";
+    }
+    source += "void material_graph_eval(out Closure surface) { surface = closure_none(); }\n";
+    const std::vector<std::vector<std::string>> variants = {
+        {},
+        {"FORWARD_PASS", "FORWARD_MAX_LIGHTS 512", "HAS_POINT_LIGHTS", "HAS_SUN_LIGHTS", "HAS_AREA_LIGHTS",
+         "HAS_SPOT_LIGHTS", "HAS_SHADOWS", "HAS_WORLD_OCCLUSION"},
+        {"AOV_PASS"},
+        {"SHADOW_PASS"},
+        {"SHADOW_PASS", "WORLD_MAP"},
+    };
+    for (const std::vector<std::string>& extra : variants) {
+        ShaderVariant v;
+        v.defines = {"MATERIAL_GRAPH", "MATERIAL_ALPHA", "MATERIAL_BUMP", "MATERIAL_ATTRIBUTE_COUNT 0",
+                     "MATERIAL_IMAGE_COUNT 0"};
+        v.defines.insert(v.defines.end(), extra.begin(), extra.end());
+        EXPECT_NE(shaders().graphics_program("geometry_vert.glsl", "geometry_frag.glsl", v,
+                                             {{kMaterialGraphFile, source}}),
+                  0u)
+            << (extra.empty() ? std::string("G-buffer") : extra[0]);
+    }
 }

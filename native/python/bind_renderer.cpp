@@ -232,6 +232,8 @@ void declare_renderer(py::module_& m) {
             d["material_programs"] = self.last.material_programs;
             d["images_uploaded"] = self.last.images_uploaded;
             d["images_reused"] = self.last.images_reused;
+            d["meshes_uploaded"] = self.last.meshes_uploaded;
+            d["meshes_reused"] = self.last.meshes_reused;
             d["world_bake_ms"] = self.last.world_bake_ms;
             d["world_map_width"] = self.last.world_map_width;
             d["emitter_triangles"] = self.last.emitter_triangles;
@@ -250,7 +252,7 @@ void declare_renderer(py::module_& m) {
              [](PyRenderer& self, const py::object& positions, const py::object& indices,
                 const py::object& corner_normals, const py::object& corner_uvs,
                 const py::object& material_indices, const py::object& attributes, const py::object& texspace_location,
-                const py::object& texspace_size) {
+                const py::object& texspace_size, const std::string& key) {
                  MeshData mesh;
                  py::ssize_t nv = 0, nt = 0, n = 0;
                  mesh.positions = borrow<float>(positions, "positions", {-1, 3}, &nv);
@@ -296,12 +298,24 @@ void declare_renderer(py::module_& m) {
                  if (!texspace_location.is_none()) mesh.texspace_location = vec3_from(texspace_location, "texspace_location");
                  if (!texspace_size.is_none()) mesh.texspace_size = vec3_from(texspace_size, "texspace_size");
                  py::gil_scoped_release release;
-                 return self.get().add_mesh(mesh);
+                 return self.get().add_mesh(mesh, key);
              },
              py::arg("positions"), py::arg("indices"), py::kw_only(), py::arg("corner_normals") = py::none(),
              py::arg("corner_uvs") = py::none(), py::arg("material_indices") = py::none(),
              py::arg("attributes") = py::none(), py::arg("texspace_location") = py::none(),
-             py::arg("texspace_size") = py::none())
+             py::arg("texspace_size") = py::none(), py::arg("key") = std::string())
+        .def("find_mesh",
+             [](PyRenderer& self, const std::string& key) -> py::object {
+                 std::int64_t id;
+                 {
+                     py::gil_scoped_release release;
+                     id = self.get().find_mesh(key);
+                 }
+                 if (id < 0) return py::none();
+                 return py::int_(id);
+             },
+             py::arg("key"), "The id of a mesh kept (by key, add_mesh(..., key=)) from the previous scene, "
+             "or None; the current scene then counts as using it.")
         .def("add_image",
              [](PyRenderer& self, const py::object& pixels, const std::string& key) {
                  ImageData image;
@@ -485,8 +499,10 @@ void declare_renderer(py::module_& m) {
                 int samples, float filter_width, bool light_culling, float light_threshold, bool shadows,
                 int shadow_resolution, float shadow_quality, float alpha_threshold,
                 const std::vector<std::string>& cryptomatte, int cryptomatte_levels,
-                const std::vector<std::pair<std::string, std::string>>& aovs, int light_groups) {
+                const std::vector<std::pair<std::string, std::string>>& aovs, int light_groups,
+                int preview_interval_ms) {
                  RenderSettings s;
+                 s.preview_interval_ms = preview_interval_ms;
                  s.width = width;
                  s.height = height;
                  for (const std::string& name : passes) {
@@ -581,7 +597,33 @@ void declare_renderer(py::module_& m) {
              py::arg("light_threshold") = 1e-3f, py::arg("shadows") = true, py::arg("shadow_resolution") = 1024,
              py::arg("shadow_quality") = 1.0f, py::arg("alpha_threshold") = 0.5f,
              py::arg("cryptomatte") = std::vector<std::string>{}, py::arg("cryptomatte_levels") = 6,
-             py::arg("aovs") = std::vector<std::pair<std::string, std::string>>{}, py::arg("light_groups") = 0);
+             py::arg("aovs") = std::vector<std::pair<std::string, std::string>>{}, py::arg("light_groups") = 0,
+             py::arg("preview_interval_ms") = -1)
+        .def("preview",
+             [](const PyRenderer& self, std::uint64_t since) -> py::object {
+                 if (!self.renderer) throw Error("the renderer was closed");
+                 PreviewImage image;
+                 bool fresh;
+                 {
+                     py::gil_scoped_release release;
+                     fresh = self.renderer->preview(since, image);
+                 }
+                 if (!fresh) return py::none();
+                 py::object pixels = py::none();
+                 if (!image.pixels.empty()) {
+                     PassImage img;
+                     img.width = image.width;
+                     img.height = image.height;
+                     img.channels = 4;
+                     img.pixels = std::move(image.pixels);
+                     pixels = to_numpy(std::move(img));
+                 }
+                 return py::make_tuple(image.version, image.samples_done, image.samples_total, pixels);
+             },
+             py::arg("since") = 0,
+             "The newest Combined estimate of a render running with preview_interval_ms >= 0, if newer "
+             "than version `since`: (version, samples_done, samples_total, (H, W, 4) float32 array or "
+             "None before the first sample), else None. Never waits for the render.");
 }
 
 }  // namespace deferred::python

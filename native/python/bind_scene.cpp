@@ -67,7 +67,7 @@ void declare_scene(py::module_& m) {
         .def(py::init([](const std::string& type, const py::object& matrix, float lens, float sensor_width,
                          float sensor_height, const std::string& sensor_fit, float shift_x, float shift_y,
                          float clip_start, float clip_end, float ortho_scale, float pixel_aspect_x,
-                         float pixel_aspect_y, const py::object& fov) {
+                         float pixel_aspect_y, const py::object& fov, const py::object& viewplane) {
                  Camera c;
                  c.type = enum_from_name<CameraType>(
                      type, {{"PERSP", CameraType::Perspective}, {"ORTHO", CameraType::Orthographic}}, "Camera.type");
@@ -95,13 +95,21 @@ void declare_scene(py::module_& m) {
                      const double sensor = c.sensor_fit == SensorFit::Vertical ? c.sensor_height : c.sensor_width;
                      c.lens = float(0.5 * sensor / std::tan(0.5 * f));
                  }
+                 if (!viewplane.is_none()) {
+                     const auto v = viewplane.cast<std::vector<float>>();
+                     if (v.size() != 4) throw py::value_error("Camera.viewplane: expected (left, right, bottom, top)");
+                     if (!(v[1] > v[0] && v[3] > v[2]))
+                         throw py::value_error("Camera.viewplane: needs left < right and bottom < top");
+                     std::copy(v.begin(), v.end(), c.viewplane.begin());
+                 }
                  return c;
              }),
              py::kw_only(), py::arg("type") = "PERSP", py::arg("matrix") = py::none(), py::arg("lens") = 50.0f,
              py::arg("sensor_width") = 36.0f, py::arg("sensor_height") = 24.0f, py::arg("sensor_fit") = "AUTO",
              py::arg("shift_x") = 0.0f, py::arg("shift_y") = 0.0f, py::arg("clip_start") = 0.1f,
              py::arg("clip_end") = 100.0f, py::arg("ortho_scale") = 6.0f, py::arg("pixel_aspect_x") = 1.0f,
-             py::arg("pixel_aspect_y") = 1.0f, py::arg("fov") = py::none())
+             py::arg("pixel_aspect_y") = 1.0f, py::arg("fov") = py::none(),
+             py::arg("viewplane") = py::none())
         .def_readwrite("lens", &Camera::lens)
         .def_readwrite("clip_start", &Camera::clip_start)
         .def_readwrite("clip_end", &Camera::clip_end);

@@ -101,8 +101,15 @@ CameraMatrices build_camera(const Camera& cam, int width, int height) {
     }
     const double dx = 2.0 * aspectratio * cam.shift_x;
     const double dy = 2.0 * aspectratio * cam.shift_y;
-    const double l = (-xaspect + dx) * unit, r = (xaspect + dx) * unit;
-    const double b = (-yaspect + dy) * unit, t = (yaspect + dy) * unit;
+    double l = (-xaspect + dx) * unit, r = (xaspect + dx) * unit;
+    double b = (-yaspect + dy) * unit, t = (yaspect + dy) * unit;
+    if (cam.viewplane != std::array<float, 4>{0.0f, 0.0f, 0.0f, 0.0f}) {
+        for (float v : cam.viewplane) require(std::isfinite(v), "viewplane has NaN/Inf");
+        l = cam.viewplane[0];
+        r = cam.viewplane[1];
+        b = cam.viewplane[2];
+        t = cam.viewplane[3];
+    }
     out.viewplane = {l, r, b, t};
 
     const double n = cam.clip_start, f = cam.clip_end;

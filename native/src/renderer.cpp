@@ -15,6 +15,7 @@
 #include "light_culling.h"
 #include "light_module.h"
 #include "material_module.h"
+#include "progressive_preview.h"
 #include "render_thread.h"
 #include "scene_store.h"
 #include "shader_library.h"
@@ -107,6 +108,7 @@ struct Renderer::Impl {
     ForwardModule forward;
     CryptomatteModule cryptomatte;
     AovModule aovs;
+    ProgressivePreview preview;
     std::int32_t world_graph = -1;  // the world's node graph in `materials`, -1: a constant colour
     VertexArray empty_vao;
     Buffer dummy_ssbo;
@@ -132,7 +134,7 @@ struct Renderer::Impl {
             forward.release();
             cryptomatte.release();
             aovs.release();
-            scene.clear();
+            scene.release_all();
             materials.release_all();
             shaders.reset();
             empty_vao.reset();
@@ -883,6 +885,8 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         forward.end_sample();
     };
 
+    double preview_ms = 0;  // progressive preview read-backs, counted as readback
+    preview.begin(settings.width, settings.height, settings.samples, settings.preview_interval_ms);
     for (int sample = 0; sample < settings.samples; ++sample) {
         check_cancel();
         // Jitter: one pixel-filter offset for the whole image (sample 0: none).
@@ -1024,6 +1028,8 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         }
         check_gl("passes");
         passes_ms += timer.lap_ms();
+        preview.publish(film.get(), sample + 1);
+        preview_ms += timer.lap_ms();
     }
 
     // DiffDir/GlossDir: accumulated light over accumulated colour; Shadow:
@@ -1067,7 +1073,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         check_gl("reading the light groups");
     }
     check_gl("readback");
-    result.timings.readback_ms = timer.lap_ms();
+    result.timings.readback_ms = timer.lap_ms() + preview_ms;
     result.timings.geometry_ms = geometry_ms;
     result.timings.lighting_ms = lighting_ms;
     result.timings.forward_ms = forward_ms;
@@ -1085,6 +1091,8 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     result.timings.programs_compiled = shaders->compile_count() - compiles_before;
     result.timings.images_uploaded = materials.images_uploaded();
     result.timings.images_reused = materials.images_reused();
+    result.timings.meshes_uploaded = scene.meshes_uploaded();
+    result.timings.meshes_reused = scene.meshes_reused();
     result.timings.compile_ms = shaders->compile_ms() - compile_ms_before;
     result.timings.programs_loaded = shaders->disk_loads() - loads_before;
     result.timings.load_ms = shaders->load_ms() - load_ms_before;
@@ -1115,8 +1123,12 @@ void Renderer::clear_scene() {
     });
 }
 
-std::uint32_t Renderer::add_mesh(const MeshData& mesh) {
-    return impl_->thread.run([&] { return impl_->scene.add_mesh(mesh); });
+std::uint32_t Renderer::add_mesh(const MeshData& mesh, const std::string& key) {
+    return impl_->thread.run([&] { return impl_->scene.add_mesh(mesh, key); });
+}
+
+std::int64_t Renderer::find_mesh(const std::string& key) {
+    return impl_->thread.run([&] { return impl_->scene.find_mesh(key); });
 }
 
 std::uint32_t Renderer::add_material(const Material& material) {
@@ -1183,5 +1195,7 @@ FrameResult Renderer::render(const Camera& camera, const RenderSettings& setting
 }
 
 void Renderer::cancel() { impl_->cancel_requested = true; }
+
+bool Renderer::preview(std::uint64_t since, PreviewImage& out) const { return impl_->preview.take(since, out); }
 
 }  // namespace deferred

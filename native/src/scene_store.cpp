@@ -186,7 +186,20 @@ Light sanitized_light(const Light& in) {
 }
 
 void SceneStore::clear() {
-    meshes_.clear();
+    // A clear right after a clear keeps the kept meshes: "used by the last
+    // scene" means the last non-empty one.
+    if (scene_started_) {
+        for (std::size_t i = 0; i < meshes_.size(); ++i) {
+            MeshSlot& slot = mesh_slots_[i];
+            if (slot.alive && (!slot.used || slot.key.empty())) {
+                meshes_[i] = GpuMesh();
+                slot = MeshSlot();
+            }
+            slot.used = false;
+        }
+        scene_started_ = false;
+    }
+    meshes_uploaded_ = meshes_reused_ = 0;
     batches_.clear();
     materials_.clear();
     lights_.clear();
@@ -194,7 +207,27 @@ void SceneStore::clear() {
     instance_count_ = 0;
 }
 
-std::uint32_t SceneStore::add_mesh(const MeshData& m) {
+void SceneStore::release_all() {
+    clear();
+    meshes_.clear();
+    mesh_slots_.clear();
+}
+
+std::int64_t SceneStore::find_mesh(const std::string& key) {
+    if (key.empty()) return -1;
+    for (std::size_t i = 0; i < meshes_.size(); ++i) {
+        MeshSlot& slot = mesh_slots_[i];
+        if (slot.alive && slot.key == key) {
+            if (!slot.used) ++meshes_reused_;
+            slot.used = true;
+            scene_started_ = true;
+            return std::int64_t(i);
+        }
+    }
+    return -1;
+}
+
+std::uint32_t SceneStore::add_mesh(const MeshData& m, const std::string& key) {
     const std::int32_t max_mat = validate_mesh(m);
 
     GpuMesh g;
@@ -291,7 +324,21 @@ std::uint32_t SceneStore::add_mesh(const MeshData& m) {
         g.texspace_location[k] = m.texspace_location[std::size_t(k)];
         g.texspace_size[k] = m.texspace_size[std::size_t(k)];
     }
+    // A slot another scene dropped, else a new one; ids stay stable while
+    // meshes are kept.
+    MeshSlot slot;
+    slot.key = key;
+    slot.alive = slot.used = true;
+    scene_started_ = true;
+    ++meshes_uploaded_;
+    for (std::size_t i = 0; i < meshes_.size(); ++i)
+        if (!mesh_slots_[i].alive) {
+            meshes_[i] = std::move(g);
+            mesh_slots_[i] = std::move(slot);
+            return static_cast<std::uint32_t>(i);
+        }
     meshes_.push_back(std::move(g));
+    mesh_slots_.push_back(std::move(slot));
     return static_cast<std::uint32_t>(meshes_.size() - 1);
 }
 
@@ -319,7 +366,7 @@ void SceneStore::add_instances(std::uint32_t mesh_id, const double* matrices, st
                                const std::uint32_t* object_indices, const std::vector<std::uint32_t>& slots,
                                bool cast_shadow, const float* colors, const float* randoms,
                                const std::uint32_t* crypto, bool holdout, std::uint32_t light_group) {
-    if (mesh_id >= meshes_.size())
+    if (mesh_id >= meshes_.size() || !mesh_slots_[mesh_id].alive)
         invalid("add_instances: mesh id " + std::to_string(mesh_id) + " does not exist (" +
                 std::to_string(meshes_.size()) + " meshes)");
     validate_instances(matrices, count);

@@ -87,8 +87,20 @@ struct InstanceBatch {
 
 class SceneStore {
 public:
+    // Drops the scene. Meshes added with a key that the scene just dropped
+    // used stay uploaded for the next one (find_mesh), as keyed images do
+    // (MaterialModule): the viewport re-syncs the whole scene after a
+    // transform or material edit without exporting a mesh again.
     void clear();
-    std::uint32_t add_mesh(const MeshData& mesh);  // validates, uploads
+    // Every mesh, kept ones too (the renderer's end).
+    void release_all();
+    // Validates, uploads. With a key (the caller's name for this mesh's
+    // content), it outlives clear() while each scene uses it.
+    std::uint32_t add_mesh(const MeshData& mesh, const std::string& key = {});
+    // The id of a mesh kept under `key`, now used by this scene; -1: none.
+    std::int64_t find_mesh(const std::string& key);
+    std::size_t meshes_uploaded() const { return meshes_uploaded_; }  // since clear()
+    std::size_t meshes_reused() const { return meshes_reused_; }
     std::uint32_t add_material(const Material& m);
     void add_instances(std::uint32_t mesh_id, const double* matrices, std::size_t count,
                        const std::uint32_t* object_indices, const std::vector<std::uint32_t>& slots,
@@ -106,7 +118,15 @@ public:
     std::size_t instance_count() const { return instance_count_; }
 
 private:
+    struct MeshSlot {
+        std::string key;
+        bool alive = false;  // holds a mesh (a dropped slot is reused by add_mesh)
+        bool used = false;   // used by the scene being built
+    };
     std::vector<GpuMesh> meshes_;
+    std::vector<MeshSlot> mesh_slots_;  // parallel to meshes_
+    bool scene_started_ = false;        // something was added or found since clear()
+    std::size_t meshes_uploaded_ = 0, meshes_reused_ = 0;
     std::vector<InstanceBatch> batches_;
     std::vector<Material> materials_;
     std::vector<Light> lights_;

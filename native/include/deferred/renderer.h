@@ -109,6 +109,21 @@ struct RenderSettings {
     // index them from 1); each gets a Combined-like RGB image of the light
     // its members give (lights, emissive surfaces, the world). 0: none.
     int light_groups = 0;
+    // Progressive preview (the 3D viewport): >= 0 publishes the Combined
+    // estimate after the first sample, then at most every this many
+    // milliseconds, and after the last sample, for Renderer::preview().
+    // -1: off (no read-back inside the sample loop).
+    int preview_interval_ms = -1;
+};
+
+// The newest Combined estimate of a render in progress (preview_interval_ms):
+// RGBA, rows bottom-up, the average of the `samples_done` samples so far.
+// `version` grows with every image and every new render.
+struct PreviewImage {
+    std::uint64_t version = 0;
+    int samples_done = 0, samples_total = 0;
+    int width = 0, height = 0;
+    std::vector<float> pixels;  // empty until the render's first sample
 };
 
 // One shader AOV of a finished frame: RGBA (colour) or one channel per
@@ -159,6 +174,8 @@ struct FrameTimings {
     std::size_t material_programs = 0;  // distinct node-material programs the frame drew with
     std::size_t images_uploaded = 0;    // images uploaded for this scene (since clear_scene)
     std::size_t images_reused = 0;      // images kept from the previous scene and found by key
+    std::size_t meshes_uploaded = 0;    // meshes uploaded for this scene (since clear_scene)
+    std::size_t meshes_reused = 0;      // meshes kept from the previous scene and found by key
     double world_bake_ms = 0;           // baking the world's node tree and its sampling CDF
     int world_map_width = 0;            // the baked world map's width (0: a constant world)
     std::size_t emitter_triangles = 0;  // emissive mesh triangles lighting the scene
@@ -190,7 +207,11 @@ public:
     // and keyed images (see add_image).
     void clear_scene();
     // Returns the mesh id. The data is validated and uploaded before returning.
-    std::uint32_t add_mesh(const MeshData& mesh);
+    // With a key (the caller's name for the mesh's content), the mesh
+    // outlives clear_scene() while each scene uses it, and find_mesh(key)
+    // gives its id back without an upload (-1: not kept), as for images.
+    std::uint32_t add_mesh(const MeshData& mesh, const std::string& key = {});
+    std::int64_t find_mesh(const std::string& key);
     std::uint32_t add_material(const Material& material);
     // `count` instances of `mesh_id`: world matrices (column-major, 16 doubles
     // each), object pass indices (may be null: 0), and a material slot map
@@ -227,6 +248,9 @@ public:
     // Thread-safe, callable while render() runs on another thread: the
     // render stops at its next sample or light batch and throws Cancelled.
     void cancel();
+    // Thread-safe, never waits for a render: copies the newest preview image
+    // into `out` when its version is newer than `since` (false otherwise).
+    bool preview(std::uint64_t since, PreviewImage& out) const;
 
     struct Impl;
 

@@ -133,6 +133,12 @@ struct Camera {
     float ortho_scale = 6.0f;
     float pixel_aspect_x = 1.0f;
     float pixel_aspect_y = 1.0f;
+    // An explicit viewplane (left, right, bottom, top at unit distance for a
+    // perspective camera, in metres for an orthographic one) replaces the one
+    // lens, sensor, shift and ortho_scale give: the 3D viewport's projection
+    // (region_data.window_matrix), whose zoom and offset in camera view a
+    // physical camera cannot express. Off (all zero): the camera's own.
+    std::array<float, 4> viewplane{0.0f, 0.0f, 0.0f, 0.0f};
 };
 
 struct World {

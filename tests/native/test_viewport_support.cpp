@@ -1,0 +1,201 @@
+// What the 3D viewport (addon engine/viewport.py) needs from the renderer:
+// meshes kept across clear_scene() by key (a transform or material edit
+// re-syncs the scene without uploading a mesh), the progressive preview
+// (the Combined estimate while samples run, taken from another thread
+// without waiting), and an explicit viewplane (the viewport's projection).
+#include "test_helpers.h"
+
+#include "camera.h"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cmath>
+#include <thread>
+
+using namespace deferred;
+using namespace deferred::testing;
+
+namespace {
+
+Material grey() {
+    Material m;
+    m.base_color = {0.5f, 0.5f, 0.5f};
+    m.roughness = 0.5f;
+    return m;
+}
+
+Light sun_light() {
+    Light sun;
+    sun.type = LightType::Sun;
+    sun.angle = 0.2f;  // soft: samples differ, so the estimate changes as they accumulate
+    const double eye[3] = {1.0, 0.5, 3.0}, target[3] = {0.0, 0.0, 0.0};
+    sun.matrix = tools::look_at(eye, target);
+    sun.energy = 3.0f;
+    return sun;
+}
+
+// A floor and a box-like plane above it casting a soft shadow.
+void build_scene(Renderer& r, std::uint32_t floor_mesh, std::uint32_t pane_mesh) {
+    const std::uint32_t mat = r.add_material(grey());
+    r.add_instances(floor_mesh, identity_matrix().data(), 1, nullptr, {mat});
+    r.add_instances(pane_mesh, tools::translation(0, 0, 1.0).data(), 1, nullptr, {mat});
+    r.add_light(sun_light());
+    set_world_color(r, 0.1f, 0.1f, 0.1f);
+}
+
+double max_difference(const PassImage& a, const PassImage& b) {
+    double worst = 0.0;
+    for (std::size_t i = 0; i < a.pixels.size(); ++i) worst = std::max(worst, double(std::abs(a.pixels[i] - b.pixels[i])));
+    return worst;
+}
+
+}  // namespace
+
+TEST(KeptMeshes, FoundByKeyAfterClearAndDrawnTheSame) {
+    Renderer r;
+    tools::MeshArrays floor = tools::make_plane(10.0f, 1), pane = tools::make_plane(1.0f, 1);
+    const std::uint32_t floor_id = r.add_mesh(floor.view(), "floor");
+    const std::uint32_t pane_id = r.add_mesh(pane.view(), "pane");
+    build_scene(r, floor_id, pane_id);
+    RenderSettings s;
+    s.width = s.height = 32;
+    s.samples = 2;
+    const FrameResult first = r.render(top_down_ortho(10.0, 6.0f), s);
+    EXPECT_EQ(first.timings.meshes_uploaded, 2u);
+    EXPECT_EQ(first.timings.meshes_reused, 0u);
+
+    r.clear_scene();
+    const std::int64_t floor_again = r.find_mesh("floor"), pane_again = r.find_mesh("pane");
+    ASSERT_EQ(floor_again, std::int64_t(floor_id));
+    ASSERT_EQ(pane_again, std::int64_t(pane_id));
+    EXPECT_EQ(r.find_mesh("nothing"), -1);
+    build_scene(r, std::uint32_t(floor_again), std::uint32_t(pane_again));
+    const FrameResult second = r.render(top_down_ortho(10.0, 6.0f), s);
+    EXPECT_EQ(second.timings.meshes_uploaded, 0u);
+    EXPECT_EQ(second.timings.meshes_reused, 2u);
+    EXPECT_EQ(max_difference(*first.find(Pass::Combined), *second.find(Pass::Combined)), 0.0);
+}
+
+TEST(KeptMeshes, UnkeyedAndUnusedMeshesAreDropped) {
+    Renderer r;
+    tools::MeshArrays plane = tools::make_plane(1.0f, 1);
+    const std::uint32_t unkeyed = r.add_mesh(plane.view());
+    const std::uint32_t keyed = r.add_mesh(plane.view(), "kept");
+    r.clear_scene();
+    // The unkeyed mesh is gone: instancing it is refused, not drawn stale.
+    EXPECT_THROW(r.add_instances(unkeyed, identity_matrix().data(), 1, nullptr, {}), InvalidInput);
+    // A clear with nothing in between keeps what the last scene used.
+    r.clear_scene();
+    EXPECT_EQ(r.find_mesh("kept"), std::int64_t(keyed));
+    // A scene that does not use it drops it at the next clear; its slot is
+    // reused by the next upload.
+    r.clear_scene();
+    const std::uint32_t other = r.add_mesh(plane.view(), "other");
+    r.clear_scene();
+    EXPECT_EQ(r.find_mesh("kept"), -1);
+    EXPECT_EQ(r.find_mesh("other"), std::int64_t(other));
+    EXPECT_LE(other, 1u);  // a dropped slot was reused
+}
+
+TEST(ProgressivePreview, LastImageIsTheRenderAndVersionsGrowWhileSampling) {
+    Renderer r;
+    tools::MeshArrays floor = tools::make_plane(10.0f, 1), pane = tools::make_plane(1.0f, 1);
+    build_scene(r, r.add_mesh(floor.view()), r.add_mesh(pane.view()));
+    RenderSettings s;
+    s.width = 40;
+    s.height = 30;
+    s.samples = 24;
+    s.preview_interval_ms = 0;  // every sample
+
+    // Another thread takes images while the render runs, never blocked by it.
+    std::atomic<bool> done{false};
+    std::vector<int> seen;
+    std::uint64_t version = 0;
+    std::thread watcher([&] {
+        PreviewImage image;
+        while (!done) {
+            if (r.preview(version, image)) {
+                EXPECT_GT(image.version, version);
+                version = image.version;
+                if (!image.pixels.empty()) seen.push_back(image.samples_done);
+            }
+            std::this_thread::yield();
+        }
+    });
+    const FrameResult frame = r.render(top_down_ortho(10.0, 6.0f), s);
+    done = true;
+    watcher.join();
+    for (std::size_t i = 1; i < seen.size(); ++i) EXPECT_GT(seen[i], seen[i - 1]);
+
+    PreviewImage last;
+    ASSERT_TRUE(r.preview(0, last));
+    EXPECT_EQ(last.samples_done, 24);
+    EXPECT_EQ(last.samples_total, 24);
+    ASSERT_EQ(last.width, 40);
+    ASSERT_EQ(last.height, 30);
+    const PassImage& combined = *frame.find(Pass::Combined);
+    ASSERT_EQ(last.pixels.size(), combined.pixels.size());
+    for (std::size_t i = 0; i < last.pixels.size(); ++i) ASSERT_EQ(last.pixels[i], combined.pixels[i]) << i;
+    EXPECT_FALSE(r.preview(last.version, last));
+}
+
+TEST(ProgressivePreview, PartialImageIsTheAverageOfTheSamplesSoFar) {
+    // A render of 8 samples publishes after its third sample
+    // sum(3 samples) / 3: it equals a 3-sample render, whose samples are the
+    // same first three (the sample sequences are indexed by sample).
+    Renderer r;
+    tools::MeshArrays floor = tools::make_plane(10.0f, 1), pane = tools::make_plane(1.0f, 1);
+    build_scene(r, r.add_mesh(floor.view()), r.add_mesh(pane.view()));
+    RenderSettings three;
+    three.width = 40;
+    three.height = 30;
+    three.samples = 3;
+    const FrameResult reference = r.render(top_down_ortho(10.0, 6.0f), three);
+
+    RenderSettings eight = three;
+    eight.samples = 8;
+    eight.preview_interval_ms = 0;
+    PreviewImage partial;
+    std::atomic<bool> done{false};
+    std::thread watcher([&] {
+        PreviewImage image;
+        std::uint64_t version = 0;
+        while (!done) {
+            if (r.preview(version, image)) {
+                version = image.version;
+                if (image.samples_done == 3) partial = image;
+            }
+            std::this_thread::yield();
+        }
+    });
+    r.render(top_down_ortho(10.0, 6.0f), eight);
+    done = true;
+    watcher.join();
+    if (partial.pixels.empty()) GTEST_SKIP() << "the watcher missed sample 3 (a loaded machine)";
+    const PassImage& want = *reference.find(Pass::Combined);
+    double worst = 0.0;
+    for (std::size_t i = 0; i < want.pixels.size(); ++i)
+        worst = std::max(worst, double(std::abs(partial.pixels[i] - want.pixels[i])) /
+                                    std::max(1e-3, double(std::abs(want.pixels[i]))));
+    // Summed in another order (/8 then x 8/3 against /3): float rounding only.
+    EXPECT_LT(worst, 1e-5);
+}
+
+TEST(CameraViewplane, ExplicitViewplaneReplacesTheLensOne) {
+    Camera cam;
+    cam.lens = 35.0f;
+    cam.shift_x = 0.1f;
+    const CameraMatrices own = build_camera(cam, 64, 48);
+    Camera explicit_cam = cam;
+    explicit_cam.lens = 10.0f;  // ignored once a viewplane is given
+    explicit_cam.shift_x = 0.0f;
+    for (int k = 0; k < 4; ++k) explicit_cam.viewplane[std::size_t(k)] = float(own.viewplane[k]);
+    const CameraMatrices given = build_camera(explicit_cam, 64, 48);
+    for (int c = 0; c < 4; ++c)
+        for (int row = 0; row < 4; ++row) EXPECT_NEAR(given.projection[c][row], own.projection[c][row], 1e-6);
+    explicit_cam.viewplane = {0.0f, 0.0f, 0.0f, 0.0f};
+    explicit_cam.viewplane[0] = std::nanf("");
+    explicit_cam.viewplane[1] = 1.0f;
+    EXPECT_THROW(build_camera(explicit_cam, 64, 48), InvalidInput);
+}

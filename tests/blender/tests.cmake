@@ -68,7 +68,14 @@ if(XVFB_RUN)
            COMMAND ${XVFB_RUN} -a ${BLENDER_EXECUTABLE} --factory-startup --addons deferred_render
                    --python ${CMAKE_SOURCE_DIR}/tests/blender/gui_panels.py
            WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
-  set(_deferred_blender_gui gui_panels)
+  # The Rendered viewport (tests/blender/gui_viewport.py): accumulation
+  # against final renders, incremental updates, preview thumbnails.
+  add_test(NAME blender_gui_viewport
+           COMMAND ${XVFB_RUN} -a -s "-screen 0 1024x768x24" ${BLENDER_EXECUTABLE} --factory-startup
+                   ${CMAKE_SOURCE_DIR}/blend_samples/analytic.blend --addons deferred_render
+                   --python ${CMAKE_SOURCE_DIR}/tests/blender/gui_viewport.py
+           WORKING_DIRECTORY ${CMAKE_SOURCE_DIR})
+  set(_deferred_blender_gui gui_panels gui_viewport)
 else()
   message(WARNING "xvfb-run not found: the Blender GUI tests are not registered (Debian: xvfb xauth)")
 endif()

@@ -335,5 +335,13 @@ class FinalRender:
         return renderer
 
 
+# Material / world / light preview thumbnails rendered (bl_use_preview):
+# Blender's preview scenes come through render() with engine.is_preview.
+preview_renders = 0
+
+
 def render(engine, depsgraph):
+    global preview_renders
+    if engine.is_preview:
+        preview_renders += 1
     FinalRender(engine, depsgraph).run()

@@ -8,7 +8,7 @@ point the engine uses. The exporter talks to any object with the native
 
 from . import camera, light, material, mesh, world  # noqa: F401
 from . import cryptomatte as crypto_export
-from .instances import ExportStats, SceneExporter  # noqa: F401
+from .instances import ExportStats, MeshKeeper, SceneExporter  # noqa: F401
 
 
 def requested_aovs(view_layer):
@@ -25,11 +25,13 @@ def light_group_indices(view_layer):
     return {g.name: k + 1 for k, g in enumerate(getattr(view_layer, "lightgroups", ())) if g.name}
 
 
-def export_scene(depsgraph, renderer, warn=None, test_break=None):
+def export_scene(depsgraph, renderer, warn=None, test_break=None, mesh_keeper=None):
     """Clear ``renderer`` and sync the evaluated scene into it.
 
     Returns (stats, cancelled). ``warn(message)`` receives every warning
-    once; ``test_break()`` is polled during the walk.
+    once; ``test_break()`` is polled during the walk. ``mesh_keeper``
+    (instances.MeshKeeper): meshes the renderer kept from the last sync are
+    found again instead of exported (the viewport).
     """
     renderer.clear_scene()
     layers, _ = crypto_export.enabled_layers(getattr(depsgraph, "view_layer", None))
@@ -37,7 +39,8 @@ def export_scene(depsgraph, renderer, warn=None, test_break=None):
     exporter = SceneExporter(renderer, warn=warn, test_break=test_break,
                              cryptomatte=crypto_export.Manifests(layers),
                              aovs_requested=bool(requested_aovs(view_layer)),
-                             light_groups=light_group_indices(view_layer))
+                             light_groups=light_group_indices(view_layer),
+                             mesh_keeper=mesh_keeper)
     completed = exporter.sync(depsgraph)
     if completed:
         scene_world = depsgraph.scene.world

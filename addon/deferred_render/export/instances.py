@@ -47,6 +47,7 @@ MAX_MATRIX_VALUE = mesh_export.MAX_COORDINATE
 class ExportStats:
     def __init__(self):
         self.meshes = 0
+        self.meshes_reused = 0      # kept by the renderer from the last sync (MeshKeeper)
         self.triangles = 0          # unique (per native mesh)
         self.instances = 0
         self.instanced_triangles = 0
@@ -58,7 +59,8 @@ class ExportStats:
         self.cryptomatte = None     # cryptomatte.Manifests of the export (export_scene sets it)
 
     def summary(self):
-        return (f"{self.instances} instances of {self.meshes} meshes "
+        reused = f" (+{self.meshes_reused} kept)" if self.meshes_reused else ""
+        return (f"{self.instances} instances of {self.meshes} meshes{reused} "
                 f"({self.triangles} unique / {self.instanced_triangles} rendered triangles), "
                 f"{self.materials} materials, {self.lights} lights")
 
@@ -139,14 +141,45 @@ class _Group:
         self.crypto = []    # (object hash, asset hash) per instance, when Cryptomatte is asked for
 
 
+class MeshKeeper:
+    """Names for the meshes a renderer keeps between syncs (``add_mesh(...,
+    key=)``, ``find_mesh``): the viewport re-syncs the whole scene after any
+    edit, and a mesh whose geometry did not change is found again instead of
+    exported. A key changes when the object's geometry does
+    (``geometry_changed``, from ``depsgraph.updates``), and with what the
+    export of the mesh depends on besides its data: the object's material
+    slot count (indices are clamped to it) and the attributes its materials
+    read."""
+
+    def __init__(self):
+        self._generation = {}   # object name -> geometry edits seen
+        self.triangles = {}     # key -> triangle count of the mesh uploaded under it
+
+    @staticmethod
+    def object_name(ob):
+        original = getattr(ob, "original", None) or ob
+        return original.name_full
+
+    def key(self, ob, attribute_keys=frozenset()):
+        name = self.object_name(ob)
+        attributes = ",".join(sorted(repr(k) for k in attribute_keys))
+        return f"{name}|{self._generation.get(name, 0)}|{len(ob.material_slots)}|{attributes}"
+
+    def geometry_changed(self, name):
+        self._generation[name] = self._generation.get(name, 0) + 1
+
+
 class SceneExporter:
     """Streams one depsgraph into anything with the ``Renderer`` scene API
     (add_mesh, add_material, add_instances, add_light): the native renderer,
     or a recorder in the tests."""
 
     def __init__(self, renderer, warn=None, test_break=None, cryptomatte=None, aovs_requested=False,
-                 light_groups=None):
+                 light_groups=None, mesh_keeper=None):
         self.renderer = renderer
+        # Meshes the renderer keeps between syncs (the viewport; None: each
+        # sync uploads every mesh, as a final render does).
+        self.mesh_keeper = mesh_keeper if hasattr(renderer, "find_mesh") else None
         # The view layer's light groups, name -> index from 1 (none: {}).
         self.light_groups = light_groups or {}
         # The view layer asks for shader AOVs: materials with AOV Output
@@ -276,11 +309,26 @@ class SceneExporter:
             return ("data", ob.data.as_pointer())
         return ("object", ob.as_pointer())
 
-    def _mesh_id(self, ob, attribute_keys=frozenset()):
+    def _kept_mesh_key(self, inst, ob, attribute_keys):
+        if self.mesh_keeper is None or inst.is_instance:
+            # Instances (collection instances, geometry nodes) come from
+            # evaluated objects whose names do not identify their geometry.
+            return None
+        return self.mesh_keeper.key(ob, attribute_keys)
+
+    def _mesh_id(self, ob, attribute_keys=frozenset(), kept_key=None):
         # Objects sharing a mesh but reading other attributes get their own copy.
         key = (self._mesh_key(ob), attribute_keys)
         if key in self._mesh_ids:
             return self._mesh_ids[key]
+        if kept_key is not None:
+            kept_id = self.renderer.find_mesh(kept_key)
+            triangles = self.mesh_keeper.triangles.get(kept_key)
+            if kept_id is not None and triangles is not None:
+                self.stats.meshes_reused += 1
+                self.stats.triangles += triangles
+                self._mesh_ids[key] = (kept_id, triangles)
+                return self._mesh_ids[key]
         entry = None
         try:
             arrays = mesh_export.object_mesh_arrays(
@@ -297,17 +345,22 @@ class SceneExporter:
         else:
             mesh_export.clamp_material_indices(arrays, max(1, len(ob.material_slots)))
             try:
+                extras = self._mesh_extras(arrays)
+                if kept_key is not None:
+                    extras["key"] = kept_key
                 mesh_id = self.renderer.add_mesh(
                     arrays.positions, arrays.indices,
                     corner_normals=arrays.corner_normals,
                     corner_uvs=arrays.corner_uvs,
                     material_indices=arrays.material_indices,
-                    **self._mesh_extras(arrays))
+                    **extras)
             except ValueError as ex:  # refused by the native validation
                 self.stats.skipped_objects += 1
                 self._warn_once(("mesh", key), f"Object '{ob.name}' skipped: {ex}")
             else:
                 entry = (mesh_id, arrays.triangle_count)
+                if kept_key is not None:
+                    self.mesh_keeper.triangles[kept_key] = arrays.triangle_count
                 self.stats.meshes += 1
                 self.stats.triangles += arrays.triangle_count
                 self.stats.mesh_bytes += arrays.nbytes()
@@ -359,7 +412,7 @@ class SceneExporter:
             return
         material_ids = self._slot_material_ids(ob)
         keys = frozenset(k for m in material_ids for k in self._material_attributes.get(m, ()))
-        entry = self._mesh_id(ob, keys)
+        entry = self._mesh_id(ob, keys, kept_key=self._kept_mesh_key(inst, ob, keys))
         if entry is None:
             return
         mesh_id, triangles = entry

@@ -19,6 +19,17 @@ class DeferredRenderSettings(bpy.types.PropertyGroup):
         soft_max=256,
         max=4096,
     )
+    viewport_samples: IntProperty(
+        name="Viewport Samples",
+        description=(
+            "Samples the Rendered viewport accumulates; then it stops and the GPU idles until "
+            "something changes"
+        ),
+        default=32,
+        min=1,
+        soft_max=256,
+        max=4096,
+    )
     light_culling: BoolProperty(
         name="Light Culling",
         description=(

@@ -38,7 +38,9 @@ class DEFERRED_RENDER_PT_sampling(_EnginePanel, bpy.types.Panel):
     def draw(self, context):
         layout = self.split_layout()
         settings = context.scene.deferred_render
-        layout.prop(settings, "samples")
+        col = layout.column(align=True)
+        col.prop(settings, "viewport_samples", text="Viewport")
+        col.prop(settings, "samples", text="Render")
 
 
 class DEFERRED_RENDER_PT_lights(_EnginePanel, bpy.types.Panel):

@@ -154,3 +154,119 @@ void node_tex_sky_nishita(int const_block, sampler2D sky_texture, vec3 direction
 #undef SKY_NISHITA_PI
 #undef SKY_NISHITA_PI_2
 #undef SKY_NISHITA_2PI
+
+/* Sky Texture node, Preetham and Hosek/Wilkie skies, as Cycles 3.4.1 renders them.
+ *
+ * Sources (Apache-2.0; Blender 3.4.1 ships the kernel in scripts/addons/cycles/source/):
+ *   kernel/svm/sky.h            svm_node_tex_sky (the 29 floats it reads), sky_angle_between,
+ *                               sky_perez_function + sky_radiance_preetham (Preetham,
+ *                               Shirley, Smits 1999: xyY with Perez distributions),
+ *                               sky_radiance_internal + sky_radiance_hosek (Hosek, Wilkie
+ *                               2012: XYZ, times 2pi/683); neither draws a sun disc
+ *   kernel/camera/projection.h  direction_to_spherical (theta = safe_acosf(z), phi = atan2f(x, y))
+ *   util/color.h                xyY_to_xyz; kernel/util/color.h xyz_to_rgb_clamped
+ *   scene/shader_nodes.cpp      sky_texture_precompute_preetham / _hosek (what the constants hold)
+ *
+ * The constants are computed in Python by addon/deferred_render/materials/sky_hosek_preetham.py
+ * (node_constants; its radiance() is the numpy reference of these functions):
+ *   const_block  46 floats: 0 sun phi, 1 sun theta, 2..4 radiance x, y, z, 5..13 config x,
+ *                14..22 config y, 23..31 config z (svm_node_tex_sky's order), 32/33 sinf/cosf
+ *                of the sun theta, 34/35 sinf/cosf of the sun phi, 36 cosf(pi/2 - 0.001),
+ *                37..45 XYZ -> scene linear RGB, rows r, g, b.
+ *
+ * The angles are not formed with acos/sin/cos of the GPU (acos is ~1e-4 rad off on
+ * llvmpipe): with c = clamp(dir.z), sin(theta) = sqrt((1 - c)(1 + c)), cos(theta) = c,
+ * and sky_angle_between's cos(sun_phi - phi) expands to cos sun_phi cos phi + sin sun_phi
+ * sin phi with (sin phi, cos phi) = (x, y) / |(x, y)|. The same cosine of the angle to
+ * the sun as Cycles', for any input vector; gamma = acos of it, as atan(sqrt((1 - c)(1 + c)), c)
+ * (exact from (1 - c) where c is near 1, the ill-conditioned end). cos(gamma) is that
+ * cosine. The zenith angle clamped to the horizon has its cosine precomputed (36). */
+
+struct SkyAngles {
+  float gamma;      /* angle to the sun (sky_angle_between) */
+  float cos_gamma;  /* its cosine */
+  float cos_theta;  /* cosine of the zenith angle clamped to pi/2 - 0.001 */
+};
+
+SkyAngles sky_angles(int const_block, vec3 dir)
+{
+  float sin_sun_theta = mat_const(const_block + 32);
+  float cos_sun_theta = mat_const(const_block + 33);
+  float sin_sun_phi = mat_const(const_block + 34);
+  float cos_sun_phi = mat_const(const_block + 35);
+  float cos_theta_clamp = mat_const(const_block + 36);
+
+  float cz = clamp(dir.z, -1.0, 1.0);
+  float sin_theta = sqrt(max((1.0 - cz) * (1.0 + cz), 0.0));
+  /* atan2f(x, y): (0, 0) -> phi = 0 -> (sin, cos) = (0, 1). */
+  float r = length(dir.xy);
+  float sin_phi = r > 0.0 ? dir.x / r : 0.0;
+  float cos_phi = r > 0.0 ? dir.y / r : 1.0;
+  float cospsi = sin_theta * sin_sun_theta * (cos_sun_phi * cos_phi + sin_sun_phi * sin_phi) +
+                 cz * cos_sun_theta;
+  cospsi = clamp(cospsi, -1.0, 1.0);
+
+  SkyAngles a;
+  a.gamma = atan(sqrt(max((1.0 - cospsi) * (1.0 + cospsi), 0.0)), cospsi);
+  a.cos_gamma = cospsi;
+  /* theta = min(theta, M_PI_2_F - 0.001f): theta >= the clamp <=> cos(theta) <= its cosine. */
+  a.cos_theta = max(cz, cos_theta_clamp);
+  return a;
+}
+
+/* xyz_to_rgb_clamped with the block's matrix. */
+vec3 sky_xyz_to_rgb(int const_block, vec3 xyz)
+{
+  vec3 to_r = vec3(mat_const(const_block + 37), mat_const(const_block + 38), mat_const(const_block + 39));
+  vec3 to_g = vec3(mat_const(const_block + 40), mat_const(const_block + 41), mat_const(const_block + 42));
+  vec3 to_b = vec3(mat_const(const_block + 43), mat_const(const_block + 44), mat_const(const_block + 45));
+  return max(vec3(dot(to_r, xyz), dot(to_g, xyz), dot(to_b, xyz)), vec3(0.0));
+}
+
+/* kernel/svm/sky.h sky_perez_function; lam = the block's config at offset `config`. */
+float sky_perez(int config, SkyAngles a)
+{
+  return (1.0 + mat_const(config + 0) * exp(mat_const(config + 1) / a.cos_theta)) *
+         (1.0 + mat_const(config + 2) * exp(mat_const(config + 3) * a.gamma) +
+          mat_const(config + 4) * a.cos_gamma * a.cos_gamma);
+}
+
+/* kernel/svm/sky.h sky_radiance_preetham + svm_node_tex_sky (sky model 0). */
+void node_tex_sky_preetham(int const_block, vec3 direction, out vec3 color)
+{
+  SkyAngles a = sky_angles(const_block, direction);
+  /* radiance_x/y/z are the zenith Y, x, y; config_x/y/z their Perez coefficients. */
+  float x = mat_const(const_block + 3) * sky_perez(const_block + 14, a);
+  float y = mat_const(const_block + 4) * sky_perez(const_block + 23, a);
+  float Y = mat_const(const_block + 2) * sky_perez(const_block + 5, a);
+  /* util/color.h xyY_to_xyz */
+  float X = (y != 0.0) ? (x / y) * Y : 0.0;
+  float Z = (y != 0.0 && Y != 0.0) ? (1.0 - x - y) / y * Y : 0.0;
+  color = sky_xyz_to_rgb(const_block, vec3(X, Y, Z));
+}
+
+/* kernel/svm/sky.h sky_radiance_internal; c = the block's config at offset `config`.
+ * powf(b, 1.5f) as b * sqrt(b). */
+float sky_hosek_internal(int config, SkyAngles a)
+{
+  float c8 = mat_const(config + 8);
+  float expM = exp(mat_const(config + 4) * a.gamma);
+  float rayM = a.cos_gamma * a.cos_gamma;
+  float base = 1.0 + c8 * c8 - 2.0 * c8 * a.cos_gamma;
+  float mieM = (1.0 + rayM) / (base * sqrt(base));
+  float zenith = sqrt(a.cos_theta);
+  return (1.0 + mat_const(config + 0) * exp(mat_const(config + 1) / (a.cos_theta + 0.01))) *
+         (mat_const(config + 2) + mat_const(config + 3) * expM + mat_const(config + 5) * rayM +
+          mat_const(config + 6) * mieM + mat_const(config + 7) * zenith);
+}
+
+/* kernel/svm/sky.h sky_radiance_hosek + svm_node_tex_sky (sky model 1). */
+void node_tex_sky_hosek(int const_block, vec3 direction, out vec3 color)
+{
+  SkyAngles a = sky_angles(const_block, direction);
+  vec3 xyz = vec3(sky_hosek_internal(const_block + 5, a) * mat_const(const_block + 2),
+                  sky_hosek_internal(const_block + 14, a) * mat_const(const_block + 3),
+                  sky_hosek_internal(const_block + 23, a) * mat_const(const_block + 4));
+  /* M_2PI_F / 683, folded in float */
+  color = sky_xyz_to_rgb(const_block, xyz) * 0.009199393;
+}

@@ -50,6 +50,7 @@ TESTS = {
     "transparency": (ANALYTIC, True),
     "bump_lighting": (ANALYTIC, True),
     "world_map": (ANALYTIC, True),
+    "sky_models": (ANALYTIC, True),
     "cryptomatte": (ANALYTIC, True),
     "holdout": (ANALYTIC, True),
     "aovs": (ANALYTIC, True),

@@ -37,6 +37,7 @@ set(DEFERRED_BLENDER_TESTS
     transparency
     bump_lighting
     world_map
+    sky_models
     cryptomatte
     holdout
     aovs

@@ -259,17 +259,32 @@ def tex_white_noise(b):
 
 @register("ShaderNodeTexSky")
 def sky_texture(b):
-    """The Sky Texture: Nishita (Blender 3.4's default) as Cycles 3.4.1
-    evaluates it (materials/sky_nishita.py builds the 512x128 XYZ table and
-    the sun disc's constants; shaders/nodes/node_sky_lib.glsl looks it up).
-    Preetham and Hosek/Wilkie are not rendered (their default output, noted)."""
-    from .. import sky_nishita
+    """The Sky Texture as Cycles 3.4.1 evaluates it, all three models:
+
+    - Nishita (Blender 3.4's default): materials/sky_nishita.py builds the
+      512x128 XYZ table and the sun disc's constants;
+      shaders/nodes/node_sky_lib.glsl node_tex_sky_nishita looks it up.
+    - Preetham and Hosek/Wilkie: materials/sky_hosek_preetham.py computes
+      Cycles' 29 sky constants (sun angles, zenith values / radiances, Perez
+      / Hosek coefficients; the Hosek/Wilkie tables in sky_hosek_data.py)
+      from the node's Sun Direction, Turbidity and Ground Albedo;
+      node_tex_sky_preetham / node_tex_sky_hosek evaluate each direction as
+      kernel/svm/sky.h does. Neither has a sun disc (nor has Cycles')."""
     node = b.node
-    if node.sky_type != "NISHITA":
-        return b.unsupported(f"{node.sky_type.replace('_', ' ').title()} sky model (only Nishita is rendered)")
     from .texture_mapping import MAP_NONE, texture_mapping
     if texture_mapping(getattr(node, "texture_mapping", None))[0] != MAP_NONE:
         b._graph.note(f"'{node.name}': the node's texture mapping is not applied (link a Mapping node instead)")
+    if node.sky_type in ("PREETHAM", "HOSEK_WILKIE"):
+        from .. import sky_hosek_preetham
+        constants = sky_hosek_preetham.node_constants(node.sky_type, tuple(node.sun_direction),
+                                                      node.turbidity, node.ground_albedo)
+        b.call("node_tex_sky_preetham" if node.sky_type == "PREETHAM" else "node_tex_sky_hosek",
+               [b.block(constants), b.input("Vector", "vector", implicit="P")],
+               [("Color", "color")])
+        return
+    if node.sky_type != "NISHITA":
+        return b.unsupported(f"{node.sky_type.replace('_', ' ').title()} sky model")
+    from .. import sky_nishita
     params = (node.sun_elevation, node.altitude, node.air_density, node.dust_density, node.ozone_density)
     key = "computed:" + repr(sky_nishita.texture_key(*params))
     table = b.computed_image(key, lambda: sky_nishita.precompute_texture(*params))

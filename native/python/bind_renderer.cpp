@@ -181,6 +181,8 @@ struct PyRenderer {
 }  // namespace
 
 void declare_renderer(py::module_& m) {
+    m.def("live_renderers", &Renderer::live_count,
+          "Renderers alive in this process (each holds a GL context and a render thread).");
     py::class_<PyRenderer>(m, "Renderer",
                            "Headless deferred renderer; owns an EGL context on a render thread of its own.")
         .def(py::init([](int device_index) {
@@ -500,9 +502,14 @@ void declare_renderer(py::module_& m) {
                 int shadow_resolution, float shadow_quality, float alpha_threshold,
                 const std::vector<std::string>& cryptomatte, int cryptomatte_levels,
                 const std::vector<std::pair<std::string, std::string>>& aovs, int light_groups,
-                int preview_interval_ms) {
+                int preview_interval_ms, const std::string& preview_pass) {
                  RenderSettings s;
                  s.preview_interval_ms = preview_interval_ms;
+                 {
+                     auto p = pass_from_name(preview_pass);
+                     if (!p) throw py::value_error("render: unknown preview_pass '" + preview_pass + "'");
+                     s.preview_pass = *p;
+                 }
                  s.width = width;
                  s.height = height;
                  for (const std::string& name : passes) {
@@ -598,7 +605,7 @@ void declare_renderer(py::module_& m) {
              py::arg("shadow_quality") = 1.0f, py::arg("alpha_threshold") = 0.5f,
              py::arg("cryptomatte") = std::vector<std::string>{}, py::arg("cryptomatte_levels") = 6,
              py::arg("aovs") = std::vector<std::pair<std::string, std::string>>{}, py::arg("light_groups") = 0,
-             py::arg("preview_interval_ms") = -1)
+             py::arg("preview_interval_ms") = -1, py::arg("preview_pass") = "Combined")
         .def("preview",
              [](const PyRenderer& self, std::uint64_t since) -> py::object {
                  if (!self.renderer) throw Error("the renderer was closed");

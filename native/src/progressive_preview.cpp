@@ -21,7 +21,7 @@ void ProgressivePreview::begin(int width, int height, int total, int interval_ms
     image_.height = height;
 }
 
-void ProgressivePreview::publish(GLuint film, int done) {
+void ProgressivePreview::publish(GLuint image, int done, bool averaged, int channels) {
     if (interval_ms_ < 0) return;
     const auto now = std::chrono::steady_clock::now();
     const bool last = done >= total_;
@@ -32,10 +32,15 @@ void ProgressivePreview::publish(GLuint film, int done) {
     staging_.resize(floats);
     glMemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
     glPixelStorei(GL_PACK_ALIGNMENT, 1);
-    glGetTextureImage(film, 0, GL_RGBA, GL_FLOAT, GLsizei(floats * sizeof(float)), staging_.data());
-    check_gl("reading the film for the progressive preview");
-    const float scale = float(total_) / float(done);
-    for (float& v : staging_) v *= scale;
+    glGetTextureImage(image, 0, GL_RGBA, GL_FLOAT, GLsizei(floats * sizeof(float)), staging_.data());
+    check_gl("reading the progressive preview");
+    const float scale = averaged ? float(total_) / float(done) : 1.0f;
+    for (std::size_t i = 0; i < floats; i += 4) {
+        float* p = &staging_[i];
+        for (int c = 0; c < 4; ++c) p[c] *= scale;
+        if (channels == 1) p[1] = p[2] = p[0];
+        if (channels < 4) p[3] = 1.0f;
+    }
     std::lock_guard<std::mutex> lock(mutex_);
     image_.version = next_version_++;
     image_.samples_done = done;

@@ -19,11 +19,15 @@ public:
     // Render thread, before the first sample: a new render of `total`
     // samples; `interval_ms` < 0 turns publishing off for it.
     void begin(int width, int height, int total, int interval_ms);
-    // Render thread, after `done` samples (1..total): reads the film back
+    // Render thread, after `done` samples (1..total): reads `image` back
     // when the interval has passed since the last image, and always after
-    // the last sample. The film holds sum(sample) / total; the image holds
-    // sum(sample) / done, the estimate of the finished pixel.
-    void publish(GLuint film, int done);
+    // the first and the last sample. An `averaged` image (the film, the
+    // filtered passes) holds sum(sample) / total; the preview holds
+    // sum(sample) / done, the estimate of the finished pixel; others (the
+    // passes of the first sample) are shown as they are. `channels` < 4:
+    // the pass's channels, the rest filled as a display expects (one
+    // channel grey, alpha 1).
+    void publish(GLuint image, int done, bool averaged = true, int channels = 4);
     // Any thread: copies the newest image into `out` if its version is newer
     // than `since`; false otherwise.
     bool take(std::uint64_t since, PreviewImage& out) const;

@@ -886,6 +886,20 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     };
 
     double preview_ms = 0;  // progressive preview read-backs, counted as readback
+    GLuint preview_image = film.get();
+    if (settings.preview_pass != Pass::Combined) {
+        const Pass p = settings.preview_pass;
+        if (p == Pass::DiffDir || p == Pass::GlossDir || p == Pass::Shadow)
+            throw InvalidInput(std::string("preview_pass: ") + pass_info(p).name +
+                               " is resolved after the last sample and cannot be previewed");
+        preview_image = 0;
+        for (auto& [q, image] : pass_images)
+            if (q == p) preview_image = image.get();
+        if (!preview_image)
+            throw InvalidInput(std::string("preview_pass: ") + pass_info(p).name + " is not among the passes rendered");
+    }
+    const bool preview_averaged = !pass_from_first_sample(settings.preview_pass);
+    const int preview_channels = pass_info(settings.preview_pass).channels;
     preview.begin(settings.width, settings.height, settings.samples, settings.preview_interval_ms);
     for (int sample = 0; sample < settings.samples; ++sample) {
         check_cancel();
@@ -1028,7 +1042,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         }
         check_gl("passes");
         passes_ms += timer.lap_ms();
-        preview.publish(film.get(), sample + 1);
+        preview.publish(preview_image, sample + 1, preview_averaged, preview_channels);
         preview_ms += timer.lap_ms();
     }
 
@@ -1102,6 +1116,10 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     return result;
 }
 
+namespace {
+std::atomic<int> live_renderers{0};
+}
+
 Renderer::Renderer(const ContextOptions& options) : impl_(std::make_unique<Impl>()) {
     try {
         impl_->thread.run([&] { impl_->init(options); });
@@ -1109,9 +1127,14 @@ Renderer::Renderer(const ContextOptions& options) : impl_(std::make_unique<Impl>
         impl_.reset();  // ~Impl releases whatever init created, on the thread
         throw;
     }
+    ++live_renderers;
 }
 
-Renderer::~Renderer() = default;
+Renderer::~Renderer() {
+    if (impl_) --live_renderers;
+}
+
+int Renderer::live_count() { return live_renderers.load(); }
 
 const GLInfo& Renderer::gl_info() const { return impl_->info; }
 

@@ -1,8 +1,8 @@
 """The engine's panels drawn by Blender's real UI (not -b): under Xvfb, with
 the engine active, the Properties editor is switched to each tab that has a
 panel of ours (Render, View Layer, Material with every Blend Mode, Light,
-Object, World) and
-the window is redrawn; every panel of ours must have drawn without an
+Object, World) and the 3D view's shading popover is opened in Rendered
+shading (Render Pass); the window is redrawn each time; every panel of ours must have drawn without an
 exception (their draw methods are wrapped, re-registered, to record what
 happened; the drawing itself is Blender's).
 
@@ -87,6 +87,15 @@ def steps():
     show('OBJECT')
     yield
     show('WORLD')
+    yield
+    # The Render Pass sub-panel of the 3D view's shading popover (Rendered
+    # shading): the popover opened as a user opens it.
+    view = next(a for a in window.screen.areas if a.type == 'VIEW_3D')
+    view.spaces.active.shading.type = 'RENDERED'
+    header = next(r for r in view.regions if r.type == 'HEADER')
+    with bpy.context.temp_override(window=window, area=view, region=header):
+        bpy.ops.wm.call_panel(name="VIEW3D_PT_shading", keep_open=False)
+    yield
     yield
     for name in names:
         print(f"  {name}: {RESULTS.get(name, 'never drawn')}")

@@ -66,6 +66,17 @@ PIXEL_Q98_DIFFERENCE = 2.0 / 255.0 + 1e-6
 WAIT_SECONDS = 240
 
 passed, failed = [], []
+# Viewports opened and closed for the resource check, and how much the
+# process may grow over them: a renderer left behind holds a GL context,
+# its targets and a thread (llvmpipe: tens of MiB each).
+CYCLES = 3
+RSS_GROWTH = 40 * 2**20
+
+
+def resident():
+    """The process's resident memory in bytes."""
+    with open("/proc/self/statm") as f:
+        return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
 
 
 def check(condition, what, detail=""):
@@ -332,7 +343,45 @@ def steps():
               f"{np.quantile(difference, 0.98):.4f} (<= {PIXEL_Q98_DIFFERENCE:.4f})")
         yield
 
-    # 6. A material preview thumbnail, rendered by this engine.
+    # 6. The Render Pass menu (View3DShading.deferred_render.render_pass):
+    # the view shows the pass; then a render border crops the view.
+    combined_view = view
+    space.shading.deferred_render.render_pass = 'Normal'
+    s = yield from wait_done("Normal pass", after=s.generation)
+    normals = s._pixels
+    lengths = np.linalg.norm(normals[..., :3], axis=2)
+    geometry = lengths > 0.5
+    # Normals are averaged over the samples: shorter on edges, where the
+    # samples see different surfaces.
+    spread = np.quantile(np.abs(lengths[geometry] - 1.0), 0.95)
+    check(geometry.mean() > 0.3 and spread < 0.02 and np.all(normals[..., 3] == 1.0),
+          "the Render Pass menu shows the Normal pass (unit normals on geometry, opaque)",
+          f"geometry {geometry.mean():.2f} of the view, 95 % of |n| within {spread:.4f} of 1")
+    space.shading.deferred_render.render_pass = 'Combined'
+    s = yield from wait_done("Combined pass again", after=s.generation)
+    space.use_render_border = True
+    space.render_border_min_x, space.render_border_max_x = 0.25, 0.75
+    space.render_border_min_y, space.render_border_max_y = 0.3, 0.8
+    for _ in range(3):
+        yield
+    bordered = capture(window, area, region, "view_border")
+    full = combined_view  # the same view and samples, without a border
+    x0, x1 = int(0.25 * region.width) + 2, int(0.75 * region.width) - 2
+    y0, y1 = int(0.3 * region.height) + 2, int(0.8 * region.height) - 2
+    inside = np.abs(bordered[y0:y1, x0:x1] - full[y0:y1, x0:x1]).max()
+    # Outside (below the border): the view's dark background (Blender's
+    # theme, a dithered grey below 0.3), where the full view shows the lit
+    # floor.
+    rows = slice(0, int(0.3 * region.height) - 2)
+    outside, was = bordered[rows].max(axis=2), full[rows].max(axis=2)
+    check(inside <= 2.0 / 255 + 1e-6 and outside.max() < 0.3 and (was > 0.5).mean() > 0.25,
+          "a render border shows the image inside it and nothing outside",
+          f"inside difference {inside:.4f}; below it at most {outside.max():.3f}, where the view "
+          f"without border is lit (> 0.5) on {(was > 0.5).mean():.0%} of the pixels")
+    space.use_render_border = False
+    yield
+
+    # 7. A material preview thumbnail, rendered by this engine.
     from deferred_render.engine import final
     before = final.preview_renders
     material.preview_ensure()
@@ -353,16 +402,52 @@ def steps():
           "the preview thumbnail is not empty",
           "no pixels" if pixels is None else f"max {pixels.max():.3f}, std {pixels.reshape(-1, 4)[:, :3].std():.3f}")
 
-    # 7. Leaving Rendered mode frees the engine and its renderer.
+    # 8. Resources: leaving Rendered mode frees the engine and its renderer,
+    # also after many viewports came and went, after switching engines, after
+    # reloading the file and after disabling the add-on.
+    from deferred_render import native
+    mod = native.load()
+
+    def released(what, rss_before=None):
+        for _ in range(20):
+            yield
+            if not viewport.sessions() and mod.live_renderers() == 0:
+                break
+        detail = f"{len(viewport.sessions())} sessions, {mod.live_renderers()} native renderers alive"
+        if rss_before is not None:
+            detail += f", resident memory {rss_before / 2**20:.0f} -> {resident() / 2**20:.0f} MiB"
+        check(not viewport.sessions() and mod.live_renderers() == 0, f"{what} releases the viewport's renderer",
+              detail)
+
     space.shading.type = 'SOLID'
-    for _ in range(10):
-        yield
-        import gc
-        gc.collect()
-        if not viewport.sessions():
-            break
-    check(not viewport.sessions(), "leaving Rendered shading releases the viewport's renderer",
-          f"{len(viewport.sessions())} sessions alive")
+    yield from released("leaving Rendered shading")
+    rss = resident()
+    for _ in range(CYCLES):
+        space.shading.type = 'RENDERED'
+        s = yield from wait_done("a viewport opened again")
+        space.shading.type = 'SOLID'
+        yield from released("closing it")
+    check(resident() - rss < RSS_GROWTH, f"{CYCLES} viewports opened and closed do not grow the process",
+          f"{(resident() - rss) / 2**20:.1f} MiB (< {RSS_GROWTH / 2**20:.0f} MiB)")
+    space.shading.type = 'RENDERED'
+    s = yield from wait_done("before switching engines")
+    scene.render.engine = 'BLENDER_WORKBENCH'
+    yield from released("switching the engine")
+    scene.render.engine = 'DEFERRED_RENDER'
+    s = yield from wait_done("before reloading the file")
+    with bpy.context.temp_override(window=window):
+        bpy.ops.wm.revert_mainfile()
+    yield from released("reloading the file")
+    # The reloaded file's own UI: find the view again, render in it again.
+    scene = bpy.context.scene
+    window, area, region = view3d()
+    space = area.spaces.active
+    scene.render.engine = 'DEFERRED_RENDER'
+    space.shading.type = 'RENDERED'
+    s = yield from wait_done("before disabling the add-on")
+    import addon_utils
+    addon_utils.disable("deferred_render")
+    yield from released("disabling the add-on")
     finish()
 
 
@@ -384,4 +469,5 @@ def tick():
     return 0.2
 
 
-bpy.app.timers.register(tick, first_interval=0.5)
+# persistent: the timer outlives the file reload of step 8.
+bpy.app.timers.register(tick, first_interval=0.5, persistent=True)

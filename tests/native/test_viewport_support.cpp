@@ -199,3 +199,36 @@ TEST(CameraViewplane, ExplicitViewplaneReplacesTheLensOne) {
     explicit_cam.viewplane[1] = 1.0f;
     EXPECT_THROW(build_camera(explicit_cam, 64, 48), InvalidInput);
 }
+
+TEST(ProgressivePreview, ShowsTheChosenPassAsTheFrameReturnsIt) {
+    Renderer r;
+    tools::MeshArrays floor = tools::make_plane(10.0f, 1), pane = tools::make_plane(1.0f, 1);
+    build_scene(r, r.add_mesh(floor.view()), r.add_mesh(pane.view()));
+    RenderSettings s;
+    s.width = 24;
+    s.height = 20;
+    s.samples = 4;
+    s.passes.insert(Pass::Normal);
+    s.passes.insert(Pass::Depth);
+    s.preview_interval_ms = 0;
+    for (Pass p : {Pass::Normal, Pass::Depth}) {
+        s.preview_pass = p;
+        const FrameResult frame = r.render(top_down_ortho(10.0, 6.0f), s);
+        PreviewImage last;
+        ASSERT_TRUE(r.preview(0, last));
+        const PassImage& want = *frame.find(p);
+        for (std::size_t i = 0; i < std::size_t(s.width * s.height); ++i) {
+            for (int c = 0; c < 3; ++c) {
+                const float expected = want.pixels[i * want.channels + (want.channels == 1 ? 0 : c)];
+                ASSERT_NEAR(last.pixels[i * 4 + c], expected, 1e-5f * std::max(1.0f, std::abs(expected)))
+                    << pass_info(p).name << " pixel " << i;
+            }
+            ASSERT_EQ(last.pixels[i * 4 + 3], 1.0f);
+        }
+    }
+    s.preview_pass = Pass::UV;  // not rendered
+    EXPECT_THROW(r.render(top_down_ortho(10.0, 6.0f), s), InvalidInput);
+    s.passes.insert(Pass::Shadow);
+    s.preview_pass = Pass::Shadow;  // resolved after the last sample
+    EXPECT_THROW(r.render(top_down_ortho(10.0, 6.0f), s), InvalidInput);
+}

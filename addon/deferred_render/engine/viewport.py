@@ -89,6 +89,38 @@ def view_camera(region_data, width, height):
             "viewplane": (float(left), float(right), float(bottom), float(top))}
 
 
+def render_border(context, scene, width, height):
+    """The part of the region the viewport shows (x0, y0, x1, y1 in region
+    pixels), or None for all of it, as Cycles' viewport does: in camera
+    view the scene's Render Region (Output > Format > Render Region) within
+    the camera frame, otherwise the view's own render border (View > Render
+    Region, Ctrl B). The accumulation covers the whole region; only the
+    border is drawn."""
+    space, region_data = context.space_data, context.region_data
+    if region_data.view_perspective == 'CAMERA':
+        render = scene.render
+        if not render.use_border or scene.camera is None:
+            return None
+        from bpy_extras.view3d_utils import location_3d_to_region_2d
+        camera = scene.camera
+        corners = [camera.matrix_world @ c for c in camera.data.view_frame(scene=scene)]
+        points = [location_3d_to_region_2d(context.region, region_data, c) for c in corners]
+        if any(p is None for p in points):
+            return None
+        fx0, fx1 = min(p.x for p in points), max(p.x for p in points)
+        fy0, fy1 = min(p.y for p in points), max(p.y for p in points)
+        box = (fx0 + render.border_min_x * (fx1 - fx0), fy0 + render.border_min_y * (fy1 - fy0),
+               fx0 + render.border_max_x * (fx1 - fx0), fy0 + render.border_max_y * (fy1 - fy0))
+    else:
+        if not getattr(space, "use_render_border", False):
+            return None
+        box = (space.render_border_min_x * width, space.render_border_min_y * height,
+               space.render_border_max_x * width, space.render_border_max_y * height)
+    x0, y0 = max(0, int(round(box[0]))), max(0, int(round(box[1])))
+    x1, y1 = min(width, int(round(box[2]))), min(height, int(round(box[3])))
+    return (x0, y0, max(x0, x1), max(y0, y1))
+
+
 class ViewportSession:
     """The state of one viewport engine (see the module docstring)."""
 
@@ -108,7 +140,9 @@ class ViewportSession:
         self._view = None           # (camera params, width, height, settings) of the running accumulation
         self._version = 0           # newest preview version drawn
         self._texture = None
-        self._texture_size = None
+        self._texture_border = None  # the region rectangle the texture covers (None: all)
+        self._texture_size = None     # the accumulation's size
+        self._pixels = None           # the newest image taken from the renderer
         self.samples_done = 0
         self.samples_total = 0
         self.generation = 0         # accumulations started
@@ -123,7 +157,7 @@ class ViewportSession:
         """Stop the accumulation and release the renderer (its GL context
         and every GPU resource): the engine is going away."""
         self.stop()
-        self._texture = None
+        self._texture = self._pixels = None
         renderer, self.renderer = self.renderer, None
         if renderer is not None:
             renderer.close()
@@ -224,17 +258,26 @@ class ViewportSession:
         scene = depsgraph.scene
         if self.error is None and self.synced:
             try:
-                self._ensure_running(context.region_data, width, height, scene)
+                self._ensure_running(context.region_data, width, height, scene,
+                                     getattr(context.space_data, "shading", None))
             except Exception as ex:
                 self.error = str(ex) or type(ex).__name__
         if self.error is not None:
             self._status(f"{final.LOG_PREFIX}: {self.error}")
             return
         self._take_preview()
+        border = render_border(context, scene, width, height)
+        if self._texture_size != (width, height):
+            # The accumulation at the new size has no sample yet: the last
+            # image, stretched over the region meanwhile, uncropped.
+            border = None
+        if self._pixels is not None and (self._texture is None or self._texture_border != border):
+            self._make_texture(border)
         if self._texture is not None:
+            x0, y0, x1, y1 = self._texture_border or (0, 0, width, height)
             gpu.state.blend_set('ALPHA_PREMULT')
             engine.bind_display_space_shader(scene)
-            draw_texture_2d(self._texture, (0, 0), width, height)
+            draw_texture_2d(self._texture, (x0, y0), x1 - x0, y1 - y0)
             engine.unbind_display_space_shader()
             gpu.state.blend_set('NONE')
         running = self._worker is not None and self._worker.is_alive()
@@ -244,16 +287,20 @@ class ViewportSession:
             self._status(f"Sample {self.samples_done}/{self.samples_total}"
                          + (f" | {len(self.warnings)} warnings (see the console)" if self.warnings else ""))
 
-    def _settings(self, scene, width, height):
+    def _settings(self, scene, shading):
         settings = getattr(scene, "deferred_render", None)
         samples = int(getattr(settings, "viewport_samples", 32)) if settings is not None else 32
-        return dict(passes=["Combined"], film_transparent=bool(scene.render.film_transparent),
+        view_settings = getattr(shading, "deferred_render", None)
+        shown = str(getattr(view_settings, "render_pass", "Combined")) if view_settings is not None else "Combined"
+        passes = ["Combined"] if shown == "Combined" else ["Combined", shown]
+        return dict(passes=passes, film_transparent=bool(scene.render.film_transparent),
                     samples=max(1, samples), filter_width=final._filter_width(scene),
-                    preview_interval_ms=PREVIEW_INTERVAL_MS, **final._light_settings(scene))
+                    preview_interval_ms=PREVIEW_INTERVAL_MS, preview_pass=shown,
+                    **final._light_settings(scene))
 
-    def _ensure_running(self, region_data, width, height, scene):
+    def _ensure_running(self, region_data, width, height, scene, shading):
         params = view_camera(region_data, width, height)
-        settings = self._settings(scene, width, height)
+        settings = self._settings(scene, shading)
         key = (repr(sorted((k, np.asarray(v).tolist()) for k, v in params.items())), width, height,
                repr(sorted(settings.items())))
         if key == self._view and not self._restart:
@@ -292,8 +339,21 @@ class ViewportSession:
         self._worker = threading.Thread(target=work, name="deferred-viewport", daemon=True)
         self._worker.start()
 
-    def _take_preview(self, counted=True):
+    def _make_texture(self, border):
         import gpu
+        pixels = self._pixels
+        if border is not None:
+            x0, y0, x1, y1 = border
+            pixels = pixels[y0:y1, x0:x1]
+        pixels = np.ascontiguousarray(pixels)
+        if pixels.size == 0:
+            self._texture, self._texture_border = None, border
+            return
+        buffer = gpu.types.Buffer('FLOAT', pixels.size, pixels.reshape(-1))
+        self._texture = gpu.types.GPUTexture((pixels.shape[1], pixels.shape[0]), format='RGBA16F', data=buffer)
+        self._texture_border = border
+
+    def _take_preview(self, counted=True):
         image = self.renderer.preview(self._version) if self.renderer is not None else None
         if image is None:
             return
@@ -301,10 +361,9 @@ class ViewportSession:
         self._version = version
         if pixels is None:
             return  # the new accumulation has no sample yet: keep the old image
-        height, width = pixels.shape[:2]
-        buffer = gpu.types.Buffer('FLOAT', pixels.size, np.ascontiguousarray(pixels).reshape(-1))
-        self._texture = gpu.types.GPUTexture((width, height), format='RGBA16F', data=buffer)
-        self._texture_size = (width, height)
+        self._pixels = pixels
+        self._texture = None  # made in draw, cropped to the render border
+        self._texture_size = (pixels.shape[1], pixels.shape[0])
         if not counted:
             return
         self.samples_done, self.samples_total = done, total

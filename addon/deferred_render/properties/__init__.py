@@ -7,7 +7,16 @@ render visibility) is read from Blender's own properties, not duplicated.
 """
 
 import bpy
-from bpy.props import BoolProperty, FloatProperty, IntProperty, PointerProperty
+from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, PointerProperty
+
+
+def _redraw_views(self, context):
+    """A setting the viewport reads in view_draw: redraw the 3D views (a
+    property of ours tags nothing by itself)."""
+    screen = getattr(context, "screen", None)
+    for area in (screen.areas if screen is not None else ()):
+        if area.type == 'VIEW_3D':
+            area.tag_redraw()
 
 
 class DeferredRenderSettings(bpy.types.PropertyGroup):
@@ -29,6 +38,7 @@ class DeferredRenderSettings(bpy.types.PropertyGroup):
         min=1,
         soft_max=256,
         max=4096,
+        update=_redraw_views,
     )
     light_culling: BoolProperty(
         name="Light Culling",
@@ -85,7 +95,36 @@ class DeferredRenderSettings(bpy.types.PropertyGroup):
     )
 
 
-classes = (DeferredRenderSettings,)
+# The passes the Rendered viewport can show (its Render Pass menu): the
+# renderer's passes that accumulate while it samples (DiffDir, GlossDir and
+# Shadow are resolved only after the last sample).
+VIEWPORT_PASSES = (
+    ("Combined", "Combined", "The lit image"),
+    ("Emit", "Emission", "Emitted light"),
+    ("Env", "Environment", "The world where it is seen"),
+    ("AO", "Ambient Occlusion", "Ambient occlusion"),
+    ("DiffCol", "Diffuse Color", "Diffuse albedo"),
+    ("GlossCol", "Glossy Color", "Glossy albedo"),
+    ("Normal", "Normal", "World-space shading normal"),
+    ("Position", "Position", "World-space position"),
+    ("UV", "UV", "The active UV map"),
+    ("Depth", "Depth", "Distance along the view axis"),
+    ("Mist", "Mist", "Mist factor"),
+)
+
+
+class DeferredViewportShading(bpy.types.PropertyGroup):
+    """The 3D view's settings for this engine (``View3DShading.deferred_render``)."""
+    render_pass: EnumProperty(
+        name="Render Pass",
+        description="The pass the Rendered viewport shows",
+        items=VIEWPORT_PASSES,
+        default="Combined",
+        update=_redraw_views,
+    )
+
+
+classes = (DeferredRenderSettings, DeferredViewportShading)
 
 
 def register():
@@ -94,9 +133,13 @@ def register():
     bpy.types.Scene.deferred_render = PointerProperty(
         type=DeferredRenderSettings, name="Deferred Render Settings"
     )
+    bpy.types.View3DShading.deferred_render = PointerProperty(
+        type=DeferredViewportShading, name="Deferred Viewport Settings"
+    )
 
 
 def unregister():
+    del bpy.types.View3DShading.deferred_render
     del bpy.types.Scene.deferred_render
     for cls in reversed(classes):
         bpy.utils.unregister_class(cls)

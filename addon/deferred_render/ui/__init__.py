@@ -30,8 +30,6 @@ EXCLUDED_PANELS = {
     "NODE_DATA_PT_light",                   # node-editor copy, shares DATA_PT_light's set
     "DATA_PT_area",                         # ours: DEFERRED_RENDER_PT_light
     "DATA_PT_falloff_curve",                # custom falloff is not rendered
-    "DATA_PT_preview",                      # no preview renders (bl_use_preview False)
-    "MATERIAL_PT_preview",
     "EEVEE_MATERIAL_PT_viewport_settings",  # EEVEE blend/shadow modes
     "VIEWLAYER_PT_filter",
     "VIEWLAYER_PT_layer_passes",
@@ -46,6 +44,7 @@ EXTRA_PANELS = (
     "EEVEE_WORLD_PT_surface",               # world Background colour x strength
     "EEVEE_WORLD_PT_mist",                  # Mist pass start/depth/falloff
     "DATA_PT_spot",                         # spot size/blend (3.4 also has BLENDER_RENDER)
+    "MATERIAL_PT_preview",                  # the preview render (bl_use_preview); lights' has BLENDER_RENDER
 )
 
 _patched = []

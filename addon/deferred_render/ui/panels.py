@@ -252,7 +252,26 @@ class DEFERRED_RENDER_PT_world_light_group(_LightGroupPanel, bpy.types.Panel):
         return context.world
 
 
+class DEFERRED_RENDER_PT_viewport_render_pass(bpy.types.Panel):
+    """Render Pass in the 3D view's shading popover, as Cycles and EEVEE have it."""
+    bl_space_type = 'VIEW_3D'
+    bl_region_type = 'HEADER'
+    bl_label = "Render Pass"
+    bl_parent_id = 'VIEW3D_PT_shading'
+    COMPAT_ENGINES = {ENGINE}
+
+    @classmethod
+    def poll(cls, context):
+        view = context.space_data
+        return (context.engine in cls.COMPAT_ENGINES and view is not None
+                and getattr(view, "shading", None) is not None and view.shading.type == 'RENDERED')
+
+    def draw(self, context):
+        self.layout.prop(context.space_data.shading.deferred_render, "render_pass", text="")
+
+
 classes = (
+    DEFERRED_RENDER_PT_viewport_render_pass,
     DEFERRED_RENDER_PT_sampling,
     DEFERRED_RENDER_PT_lights,
     DEFERRED_RENDER_PT_film,

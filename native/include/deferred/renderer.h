@@ -114,10 +114,16 @@ struct RenderSettings {
     // milliseconds, and after the last sample, for Renderer::preview().
     // -1: off (no read-back inside the sample loop).
     int preview_interval_ms = -1;
+    // The pass the preview shows (one of `passes`, or Combined): the
+    // viewport's Render Pass. Not DiffDir, GlossDir or Shadow (resolved
+    // only after the last sample).
+    Pass preview_pass = Pass::Combined;
 };
 
-// The newest Combined estimate of a render in progress (preview_interval_ms):
-// RGBA, rows bottom-up, the average of the `samples_done` samples so far.
+// The newest estimate of a render in progress (preview_interval_ms) of its
+// preview_pass: RGBA, rows bottom-up, the average of the `samples_done`
+// samples so far (a pass taken from the first sample as it is; one-channel
+// passes grey, alpha 1 but for Combined).
 // `version` grows with every image and every new render.
 struct PreviewImage {
     std::uint64_t version = 0;
@@ -201,6 +207,10 @@ public:
     Renderer& operator=(const Renderer&) = delete;
 
     const GLInfo& gl_info() const;
+    // Renderers alive in this process (each holds a GL context and a
+    // thread): what tests check to see that closed viewports, reloaded
+    // files and a disabled add-on released theirs.
+    static int live_count();
 
     // Drops the scene (meshes, materials, lights, world) and keeps what the
     // next one can reuse: the GL context, compiled programs, frame targets

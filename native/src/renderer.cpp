@@ -185,12 +185,30 @@ struct Renderer::Impl {
     // The visible surfaces the shadow maps are sized for: sample 0's depth
     // (unjittered pixel centres) read back on a grid of at most 128 x 128
     // points, as camera-relative positions with the width of a pixel there.
-    std::vector<ShadowModule::Receiver> visible_receivers(const CameraMatrices& cam, int width, int height) const {
+    // `visible_depths` gets the nearest and farthest view depth of all the
+    // pixels that see a surface ((0, 0) if none does).
+    std::vector<ShadowModule::Receiver> visible_receivers(const CameraMatrices& cam, int width, int height,
+                                                          std::pair<double, double>& visible_depths) const {
         std::vector<float> depth(std::size_t(width) * std::size_t(height));
         glGetTextureImage(gbuffer.depth_texture(), 0, GL_DEPTH_COMPONENT, GL_FLOAT,
                           GLsizei(depth.size() * sizeof(float)), depth.data());
         check_gl("reading the depth for shadow map sizes");
         const glm::dmat4 to_view = glm::inverse(cam.projection);
+        // Reversed Z: the largest stored value is the nearest surface.
+        float z_near = 0.0f, z_far = 2.0f;
+        for (float z : depth)
+            if (z > 0.0f) {
+                z_near = std::max(z_near, z);
+                z_far = std::min(z_far, z);
+            }
+        visible_depths = {0.0, 0.0};
+        if (z_near > 0.0f) {
+            auto view_depth = [&](double z) {
+                glm::dvec4 v = to_view * glm::dvec4(0.0, 0.0, z, 1.0);
+                return -v.z / v.w;
+            };
+            visible_depths = {view_depth(z_near), view_depth(z_far)};
+        }
         const glm::dmat4 to_world = glm::inverse(cam.view);
         const glm::dvec4& vp = cam.viewplane;
         const double pixel = std::min((vp.y - vp.x) / width, (vp.w - vp.z) / height);  // at unit depth (persp)
@@ -978,7 +996,11 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         // Shadow maps from this sample's point on each shadowed light, sized
         // at sample 0 from what the visible surfaces need.
         if (!shadows.empty()) {
-            if (sample == 0) shadows.fit(visible_receivers(cam, settings.width, settings.height));
+            if (sample == 0) {
+                std::pair<double, double> visible_depths;
+                const auto receivers = visible_receivers(cam, settings.width, settings.height, visible_depths);
+                shadows.fit(receivers, visible_depths);
+            }
             shadows.render_sample(*shaders, {u[2], u[3]}, world_dirs, draw_shadow_casters,
                                   caster_defines, scene_alpha || alpha_graphs);
             shadow_ms += timer.lap_ms();

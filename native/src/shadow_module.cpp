@@ -125,6 +125,8 @@ ShadowModule::CasterTest ortho_casters(const glm::dvec3& axis, const glm::dvec3&
 void ShadowModule::begin_frame(const CameraMatrices& camera, int max_resolution, float quality,
                               std::size_t memory_budget) {
     camera_ = camera;
+    split_near_ = camera.clip_start;
+    split_far_ = camera.clip_end;
     resolution_ = std::clamp(max_resolution, 32, 8192);
     quality_ = quality;
     budget_ = memory_budget;
@@ -232,8 +234,9 @@ std::vector<int> ShadowModule::allocate(std::size_t light_count) {
 
 ShadowModule::Cascades ShadowModule::cascades() const {
     Cascades c{};
-    // Practical split scheme (Zhang et al. 2006), lambda 0.75.
-    const double n = camera_.clip_start, f = camera_.clip_end;
+    // Practical split scheme (Zhang et al. 2006), lambda 0.75, over the
+    // depths the view sees (fit).
+    const double n = split_near_, f = split_far_;
     for (int k = 0; k <= SHADOW_CASCADE_COUNT; ++k) {
         const double t = double(k) / SHADOW_CASCADE_COUNT;
         c.split[k] = 0.75 * n * std::pow(f / n, t) + 0.25 * (n + (f - n) * t);
@@ -259,8 +262,24 @@ ShadowModule::Cascades ShadowModule::cascades() const {
     return c;
 }
 
-void ShadowModule::fit(const std::vector<Receiver>& receivers) {
+void ShadowModule::fit(const std::vector<Receiver>& receivers, std::pair<double, double> visible_depths) {
     if (entries_.empty()) return;
+    split_near_ = camera_.clip_start;
+    split_far_ = camera_.clip_end;
+    auto [near, far] = visible_depths;
+    if (far > near && near > 0.0) {
+        // A margin for what later, jittered samples see beyond sample 0's
+        // pixel centres (up to the filter's reach across an edge): 5 % of
+        // the range and 1 % of the depth each side. A pixel beyond the last
+        // cascade would find no map (lit), before the first the same.
+        const double margin = 0.05 * (far - near);
+        split_near_ = std::max(camera_.clip_start, near * 0.99 - margin);
+        split_far_ = std::min(camera_.clip_end, far * 1.01 + margin);
+        if (!(split_far_ > split_near_)) {
+            split_near_ = camera_.clip_start;
+            split_far_ = camera_.clip_end;
+        }
+    }
     const Cascades cs = cascades();
     layers_rendered_ = 0;
     receivers_center_ = glm::dvec3(0.0);

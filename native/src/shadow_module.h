@@ -75,7 +75,13 @@ public:
     };
     // Chooses each kept light's resolution from the receivers it reaches and
     // (re)allocates the array; call before the first render_sample().
-    void fit(const std::vector<Receiver>& receivers);
+    // `visible_depths` (near, far): the view depths of every visible pixel
+    // at sample 0; the sun's cascades are split over them (with a margin)
+    // rather than over the whole clip range, which in a scene with a far
+    // clip end (Blender's default 100 m, an orthographic view's +-clip_end/2)
+    // would put everything visible in one coarse cascade. (0, 0): the clip
+    // range.
+    void fit(const std::vector<Receiver>& receivers, std::pair<double, double> visible_depths = {0.0, 0.0});
     // Whether an instance's bounding sphere (camera-relative centre, radius)
     // can cast into the map being drawn.
     using CasterTest = std::function<bool(const glm::dvec3&, double)>;
@@ -133,6 +139,7 @@ private:
     std::size_t layers_rendered_ = 0;
     std::size_t dropped_ = 0;
     CameraMatrices camera_{};
+    double split_near_ = 0.0, split_far_ = 0.0;  // the cascades' depth range (fit)
     int resolution_ = 1024;
     std::size_t budget_ = 0, bytes_ = 0;
     std::vector<Entry> entries_;

@@ -993,6 +993,10 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         check_gl("geometry pass");
         geometry_ms += timer.lap_ms();
 
+        // A cancel (a viewport edit waits for it) stops between stages too,
+        // not only between samples: everything below is redone from scratch
+        // by the next render.
+        check_cancel();
         // Shadow maps from this sample's point on each shadowed light, sized
         // at sample 0 from what the visible surfaces need.
         if (!shadows.empty()) {
@@ -1029,6 +1033,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
             forward_ms += timer.lap_ms();
         }
 
+        check_cancel();
         // Lighting pass: adds this sample's share to the film.
         glUseProgram(lighting);
         if (culled) culling.bind();

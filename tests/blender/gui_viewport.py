@@ -401,6 +401,23 @@ def steps():
     check(pixels is not None and pixels.max() > 0.05 and pixels.reshape(-1, 4)[:, :3].std() > 0.01,
           "the preview thumbnail is not empty",
           "no pixels" if pixels is None else f"max {pixels.max():.3f}, std {pixels.reshape(-1, 4)[:, :3].std():.3f}")
+    # And the world's.
+    world = scene.world
+    before = final.preview_renders
+    world.preview_ensure()
+    with bpy.context.temp_override(window=window, area=area, region=region, id=world):
+        bpy.ops.ed.lib_id_generate_preview()
+    start = time.perf_counter()
+    pixels = None
+    while time.perf_counter() - start < WAIT_SECONDS:
+        if final.preview_renders > before and world.preview.image_size[0] > 0:
+            pixels = np.array(world.preview.image_pixels_float[:], dtype=np.float32)
+            if pixels.max() > 0:
+                break
+        yield
+    check(pixels is not None and pixels.max() > 0.01 and final.preview_renders > before,
+          "the world preview thumbnail is rendered by this engine and not empty",
+          "no pixels" if pixels is None else f"max {pixels.max():.3f}")
 
     # 8. Resources: leaving Rendered mode frees the engine and its renderer,
     # also after many viewports came and went, after switching engines, after

@@ -6,6 +6,8 @@
 #include "test_helpers.h"
 
 #include "camera.h"
+#include "gl_test_context.h"
+#include "progressive_preview.h"
 
 #include <gtest/gtest.h>
 
@@ -140,46 +142,47 @@ TEST(ProgressivePreview, LastImageIsTheRenderAndVersionsGrowWhileSampling) {
     EXPECT_FALSE(r.preview(last.version, last));
 }
 
-TEST(ProgressivePreview, PartialImageIsTheAverageOfTheSamplesSoFar) {
-    // A render of 8 samples publishes after its third sample
-    // sum(3 samples) / 3: it equals a 3-sample render, whose samples are the
-    // same first three (the sample sequences are indexed by sample).
-    Renderer r;
-    tools::MeshArrays floor = tools::make_plane(10.0f, 1), pane = tools::make_plane(1.0f, 1);
-    build_scene(r, r.add_mesh(floor.view()), r.add_mesh(pane.view()));
-    RenderSettings three;
-    three.width = 40;
-    three.height = 30;
-    three.samples = 3;
-    const FrameResult reference = r.render(top_down_ortho(10.0, 6.0f), three);
+class ProgressivePreviewGL : public GLTest {};
 
-    RenderSettings eight = three;
-    eight.samples = 8;
-    eight.preview_interval_ms = 0;
-    PreviewImage partial;
-    std::atomic<bool> done{false};
-    std::thread watcher([&] {
-        PreviewImage image;
-        std::uint64_t version = 0;
-        while (!done) {
-            if (r.preview(version, image)) {
-                version = image.version;
-                if (image.samples_done == 3) partial = image;
-            }
-            std::this_thread::yield();
-        }
-    });
-    r.render(top_down_ortho(10.0, 6.0f), eight);
-    done = true;
-    watcher.join();
-    if (partial.pixels.empty()) GTEST_SKIP() << "the watcher missed sample 3 (a loaded machine)";
-    const PassImage& want = *reference.find(Pass::Combined);
-    double worst = 0.0;
-    for (std::size_t i = 0; i < want.pixels.size(); ++i)
-        worst = std::max(worst, double(std::abs(partial.pixels[i] - want.pixels[i])) /
-                                    std::max(1e-3, double(std::abs(want.pixels[i]))));
-    // Summed in another order (/8 then x 8/3 against /3): float rounding only.
-    EXPECT_LT(worst, 1e-5);
+TEST_F(ProgressivePreviewGL, PartialImageIsTheAverageOfTheSamplesSoFar) {
+    // The film after 3 of 8 samples holds sum(3 samples) / 8 (the lighting
+    // pass adds value / samples): the preview shows sum / 3, the estimate
+    // of the finished pixel. Passes of the first sample are shown as they
+    // are, one channel as grey; an interval skips all but the first and the
+    // last sample.
+    const float film_values[8] = {0.3f, 0.6f, 0.9f, 0.75f, 3.0f, 0.0f, 1.5f, 0.375f};
+    Texture film = make_texture_2d(GL_RGBA32F, 2, 1, "film");
+    glTextureSubImage2D(film.get(), 0, 0, 0, 2, 1, GL_RGBA, GL_FLOAT, film_values);
+    ProgressivePreview preview;
+    preview.begin(2, 1, 8, 0);
+    PreviewImage image;
+    ASSERT_TRUE(preview.take(0, image));
+    EXPECT_TRUE(image.pixels.empty());  // nothing before the first sample
+    const std::uint64_t started = image.version;
+    preview.publish(film.get(), 3);
+    ASSERT_TRUE(preview.take(started, image));
+    ASSERT_EQ(image.pixels.size(), 8u);
+    EXPECT_EQ(image.samples_done, 3);
+    for (int i = 0; i < 8; ++i) EXPECT_NEAR(image.pixels[std::size_t(i)], film_values[i] * 8.0f / 3.0f, 1e-6f) << i;
+
+    preview.publish(film.get(), 5, /*averaged=*/false, /*channels=*/1);
+    ASSERT_TRUE(preview.take(image.version, image));
+    for (int px = 0; px < 2; ++px) {
+        for (int c = 0; c < 3; ++c) EXPECT_EQ(image.pixels[std::size_t(px * 4 + c)], film_values[px * 4]);
+        EXPECT_EQ(image.pixels[std::size_t(px * 4 + 3)], 1.0f);
+    }
+
+    preview.begin(2, 1, 8, 1000000);
+    ASSERT_TRUE(preview.take(image.version, image));
+    const std::uint64_t second = image.version;
+    preview.publish(film.get(), 1);  // the first sample: always
+    ASSERT_TRUE(preview.take(second, image));
+    preview.publish(film.get(), 4);  // within the interval: skipped
+    EXPECT_FALSE(preview.take(image.version, image));
+    preview.publish(film.get(), 8);  // the last: always
+    ASSERT_TRUE(preview.take(image.version, image));
+    EXPECT_EQ(image.samples_done, 8);
+    EXPECT_NEAR(image.pixels[0], film_values[0], 1e-7f);
 }
 
 TEST(CameraViewplane, ExplicitViewplaneReplacesTheLensOne) {

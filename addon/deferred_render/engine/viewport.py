@@ -134,6 +134,7 @@ class ViewportSession:
         self._scene_signature = None  # what a scene update without flags may change: its world
         self.error = None           # a message shown in the viewport instead of an image
         self.warnings = []
+        self.last_sync = ""         # what the last sync did, for the viewport's status text
         self._worker = None
         self._stopping = False
         self._restart = True
@@ -165,15 +166,22 @@ class ViewportSession:
 
     def stop(self):
         """Cancel the running accumulation and wait for it (at most one
-        sample: the renderer checks for cancellation between samples)."""
+        stage of a sample: the renderer checks for cancellation before its
+        shadow maps, before its lighting and between samples)."""
         worker = self._worker
         if worker is None:
             return
         if worker.is_alive():
             self._stopping = True
+            start = time.perf_counter()
             self.renderer.cancel()
             worker.join()
             self._stopping = False
+            # How long the UI waited for the running stage (the benchmark's
+            # "UI wait on an edit").
+            waited = time.perf_counter() - start
+            self.stats["stops"] += 1
+            self.stats["stop_seconds_max"] = max(self.stats["stop_seconds_max"], waited)
         self._worker = None
 
     def _status(self, text):
@@ -219,6 +227,7 @@ class ViewportSession:
             self.stats["syncs"] += 1
             self.stats["meshes_exported"] += stats.meshes
             self.stats["meshes_reused"] += stats.meshes_reused
+            self.last_sync = f"sync: {stats.meshes} meshes exported, {stats.meshes_reused} kept"
             self.stats["sync_seconds"] += time.perf_counter() - start
             self.synced = True
             self._fresh_sync = True
@@ -256,7 +265,9 @@ class ViewportSession:
         region = context.region
         width, height = int(region.width), int(region.height)
         scene = depsgraph.scene
-        if self.error is None and self.synced:
+        if self.synced:
+            # Also after an error: a new view or setting tries again (an
+            # accumulation that failed is not retried for the same view).
             try:
                 self._ensure_running(context.region_data, width, height, scene,
                                      getattr(context.space_data, "shading", None))
@@ -284,7 +295,7 @@ class ViewportSession:
         if running or self.samples_done < self.samples_total or self.shown_generation != self.generation:
             engine.tag_redraw()
         if self.error is None:
-            self._status(f"Sample {self.samples_done}/{self.samples_total}"
+            self._status(f"Sample {self.samples_done}/{self.samples_total} | {self.last_sync}"
                          + (f" | {len(self.warnings)} warnings (see the console)" if self.warnings else ""))
 
     def _settings(self, scene, shading):
@@ -311,6 +322,7 @@ class ViewportSession:
         self._take_preview(counted=False)  # what the stopped accumulation left: still the old view
         self._view = key
         self._restart = False
+        self.error = None
         self.generation += 1
         self.samples_done = 0
         self.samples_total = settings["samples"]

@@ -252,6 +252,22 @@ class DEFERRED_RENDER_PT_world_light_group(_LightGroupPanel, bpy.types.Panel):
         return context.world
 
 
+class DEFERRED_RENDER_PT_world_preview(_EnginePanel, bpy.types.Panel):
+    """The world's preview, rendered by this engine (Blender's own World
+    tab has none for engines other than Cycles; materials and lights use
+    Blender's preview panels)."""
+    bl_label = "Preview"
+    bl_context = "world"
+    bl_options = {'DEFAULT_CLOSED'}
+
+    @classmethod
+    def poll(cls, context):
+        return context.world is not None and context.engine in cls.COMPAT_ENGINES
+
+    def draw(self, context):
+        self.layout.template_preview(context.world)
+
+
 class DEFERRED_RENDER_PT_viewport_render_pass(bpy.types.Panel):
     """Render Pass in the 3D view's shading popover, as Cycles and EEVEE have it."""
     bl_space_type = 'VIEW_3D'
@@ -281,4 +297,5 @@ classes = (
     DEFERRED_RENDER_PT_material_settings,
     DEFERRED_RENDER_PT_object_light_group,
     DEFERRED_RENDER_PT_world_light_group,
+    DEFERRED_RENDER_PT_world_preview,
 )

@@ -260,7 +260,11 @@ def steps():
     redder = (after_colour[..., 0] - after_colour[..., 2]) - (after_move[..., 0] - after_move[..., 2])
     check(redder.max() > 0.2, "the view follows the colour (SphereB turns red)", f"largest red-blue gain {redder.max():.3f}")
 
-    # 3. A mesh edit: that mesh only.
+    # 3. A mesh edit: that mesh only. Then undone: the view shows the mesh
+    # as it was (an undo reloads the changed mesh; a stale kept mesh would
+    # show the edit).
+    with bpy.context.temp_override(window=window, area=area, region=region):
+        bpy.ops.ed.undo_push(message="before the mesh edit")
     stats = dict(s.stats)
     box = bpy.data.objects["Box"]
     for vertex in box.data.vertices:
@@ -272,7 +276,24 @@ def steps():
     check(delta.get("meshes_exported", 0) == 1 and delta.get("meshes_reused", 0) >= 5,
           "editing a mesh exports that mesh only", str(delta))
     view = capture(window, area, region, "view_mesh")
-    compare_with_final(view, rect, final_render("mesh"), "after the mesh edit")
+    after_mesh = compare_with_final(view, rect, final_render("mesh"), "after the mesh edit")
+    with bpy.context.temp_override(window=window, area=area, region=region):
+        bpy.ops.ed.undo_push(message="the mesh edit")
+        bpy.ops.ed.undo()
+    s = yield from wait_done("undo", after=s.generation)
+    # An undo reloads data-blocks: every Python reference is found again.
+    scene = bpy.context.scene
+    material = bpy.data.materials["MatSphereB"]
+    window, area, region = view3d()
+    space = area.spaces.active
+    region_data = space.region_3d
+    view = capture(window, area, region, "view_undo")
+    undone = block_means(view, rect)
+    check(np.abs(undone - after_colour).max() <= MAX_BLOCK_DIFFERENCE
+          and np.abs(after_mesh - after_colour).max() > 0.05,
+          "undoing the mesh edit shows the mesh as it was",
+          f"largest block difference to before the edit {np.abs(undone - after_colour).max():.4f}, "
+          f"the edit had changed blocks by {np.abs(after_mesh - after_colour).max():.3f}")
 
     # 4. The view's size: a restart at the new size, no re-sync.
     stats = dict(s.stats)

@@ -163,7 +163,17 @@ class MeshKeeper:
     def key(self, ob, attribute_keys=frozenset()):
         name = self.object_name(ob)
         attributes = ",".join(sorted(repr(k) for k in attribute_keys))
-        return f"{name}|{self._generation.get(name, 0)}|{len(ob.material_slots)}|{attributes}"
+        # Also the original data-block's address: an undo reloads a changed
+        # mesh at a new address (unchanged ones keep theirs), whether or not
+        # the depsgraph reports it as a geometry update; and the evaluated
+        # mesh's sizes, a cheap guard against any edit the updates miss.
+        original = getattr(ob, "original", None) or ob
+        data = getattr(original, "data", None)
+        address = data.as_pointer() if data is not None else 0
+        mesh = ob.data if ob.type == "MESH" else None
+        sizes = (len(mesh.vertices), len(mesh.polygons)) if mesh is not None else ()
+        return (f"{name}|{self._generation.get(name, 0)}|{address:x}|{sizes}|{len(ob.material_slots)}|"
+                f"{attributes}")
 
     def geometry_changed(self, name):
         self._generation[name] = self._generation.get(name, 0) + 1

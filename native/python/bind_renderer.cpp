@@ -628,7 +628,7 @@ void declare_renderer(py::module_& m) {
                  return py::make_tuple(image.version, image.samples_done, image.samples_total, pixels);
              },
              py::arg("since") = 0,
-             "The newest Combined estimate of a render running with preview_interval_ms >= 0, if newer "
+             "The newest estimate of the preview_pass of a render running with preview_interval_ms >= 0, if newer "
              "than version `since`: (version, samples_done, samples_total, (H, W, 4) float32 array or "
              "None before the first sample), else None. Never waits for the render.");
 }

@@ -1003,6 +1003,22 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
             if (sample == 0) {
                 std::pair<double, double> visible_depths;
                 const auto receivers = visible_receivers(cam, settings.width, settings.height, visible_depths);
+                if (forward_pass || scene_alpha || alpha_graphs) {
+                    // Surfaces sample 0's depth may not hold: Blend-mode
+                    // layers (the forward pass) and stochastic alpha seen
+                    // at later samples. The bounding spheres of every
+                    // instance in view widen the cascades' range to them.
+                    const glm::dmat3 to_view(cam.view);
+                    double near = visible_depths.second > 0.0 ? visible_depths.first : 1e300;
+                    double far = visible_depths.second > 0.0 ? visible_depths.second : 0.0;
+                    for (const auto& b : bounds)
+                        if (in_view(b.center, b.radius)) {
+                            const double d = -(to_view * b.center).z;
+                            near = std::min(near, d - b.radius);
+                            far = std::max(far, d + b.radius);
+                        }
+                    if (far > 0.0) visible_depths = {std::max(near, double(cam.clip_start)), far};
+                }
                 shadows.fit(receivers, visible_depths);
             }
             shadows.render_sample(*shaders, {u[2], u[3]}, world_dirs, draw_shadow_casters,

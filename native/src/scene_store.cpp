@@ -192,6 +192,7 @@ void SceneStore::clear() {
         for (std::size_t i = 0; i < meshes_.size(); ++i) {
             MeshSlot& slot = mesh_slots_[i];
             if (slot.alive && (!slot.used || slot.key.empty())) {
+                if (!slot.key.empty()) mesh_by_key_.erase(slot.key);
                 meshes_[i] = GpuMesh();
                 slot = MeshSlot();
             }
@@ -211,20 +212,18 @@ void SceneStore::release_all() {
     clear();
     meshes_.clear();
     mesh_slots_.clear();
+    mesh_by_key_.clear();
 }
 
 std::int64_t SceneStore::find_mesh(const std::string& key) {
     if (key.empty()) return -1;
-    for (std::size_t i = 0; i < meshes_.size(); ++i) {
-        MeshSlot& slot = mesh_slots_[i];
-        if (slot.alive && slot.key == key) {
-            if (!slot.used) ++meshes_reused_;
-            slot.used = true;
-            scene_started_ = true;
-            return std::int64_t(i);
-        }
-    }
-    return -1;
+    const auto found = mesh_by_key_.find(key);
+    if (found == mesh_by_key_.end()) return -1;
+    MeshSlot& slot = mesh_slots_[found->second];
+    if (!slot.used) ++meshes_reused_;
+    slot.used = true;
+    scene_started_ = true;
+    return std::int64_t(found->second);
 }
 
 std::uint32_t SceneStore::add_mesh(const MeshData& m, const std::string& key) {
@@ -331,15 +330,27 @@ std::uint32_t SceneStore::add_mesh(const MeshData& m, const std::string& key) {
     slot.alive = slot.used = true;
     scene_started_ = true;
     ++meshes_uploaded_;
+    // A key uploaded again (the caller did not find it first) replaces the
+    // old mapping; the old mesh stays alive for this scene if it is used.
+    std::uint32_t id = static_cast<std::uint32_t>(meshes_.size());
     for (std::size_t i = 0; i < meshes_.size(); ++i)
         if (!mesh_slots_[i].alive) {
-            meshes_[i] = std::move(g);
-            mesh_slots_[i] = std::move(slot);
-            return static_cast<std::uint32_t>(i);
+            id = static_cast<std::uint32_t>(i);
+            break;
         }
-    meshes_.push_back(std::move(g));
-    mesh_slots_.push_back(std::move(slot));
-    return static_cast<std::uint32_t>(meshes_.size() - 1);
+    if (!key.empty()) {
+        const auto old = mesh_by_key_.find(key);
+        if (old != mesh_by_key_.end()) mesh_slots_[old->second].key.clear();  // unkeyed: dropped at the next clear
+        mesh_by_key_[key] = id;
+    }
+    if (id == meshes_.size()) {
+        meshes_.push_back(std::move(g));
+        mesh_slots_.push_back(std::move(slot));
+    } else {
+        meshes_[id] = std::move(g);
+        mesh_slots_[id] = std::move(slot);
+    }
+    return id;
 }
 
 std::uint32_t SceneStore::add_material(const Material& m) {

@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <string>
 #include <utility>
+#include <unordered_map>
 #include <vector>
 
 namespace deferred {
@@ -125,6 +126,7 @@ private:
     };
     std::vector<GpuMesh> meshes_;
     std::vector<MeshSlot> mesh_slots_;  // parallel to meshes_
+    std::unordered_map<std::string, std::uint32_t> mesh_by_key_;  // alive keyed slots
     bool scene_started_ = false;        // something was added or found since clear()
     std::size_t meshes_uploaded_ = 0, meshes_reused_ = 0;
     std::vector<InstanceBatch> batches_;

@@ -99,7 +99,7 @@ def render_border(context, scene, width, height):
     space, region_data = context.space_data, context.region_data
     if region_data.view_perspective == 'CAMERA':
         render = scene.render
-        if not render.use_border or scene.camera is None:
+        if not render.use_border or scene.camera is None or scene.camera.type != 'CAMERA':
             return None
         from bpy_extras.view3d_utils import location_3d_to_region_2d
         camera = scene.camera
@@ -136,7 +136,6 @@ class ViewportSession:
         self.warnings = []
         self.last_sync = ""         # what the last sync did, for the viewport's status text
         self._worker = None
-        self._stopping = False
         self._restart = True
         self._view = None           # (camera params, width, height, settings) of the running accumulation
         self._version = 0           # newest preview version drawn
@@ -172,11 +171,12 @@ class ViewportSession:
         if worker is None:
             return
         if worker.is_alive():
-            self._stopping = True
             start = time.perf_counter()
-            self.renderer.cancel()
-            worker.join()
-            self._stopping = False
+            # Repeated: a render that starts clears a cancel issued before it
+            # (the worker may not have reached render() yet).
+            while worker.is_alive():
+                self.renderer.cancel()
+                worker.join(0.02)
             # How long the UI waited for the running stage (the benchmark's
             # "UI wait on an edit").
             waited = time.perf_counter() - start
@@ -201,7 +201,9 @@ class ViewportSession:
                 # The scene itself, tagged without geometry, transform or
                 # shading (a final render, a UI change, a render setting):
                 # the settings the accumulation reads are compared in
-                # view_draw; the world the scene points to is below.
+                # view_draw; the world the scene points to is below. Known
+                # gap: a view-layer setting the export reads (a holdout
+                # collection) changes nothing here until the next edit.
                 continue
             changed = True
             if update.is_updated_geometry:
@@ -223,7 +225,9 @@ class ViewportSession:
                 self.renderer = self.mod.Renderer(device_index=device_index)
             self.warnings = []
             start = time.perf_counter()
+            self.keeper.begin_sync()
             stats, _ = export_scene(depsgraph, self.renderer, warn=self._warn, mesh_keeper=self.keeper)
+            self.keeper.end_sync()
             self.stats["syncs"] += 1
             self.stats["meshes_exported"] += stats.meshes
             self.stats["meshes_reused"] += stats.meshes_reused
@@ -256,6 +260,13 @@ class ViewportSession:
 
     # -- view_draw --------------------------------------------------------
     def draw(self, context, depsgraph):
+        try:
+            self._draw(context, depsgraph)
+        except Exception as ex:  # shown in the viewport; never raised into Blender
+            self.error = str(ex) or type(ex).__name__
+            self._status(f"{final.LOG_PREFIX}: {self.error}")
+
+    def _draw(self, context, depsgraph):
         import gpu
         from gpu_extras.presets import draw_texture_2d
 
@@ -329,7 +340,6 @@ class ViewportSession:
         self.stats["restarts"] += 1
         camera = self.mod.Camera(**params)
         renderer = self.renderer
-        generation = self.generation
         first_after_sync, self._fresh_sync = self._fresh_sync, False
 
         def work():
@@ -340,13 +350,8 @@ class ViewportSession:
                 if first_after_sync:  # the renderer counts uploads since the sync
                     self.stats["meshes_uploaded"] += int(timings.get("meshes_uploaded", 0))
             except Exception as ex:
-                cancelled = getattr(self.mod, "Cancelled", ())
-                if not isinstance(ex, cancelled):
+                if not isinstance(ex, getattr(self.mod, "Cancelled", ())):
                     self.error = str(ex) or type(ex).__name__
-                elif not self._stopping and generation == self.generation:
-                    # A cancel meant for the last accumulation reached this
-                    # one (it had just finished): start it again.
-                    self._restart = True
 
         self._worker = threading.Thread(target=work, name="deferred-viewport", daemon=True)
         self._worker.start()

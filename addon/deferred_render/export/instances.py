@@ -154,6 +154,17 @@ class MeshKeeper:
     def __init__(self):
         self._generation = {}   # object name -> geometry edits seen
         self.triangles = {}     # key -> triangle count of the mesh uploaded under it
+        self._used = None       # keys the sync in progress asked for
+
+    def begin_sync(self):
+        self._used = set()
+
+    def end_sync(self):
+        """Forget the keys the sync did not use (the renderer drops their
+        meshes at its next clear): edits would otherwise grow it forever."""
+        if self._used is not None:
+            self.triangles = {k: v for k, v in self.triangles.items() if k in self._used}
+        self._used = None
 
     @staticmethod
     def object_name(ob):
@@ -172,8 +183,11 @@ class MeshKeeper:
         address = data.as_pointer() if data is not None else 0
         mesh = ob.data if ob.type == "MESH" else None
         sizes = (len(mesh.vertices), len(mesh.polygons)) if mesh is not None else ()
-        return (f"{name}|{self._generation.get(name, 0)}|{address:x}|{sizes}|{len(ob.material_slots)}|"
-                f"{attributes}")
+        key = (f"{name}|{self._generation.get(name, 0)}|{address:x}|{sizes}|{len(ob.material_slots)}|"
+               f"{attributes}")
+        if self._used is not None:
+            self._used.add(key)
+        return key
 
     def geometry_changed(self, name):
         self._generation[name] = self._generation.get(name, 0) + 1

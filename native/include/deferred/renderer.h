@@ -256,7 +256,10 @@ public:
 
     FrameResult render(const Camera& camera, const RenderSettings& settings);
     // Thread-safe, callable while render() runs on another thread: the
-    // render stops at its next sample or light batch and throws Cancelled.
+    // render stops before its next sample, shadow maps, lighting or light
+    // batch and throws Cancelled. A render that starts clears the request
+    // (a cancel meant for the last one), so a caller stopping a render it
+    // has just started repeats cancel() until the render has returned.
     void cancel();
     // Thread-safe, never waits for a render: copies the newest preview image
     // into `out` when its version is newer than `since` (false otherwise).

@@ -179,6 +179,8 @@ def steps():
     scene.render.image_settings.file_format = 'PNG'
     scene.render.image_settings.color_mode = 'RGB'
     scene.camera.data.show_passepartout = False
+    # Not rendered by this engine (final render or viewport): must be named.
+    scene.camera.data.dof.use_dof = True
     # Side regions take their width from the view (not drawn over it), so
     # showing the sidebar resizes the view's region.
     bpy.context.preferences.system.use_region_overlap = False
@@ -221,6 +223,9 @@ def steps():
 
     s = yield from wait_done("first display")
     check(len(viewport.sessions()) == 1, "one viewport session", str(len(viewport.sessions())))
+    # The camera's depth of field (set above) is not rendered: named.
+    check(any("depth of field" in w for w in s.warnings), "the camera view names what it does not render",
+          repr(s.warnings))
     first_stats = dict(s.stats)
     check(first_stats.get("meshes_exported") == 6, "the first sync exports the scene's 6 meshes", str(first_stats))
     view = capture(window, area, region, "view_first")
@@ -402,41 +407,33 @@ def steps():
     space.use_render_border = False
     yield
 
-    # 7. A material preview thumbnail, rendered by this engine.
+    # 7. Material and world preview thumbnails, rendered by this engine.
     from deferred_render.engine import final
-    before = final.preview_renders
-    material.preview_ensure()
-    with bpy.context.temp_override(window=window, area=area, region=region, id=material):
-        bpy.ops.ed.lib_id_generate_preview()
-    start = time.perf_counter()
-    pixels = None
-    while time.perf_counter() - start < WAIT_SECONDS:
-        preview = material.preview
-        if final.preview_renders > before and preview.image_size[0] > 0:
-            pixels = np.array(preview.image_pixels_float[:], dtype=np.float32)
-            if pixels.max() > 0:
-                break
-        yield
-    check(final.preview_renders > before, "the material preview was rendered by this engine",
-          f"{final.preview_renders - before} preview renders")
+
+    def thumbnail(datablock):
+        """Asks Blender for the data-block's preview; yields until this
+        engine has rendered it; returns (preview renders, pixels or None)."""
+        before = final.preview_renders
+        datablock.preview_ensure()
+        with bpy.context.temp_override(window=window, area=area, region=region, id=datablock):
+            bpy.ops.ed.lib_id_generate_preview()
+        start = time.perf_counter()
+        while time.perf_counter() - start < WAIT_SECONDS:
+            preview = datablock.preview
+            if final.preview_renders > before and preview.image_size[0] > 0:
+                pixels = np.array(preview.image_pixels_float[:], dtype=np.float32)
+                if pixels.max() > 0:
+                    return final.preview_renders - before, pixels
+            yield
+        return final.preview_renders - before, None
+
+    renders, pixels = yield from thumbnail(material)
+    check(renders > 0, "the material preview was rendered by this engine", f"{renders} preview renders")
     check(pixels is not None and pixels.max() > 0.05 and pixels.reshape(-1, 4)[:, :3].std() > 0.01,
           "the preview thumbnail is not empty",
           "no pixels" if pixels is None else f"max {pixels.max():.3f}, std {pixels.reshape(-1, 4)[:, :3].std():.3f}")
-    # And the world's.
-    world = scene.world
-    before = final.preview_renders
-    world.preview_ensure()
-    with bpy.context.temp_override(window=window, area=area, region=region, id=world):
-        bpy.ops.ed.lib_id_generate_preview()
-    start = time.perf_counter()
-    pixels = None
-    while time.perf_counter() - start < WAIT_SECONDS:
-        if final.preview_renders > before and world.preview.image_size[0] > 0:
-            pixels = np.array(world.preview.image_pixels_float[:], dtype=np.float32)
-            if pixels.max() > 0:
-                break
-        yield
-    check(pixels is not None and pixels.max() > 0.01 and final.preview_renders > before,
+    renders, pixels = yield from thumbnail(scene.world)
+    check(renders > 0 and pixels is not None and pixels.max() > 0.01,
           "the world preview thumbnail is rendered by this engine and not empty",
           "no pixels" if pixels is None else f"max {pixels.max():.3f}")
 

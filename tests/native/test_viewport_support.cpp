@@ -27,11 +27,13 @@ Material grey() {
     return m;
 }
 
-Light sun_light() {
+// A sun from (1, 0.7, 3) towards the origin, soft by default (samples differ,
+// so the estimate changes as they accumulate).
+Light sun_light(float angle = 0.2f) {
     Light sun;
     sun.type = LightType::Sun;
-    sun.angle = 0.2f;  // soft: samples differ, so the estimate changes as they accumulate
-    const double eye[3] = {1.0, 0.5, 3.0}, target[3] = {0.0, 0.0, 0.0};
+    sun.angle = angle;
+    const double eye[3] = {1.0, 0.7, 3.0}, target[3] = {0.0, 0.0, 0.0};
     sun.matrix = tools::look_at(eye, target);
     sun.energy = 3.0f;
     return sun;
@@ -44,6 +46,12 @@ void build_scene(Renderer& r, std::uint32_t floor_mesh, std::uint32_t pane_mesh)
     r.add_instances(pane_mesh, tools::translation(0, 0, 1.0).data(), 1, nullptr, {mat});
     r.add_light(sun_light());
     set_world_color(r, 0.1f, 0.1f, 0.1f);
+}
+
+// The same with its own (unkeyed) meshes.
+void build_scene(Renderer& r) {
+    tools::MeshArrays floor = tools::make_plane(10.0f, 1), pane = tools::make_plane(1.0f, 1);
+    build_scene(r, r.add_mesh(floor.view()), r.add_mesh(pane.view()));
 }
 
 double max_difference(const PassImage& a, const PassImage& b) {
@@ -102,8 +110,7 @@ TEST(KeptMeshes, UnkeyedAndUnusedMeshesAreDropped) {
 
 TEST(ProgressivePreview, LastImageIsTheRenderAndVersionsGrowWhileSampling) {
     Renderer r;
-    tools::MeshArrays floor = tools::make_plane(10.0f, 1), pane = tools::make_plane(1.0f, 1);
-    build_scene(r, r.add_mesh(floor.view()), r.add_mesh(pane.view()));
+    build_scene(r);
     RenderSettings s;
     s.width = 40;
     s.height = 30;
@@ -205,8 +212,7 @@ TEST(CameraViewplane, ExplicitViewplaneReplacesTheLensOne) {
 
 TEST(ProgressivePreview, ShowsTheChosenPassAsTheFrameReturnsIt) {
     Renderer r;
-    tools::MeshArrays floor = tools::make_plane(10.0f, 1), pane = tools::make_plane(1.0f, 1);
-    build_scene(r, r.add_mesh(floor.view()), r.add_mesh(pane.view()));
+    build_scene(r);
     RenderSettings s;
     s.width = 24;
     s.height = 20;
@@ -244,13 +250,7 @@ TEST(SunCascades, SplitOverTheVisibleDepthsNotTheClipRange) {
     auto render = [](float clip_end) {
         Renderer r;
         tools::MeshArrays floor = tools::make_plane(10.0f, 1), pane = tools::make_plane(0.5f, 1);
-        Light sun;
-        sun.type = LightType::Sun;
-        sun.angle = 0.0f;  // hard: the shadow edge is the map's
-        const double eye[3] = {1.0, 0.7, 3.0}, target[3] = {0.0, 0.0, 0.0};
-        sun.matrix = tools::look_at(eye, target);
-        sun.energy = 3.0f;
-        r.add_light(sun);
+        r.add_light(sun_light(0.0f));  // hard: the shadow edge is the map's
         set_world_color(r, 0.0f, 0.0f, 0.0f);
         const std::uint32_t mat = r.add_material(grey());
         r.add_instances(r.add_mesh(floor.view()), identity_matrix().data(), 1, nullptr, {mat});
@@ -283,13 +283,7 @@ TEST(SunCascades, BlendSurfacesNearerThanEveryOpaquePixelStayShadowed) {
         Renderer r;
         tools::MeshArrays floor = tools::make_plane(10.0f, 1), pane = tools::make_plane(3.0f, 1),
                           caster = tools::make_plane(0.5f, 1);
-        Light sun;
-        sun.type = LightType::Sun;
-        sun.angle = 0.0f;
-        const double eye[3] = {1.0, 0.7, 3.0}, target[3] = {0.0, 0.0, 0.0};
-        sun.matrix = tools::look_at(eye, target);
-        sun.energy = 3.0f;
-        r.add_light(sun);
+        r.add_light(sun_light(0.0f));
         set_world_color(r, 0.0f, 0.0f, 0.0f);
         const std::uint32_t opaque = r.add_material(grey());
         Material glass = grey();

@@ -338,6 +338,16 @@ class ViewportSession:
         self.samples_done = 0
         self.samples_total = settings["samples"]
         self.stats["restarts"] += 1
+        if region_data.view_perspective == 'CAMERA' and scene.camera is not None:
+            # What the camera has that the view's projection leaves out
+            # (panoramic types, depth of field): named, as a final render does.
+            try:
+                _, camera_warnings = camera_export.camera_params(scene, scene.camera)
+            except camera_export.CameraError as ex:
+                camera_warnings = [str(ex)]
+            for message in camera_warnings:
+                if message not in self.warnings:
+                    self._warn(message)
         camera = self.mod.Camera(**params)
         renderer = self.renderer
         first_after_sync, self._fresh_sync = self._fresh_sync, False

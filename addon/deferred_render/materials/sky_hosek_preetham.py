@@ -274,16 +274,8 @@ def node_constants(sky_type, sun_direction, turbidity, ground_albedo, xyz_to_rgb
 # Kernel reference (kernel/svm/sky.h, Cycles 3.4.1), float32
 # ---------------------------------------------------------------------------
 
-def _cosf_a(x):
-    return np.cos(np.asarray(x, dtype=np.float64)).astype(F)
-
-
-def _sinf_a(x):
-    return np.sin(np.asarray(x, dtype=np.float64)).astype(F)
-
-
-def _expf_a(x):
-    return np.exp(np.asarray(x, dtype=np.float64)).astype(F)
+# float32 cos/sin/exp of arrays, as Cycles' cosf/sinf/expf: sky_nishita's.
+from .sky_nishita import _cosf as _cosf_a, _expf as _expf_a, _sinf as _sinf_a  # noqa: E402
 
 
 def _perez_kernel(lam, theta, gamma):

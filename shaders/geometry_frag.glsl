@@ -6,7 +6,10 @@
  * the graph's shader AOVs where the G-buffer sees the surface.
  * FORWARD_PASS (materials in Blend mode, forward_module.h): the surface is
  * lit here, by the lighting pass's own code (lighting_lib.glsl), in front
- * of the opaque depth, and blended over the forward layer with its alpha. */
+ * of the opaque depth, and blended over the forward layer with its alpha.
+ * EMISSION_BAKE (node materials whose emission varies, emitter_module.h):
+ * the radiance the surface emits towards a light sample, drawn into each
+ * emitting triangle's tile of the bake target (geometry_vert.glsl). */
 #include "frame_lib.glsl"
 #include "octahedral_lib.glsl"
 #ifdef FORWARD_PASS
@@ -41,6 +44,8 @@ layout(location = 0) out float out_distance;
 layout(location = 23) uniform int aov_slot;
 layout(location = 24) uniform int aov_color; /* 1: a Color AOV (rgb, a coverage), 0: a Value AOV (a) */
 layout(location = 0) out vec4 out_aov;
+#elif defined(EMISSION_BAKE)
+layout(location = 0) out vec4 out_bake;
 #elif defined(FORWARD_PASS)
 /* Premultiplied light and alpha; blended ONE, ONE_MINUS_SRC_ALPHA (alpha:
  * ZERO, ONE_MINUS_SRC_ALPHA), so the target's a is the transmittance. */
@@ -54,7 +59,7 @@ layout(location = OUT_NORMAL) out vec2 out_normal;
 layout(location = OUT_SMOOTH_NORMAL) out vec2 out_smooth_normal;
 #endif
 #endif
-#if !defined(FORWARD_PASS) && !defined(AOV_PASS)
+#if !defined(FORWARD_PASS) && !defined(AOV_PASS) && !defined(EMISSION_BAKE)
 #ifdef GBUF_PARAMS1
 layout(location = OUT_PARAMS1) out vec4 out_params1;
 #endif
@@ -257,14 +262,24 @@ void main() {
     /* Geometric normal from the triangle's winding, in world space. Cycles
      * flips the normals of a surface hit from behind; a mirrored instance
      * (negative determinant) reverses the screen winding, hence the xor. */
+#ifdef EMISSION_BAKE
+    /* Seen from the front of its winding (emission is two-sided), by a ray
+     * along the true normal: the bake's winding is the tile's, not a view's. */
+    const bool back = false;
+#else
     const bool back = gl_FrontFacing == ((v_mirrored & 1u) != 0u);
+#endif
     vec3 Ng = normalize(cross(dFdx(v_position), dFdy(v_position)));
 #ifdef MATERIAL_GRAPH
     /* Node materials read Ng (True Normal, flat Normal Map): exact from the
      * triangle's vertices rather than from screen derivatives. */
     if (dot(v_true_normal, v_true_normal) > 0.0) Ng = normalize(v_true_normal);
 #endif
+#ifdef EMISSION_BAKE
+    vec3 V = Ng;
+#else
     vec3 V = frame_view_vector(v_position);
+#endif
     if (dot(Ng, V) < 0.0) Ng = -Ng;
     vec3 N = Ng;
     float len2 = dot(v_normal, v_normal);
@@ -281,10 +296,15 @@ void main() {
     g_mix_u = fract(pixel_hash(uvec2(gl_FragCoord.xy)) + frame.sample_shift.z);
     Closure c;
     material_graph_eval(c);
-#if defined(MATERIAL_ALPHA) && !defined(FORWARD_PASS)
+#if defined(MATERIAL_ALPHA) && !defined(FORWARD_PASS) && !defined(EMISSION_BAKE)
     if (transparent_here(clamp(finite_or(c.alpha, 1.0), 0.0, 1.0))) discard;
 #endif
-#ifdef AOV_PASS
+#ifdef EMISSION_BAKE
+    /* What a light sample receives: the closure's emission weighted by its
+     * coverage (a Principled BSDF's Alpha, a Mix with Transparent), as
+     * Cycles' closure weights scale it; negative light is not sampled. */
+    out_bake = vec4(max(finite_or(c.emission, vec3(0.0)), vec3(0.0)) * clamp(finite_or(c.alpha, 1.0), 0.0, 1.0), 1.0);
+#elif defined(AOV_PASS)
     vec4 aov = g_aov[clamp(aov_slot, 0, MAX_GRAPH_AOVS - 1)];
     out_aov = aov_color != 0 ? vec4(finite_or(aov.rgb, vec3(0.0)), 1.0) : vec4(0.0, 0.0, 0.0, finite_or(aov.a, 0.0));
 #elif defined(SHADOW_PASS)
@@ -309,7 +329,7 @@ void main() {
                                    finite_or(c.clearcoat_roughness, 0.0)), vec4(0.0), vec4(1.0));
     uint surf_material_index = uint(materials[v_material].emission.w);
     float surf_alpha = clamp(finite_or(c.alpha, 1.0), 0.0, 1.0);
-#endif  /* AOV_PASS, SHADOW_PASS */
+#endif  /* EMISSION_BAKE, AOV_PASS, SHADOW_PASS */
 #else
     vec3 shading_normal = N;
     vec4 surf_emission = vec4(min(m.emission.rgb, vec3(65504.0)), 1.0);
@@ -319,7 +339,7 @@ void main() {
     uint surf_material_index = uint(m.emission.w);
     float surf_alpha = clamp(isnan(m.mix.w) ? 1.0 : m.mix.w, 0.0, 1.0);
 #endif
-#if !defined(SHADOW_PASS) && !defined(AOV_PASS)
+#if !defined(SHADOW_PASS) && !defined(AOV_PASS) && !defined(EMISSION_BAKE)
 #ifndef MATERIAL_GRAPH
     const bool holdout_material = m.base_diffuse.a > 3.5; /* kClosureHoldout */
 #else
@@ -353,10 +373,11 @@ void main() {
 #endif
 #endif
 #endif
-#if defined(GBUF_SMOOTH_NORMAL) && !defined(SHADOW_PASS) && !defined(FORWARD_PASS) && !defined(AOV_PASS)
+#if defined(GBUF_SMOOTH_NORMAL) && !defined(SHADOW_PASS) && !defined(FORWARD_PASS) && !defined(AOV_PASS) && \
+    !defined(EMISSION_BAKE)
     out_smooth_normal = octahedral_encode(N);
 #endif
-#if defined(GBUF_UV) && !defined(FORWARD_PASS) && !defined(AOV_PASS)
+#if defined(GBUF_UV) && !defined(FORWARD_PASS) && !defined(AOV_PASS) && !defined(EMISSION_BAKE)
     out_uv = v_uv;
 #endif
 }

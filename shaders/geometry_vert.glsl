@@ -23,6 +23,18 @@ layout(std430, binding = SSBO_INSTANCE_REMAP) readonly buffer Remap { uint insta
 /* Shadow maps (shadow_frag.glsl): camera-relative world -> the face's clip space. */
 layout(location = 2) uniform mat4 shadow_view_projection;
 #endif
+#ifdef EMISSION_BAKE
+/* Textured emission (emitter_module.h): each emitting triangle is drawn into
+ * its own T x T tile of the bake target, corners 0, 1, 2 at the tile's
+ * (0, 0), (T + 1/2, 0), (0, T + 1/2), so exactly the texels (i, j) with
+ * i + j <= T - 1 are covered (their centres' sums are whole numbers, the
+ * edge's is T + 1/2) and texel (i, j) holds the surface at barycentric
+ * weights ((i + 1/2), (j + 1/2)) / (T + 1/2) of corners 1 and 2.
+ * Tile of triangle t: bake_tile_offset + (t - bake_first_triangle). */
+layout(location = 30) uniform int bake_tile_offset;
+layout(location = 31) uniform uint bake_first_triangle;
+layout(location = 32) uniform ivec4 bake_layout;  /* tile size T, tiles per row, target width, height */
+#endif
 
 #ifdef MATERIAL_GRAPH
 /* Node materials: the mesh's named per-corner attributes, one float array;
@@ -64,6 +76,15 @@ void main() {
     v_position = world.xyz;
 #ifdef SHADOW_PASS
     gl_Position = shadow_view_projection * world;
+#elif defined(EMISSION_BAKE)
+    {
+        const int tile = bake_tile_offset + int(triangle - bake_first_triangle);
+        const float T = float(bake_layout.x);
+        vec2 at = vec2(float(tile % bake_layout.y), float(tile / bake_layout.y)) * T;
+        const uint c = corner % 3u;
+        at += c == 1u ? vec2(T + 0.5, 0.0) : c == 2u ? vec2(0.0, T + 0.5) : vec2(0.0);
+        gl_Position = vec4(at / vec2(bake_layout.zw) * 2.0 - 1.0, 0.0, 1.0);
+    }
 #else
     gl_Position = frame.projection * (frame.view * world);
 #endif

@@ -371,6 +371,37 @@ LightContribution shade_light_unshadowed(GpuLight light, SurfaceParams s, Princi
 
 #ifdef HAS_MESH_LIGHTS
 layout(std430, binding = SSBO_EMITTERS) readonly buffer Emitters { GpuEmitterTriangle emitters[]; };
+#ifdef HAS_EMISSION_TEXELS
+/* Textured emitters (emitter_module.h): each such triangle's radiance baked
+ * at T(T + 1)/2 texels, texel (i, j) (i + j <= T - 1) at barycentric weights
+ * ((i + 1/2), (j + 1/2)) / (T + 1/2) of vertices 1 and 2, rows j after one
+ * another; rgb per texel. */
+layout(std430, binding = SSBO_EMISSION_TEXELS) readonly buffer EmissionTexels {
+    uint emission_tile_size;
+    uint emission_texels_pad[3];
+    float emission_texels[];
+};
+#endif
+
+/* The radiance of triangle t at the point with barycentric weights b of its
+ * vertices 1 and 2 (X = v0 + b.x e1 + b.y e2): its constant radiance, or for
+ * a textured one (radiance.w = its tile + 1) the texel holding that point,
+ * the nearest of the tile's (EmitterModule::radiance_at does the same). */
+vec3 emitter_radiance(GpuLight light, GpuEmitterTriangle t, vec2 b) {
+#ifdef HAS_EMISSION_TEXELS
+    if (t.radiance.w > 0.0) {
+        const int T = int(emission_tile_size);
+        int i = clamp(int(floor(b.x * (float(T) + 0.5))), 0, T - 1);
+        int j = clamp(int(floor(b.y * (float(T) + 0.5))), 0, T - 1);
+        if (i + j > T - 1) {
+            if (b.x >= b.y) i = T - 1 - j; else j = T - 1 - i;
+        }
+        const uint texel = uint(t.radiance.w - 1.0) * uint(T * (T + 1) / 2) + uint(j * T - j * (j - 1) / 2 + i);
+        return vec3(emission_texels[3u * texel], emission_texels[3u * texel + 1u], emission_texels[3u * texel + 2u]);
+    }
+#endif
+    return t.radiance.rgb;
+}
 
 /* Light from point X (unit winding normal n, radiance Le, density pdf in
  * area measure) of an emitter: f cos Le cos_l / (d^2 pdf), cos_l = |N.I| for
@@ -433,7 +464,8 @@ LightContribution mesh_light_unoccluded(GpuLight light, SurfaceParams s, Princip
         float sa = sqrt(a);
         vec3 X = t.v0.xyz + t.e1.xyz * (sa * (1.0 - u.y)) + t.e2.xyz * (sa * u.y);
         vec3 n = normalize(cross(t.e1.xyz, t.e2.xyz));
-        LightContribution c = mesh_light_point(s, w, P, N, V, X, n, t.radiance.rgb, p / t.e1.w, light.axis_y.w);
+        vec3 Le = emitter_radiance(light, t, vec2(sa * (1.0 - u.y), sa * u.y));
+        LightContribution c = mesh_light_point(s, w, P, N, V, X, n, Le, p / t.e1.w, light.axis_y.w);
         r.diffuse += c.diffuse * (1.0 / float(points));
         r.glossy += c.glossy * (1.0 / float(points));
     }

@@ -30,6 +30,7 @@
 #define SSBO_CRYPTO_SLOTS 20     /* ... per pixel and layer, Levels (hash, coverage bits) slots */
 #define SSBO_LIGHT_GROUPS 21     /* light groups: each packed light's group, 0 none (light_module.h) */
 #define SSBO_INSTANCE_GROUPS 22  /* ... each instance's group, for its emission */
+#define SSBO_EMISSION_TEXELS 23   /* textured emitters' baked radiance (emitter_module.h) */
 
 /* Textures sampled by compute passes (G-buffer inputs) */
 #define TEX_DEPTH 0

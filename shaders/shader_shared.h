@@ -66,7 +66,8 @@ SHARED_ASSERT_SIZE(GpuLight, 96);
 /* One emitting triangle (camera-relative) of a mesh light.
  *   v0       : xyz vertex 0, w the light's CDF after this triangle (the last is 1)
  *   e1, e2   : xyz edges v1 - v0, v2 - v0; e1.w its area, e2.w its probability
- *   radiance : rgb emitted radiance (two-sided), w unused */
+ *   radiance : rgb emitted radiance (two-sided); w 0, or for a textured emitter its tile
+ *              + 1 among the baked texels (light_lib.glsl emitter_radiance) */
 SHARED_STRUCT(GpuEmitterTriangle) {
     vec4 v0;
     vec4 e1;

@@ -239,6 +239,8 @@ void declare_renderer(py::module_& m) {
             d["world_bake_ms"] = self.last.world_bake_ms;
             d["world_map_width"] = self.last.world_map_width;
             d["emitter_triangles"] = self.last.emitter_triangles;
+            d["emission_bake_ms"] = self.last.emission_bake_ms;
+            d["emission_baked_triangles"] = self.last.emission_baked_triangles;
             return d;
         })
         .def_property_readonly("last_warnings", [](PyRenderer& self) { return self.last_warnings; },
@@ -351,8 +353,9 @@ void declare_renderer(py::module_& m) {
              "the current scene then counts as using it.")
         .def("add_graph_material",
              [](PyRenderer& self, const py::dict& graph, const py::object& pass_index, const py::object& light_emission,
-               bool blend, std::uint32_t crypto) {
+               bool emission_varies, bool blend, std::uint32_t crypto) {
                  Material base;
+                 base.emission_varies = emission_varies;
                  base.blend = blend;
                  base.crypto = crypto;
                  base.pass_index = index_from(pass_index, "add_graph_material: pass_index");
@@ -362,10 +365,11 @@ void declare_renderer(py::module_& m) {
                  return self.get().add_graph_material(base, g);
              },
              py::arg("graph"), py::kw_only(), py::arg("pass_index") = 0, py::arg("light_emission") = py::none(),
-             py::arg("blend") = false, py::arg("crypto") = 0u,
+             py::arg("emission_varies") = false, py::arg("blend") = false, py::arg("crypto") = 0u,
              "A node material from the add-on's graph dict (materials/builder.py); returns the material id. "
              "light_emission: the radiance its surface emits when the graph makes it a constant (the mesh "
-             "then lights other surfaces); the graph alone decides what its pixels show. blend: Blend mode, "
+             "then lights other surfaces); the graph alone decides what its pixels show. emission_varies: its "
+             "emission varies over the surface (the renderer bakes it to light other surfaces). blend: Blend mode, "
              "drawn by the forward pass (Material::blend).")
         .def("add_material",
              [](PyRenderer& self, const py::object& base_color, float metallic, float roughness, float specular,

@@ -1,10 +1,14 @@
 #include "emitter_module.h"
 
+#include <deferred/renderer.h>
+
 #include "../../shaders/shader_defines.h"
 
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
+#include <cstring>
 #include <map>
 
 namespace deferred {
@@ -19,7 +23,8 @@ glm::dvec3 material_emission(const std::vector<Material>& materials, std::uint32
     if (id >= materials.size() || depth > 64) return glm::dvec3(0.0);
     const Material& m = materials[id];
     // A node material: the constant radiance the add-on found in its graph
-    // (add_graph_material's light_emission; 0 where the graph varies it).
+    // (add_graph_material's light_emission; 0 where the graph varies it:
+    // emission_varies, baked).
     if (m.graph >= 0) return glm::dvec3(m.emission[0], m.emission[1], m.emission[2]);
     const glm::dvec3 own = glm::dvec3(m.emission[0], m.emission[1], m.emission[2]) * double(m.emission_strength) *
                            double(std::clamp(m.alpha, 0.0f, 1.0f));
@@ -67,31 +72,42 @@ int closed_mesh_side(const std::vector<float>& positions, const std::vector<std:
 
 }  // namespace
 
-std::size_t EmitterModule::sync(const SceneStore& scene, const glm::dvec3& camera_position) {
+void EmitterModule::sync(const SceneStore& scene, const glm::dvec3& camera_position) {
     release();
     const std::vector<Material>& materials = scene.materials();
     std::vector<glm::dvec3> emission(materials.size());
+    // A node material whose emission varies: baked (bake()), its power known after.
+    std::vector<bool> textured(materials.size(), false);
     bool any = false;
     for (std::size_t i = 0; i < materials.size(); ++i) {
+        textured[i] = materials[i].graph >= 0 && materials[i].emission_varies;
         emission[i] = material_emission(materials, std::uint32_t(i));
         // Negative light is not sampled; radiance beyond the lights' power
         // limit (InputLimits::kMaxLightPower) lights as that limit, which keeps
         // every float product of the lighting finite (the fuzzer found 1e25).
         emission[i] = glm::clamp(emission[i], glm::dvec3(0.0), glm::dvec3(double(InputLimits::kMaxLightPower)));
         if (!std::isfinite(emission[i].x + emission[i].y + emission[i].z)) emission[i] = glm::dvec3(0.0);
-        any = any || luminance(emission[i]) > 0.0;
+        any = any || luminance(emission[i]) > 0.0 || textured[i];
     }
-    if (!any) return 0;
+    if (!any) return;
 
+    std::uint32_t instance_base = 0;  // the frame's instance index of the batch's first
     for (const InstanceBatch& batch : scene.batches()) {
+        const std::uint32_t batch_base = instance_base;
+        instance_base += std::uint32_t(batch.object_indices.size());
         const GpuMesh& mesh = scene.meshes()[batch.mesh_id];
         if (mesh.triangle_count == 0 || batch.material_slots.empty()) continue;
-        // The slots of this batch that emit.
+        // The slots of this batch that emit (a constant, or baked).
         std::vector<glm::dvec3> slot_emission(mesh.slot_ranges.size(), glm::dvec3(0.0));
+        std::vector<std::int64_t> slot_textured(mesh.slot_ranges.size(), -1);  // material id when baked
         bool emits = false;
         for (std::size_t s = 0; s < mesh.slot_ranges.size(); ++s) {
             const std::uint32_t id = batch.material_slots[std::min(s, batch.material_slots.size() - 1)];
-            if (id < emission.size() && luminance(emission[id]) > 0.0 && mesh.slot_ranges[s].second > 0) {
+            if (id >= emission.size() || mesh.slot_ranges[s].second == 0) continue;
+            if (textured[id]) {
+                slot_textured[s] = id;
+                emits = true;
+            } else if (luminance(emission[id]) > 0.0) {
                 slot_emission[s] = emission[id];
                 emits = true;
             }
@@ -117,11 +133,26 @@ std::size_t EmitterModule::sync(const SceneStore& scene, const glm::dvec3& camer
             light.light_group = batch.light_group;
             // A mirroring transform turns the winding (and the outside) over.
             light.side = glm::determinant(glm::dmat3(model)) < 0.0 ? -mesh_side : mesh_side;
-            glm::dvec3 lo(1e300), hi(-1e300);
             for (std::size_t s = 0; s < mesh.slot_ranges.size(); ++s) {
                 const glm::dvec3 Le = slot_emission[s];
-                if (!(luminance(Le) > 0.0)) continue;
+                const bool baked = slot_textured[s] >= 0;
+                if (!baked && !(luminance(Le) > 0.0)) continue;
                 const auto [first, count] = mesh.slot_ranges[s];
+                std::uint32_t first_tile = 0;
+                if (baked) {
+                    // One tile per triangle of the range (a degenerate one keeps its unused tile).
+                    first_tile = std::uint32_t(tile_count_);
+                    EmissionBakeRun run;
+                    run.instance = batch_base + std::uint32_t(inst);
+                    run.mesh = batch.mesh_id;
+                    run.material = std::uint32_t(slot_textured[s]);
+                    run.graph = std::uint32_t(materials[run.material].graph);
+                    run.first = first;
+                    run.count = count;
+                    run.first_tile = first_tile;
+                    bake_runs_.push_back(run);
+                    tile_count_ += count;
+                }
                 for (std::uint32_t t = first; t < first + count; ++t) {
                     glm::dvec3 v[3];
                     bool ok = true;
@@ -139,42 +170,210 @@ std::size_t EmitterModule::sync(const SceneStore& scene, const glm::dvec3& camer
                     gpu::GpuEmitterTriangle g{};
                     g.v0 = {float(v[0].x), float(v[0].y), float(v[0].z), 0.0f};
                     g.e1 = {float(e1.x), float(e1.y), float(e1.z), float(area)};
-                    g.e2 = {float(e2.x), float(e2.y), float(e2.z), float(area * luminance(Le))};  // power, normalised below
-                    g.radiance = {float(Le.x), float(Le.y), float(Le.z), 0.0f};
+                    // e2.w: the triangle's power (area x luminance), a probability after finish().
+                    g.e2 = {float(e2.x), float(e2.y), float(e2.z), float(area * luminance(Le))};
+                    g.radiance = {float(Le.x), float(Le.y), float(Le.z),
+                                  baked ? float(first_tile + (t - first) + 1) : 0.0f};
                     triangles_.push_back(g);
-                    light.area += area;
-                    light.power += area * luminance(Le);
-                    light.max_radiance = std::max({light.max_radiance, Le.x, Le.y, Le.z});
-                    for (int k = 0; k < 3; ++k) {
-                        lo = glm::min(lo, v[k]);
-                        hi = glm::max(hi, v[k]);
-                    }
                 }
             }
             light.count = std::uint32_t(triangles_.size()) - light.first;
-            if (light.count == 0 || !(light.power > 0.0)) {
-                triangles_.resize(light.first);
-                continue;
-            }
-            // The CDF over the light's triangles by power: v0.w the running
-            // sum (ending at 1), e2.w the triangle's probability.
-            double running = 0.0;
-            for (std::uint32_t t = light.first; t < light.first + light.count; ++t) {
-                const double p = double(triangles_[t].e2.w) / light.power;
-                running += p;
-                triangles_[t].e2.w = float(p);
-                triangles_[t].v0.w = float(running);
-            }
-            triangles_[light.first + light.count - 1].v0.w = 1.0f;
-            light.center = 0.5 * (lo + hi);
-            light.radius = 0.5 * glm::length(hi - lo);
-            lights_.push_back(light);
+            if (light.count > 0) lights_.push_back(light);
         }
     }
+}
+
+double EmitterModule::bake(ShaderLibrary& shaders, MaterialModule& materials,
+                           const std::function<void(const EmissionBakeRun& run, GLuint program)>& draw) {
+    if (bake_runs_.empty()) return 0.0;
+    const auto start = std::chrono::steady_clock::now();
+    // The tile edge: the largest T whose T(T + 1)/2 texels per triangle fit the budget.
+    int T = kMaxTileSize;
+    while (T > 1 && tile_count_ * std::size_t(T) * std::size_t(T + 1) / 2 > kTexelBudget) --T;
+    tile_size_ = T;
+    const std::size_t per_tile = std::size_t(T) * std::size_t(T + 1) / 2;
+    // The target holds tiles as T x T squares (the triangle covers the lower
+    // half); large counts go through it in chunks.
+    GLint max_size = 0;
+    glGetIntegerv(GL_MAX_TEXTURE_SIZE, &max_size);
+    const int side = std::max(std::min(2048, int(max_size)), T);
+    const int columns = side / T;
+    const std::size_t chunk_tiles = std::size_t(columns) * std::size_t(side / T);
+    const std::size_t rows = std::min((tile_count_ + std::size_t(columns) - 1) / std::size_t(columns),
+                                      std::size_t(side / T));
+    const int width = columns * T, height = int(rows) * T;
+    Texture target = make_texture_2d(GL_RGBA32F, width, height, "emission bake");
+    GLuint fbo_id = 0;
+    glCreateFramebuffers(1, &fbo_id);
+    Framebuffer fbo(fbo_id);
+    glNamedFramebufferTexture(fbo.get(), GL_COLOR_ATTACHMENT0, target.get(), 0);
+    if (glCheckNamedFramebufferStatus(fbo.get(), GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+        throw Error("emission bake: the bake target is not complete");
+    // Instance remap: entry k is run k's instance (uniform 0 of the draw).
+    std::vector<std::uint32_t> remap;
+    for (const EmissionBakeRun& r : bake_runs_) remap.push_back(r.instance);
+    Buffer remap_buffer = make_storage_buffer(remap.data(), remap.size() * sizeof(std::uint32_t), "bake remap");
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_INSTANCE_REMAP, remap_buffer.get());
+    std::map<std::uint32_t, GLuint> programs;  // graph -> its bake program
+    ShaderVariant variant;
+    variant.defines.push_back("EMISSION_BAKE");
+    for (const EmissionBakeRun& r : bake_runs_)
+        if (!programs.count(r.graph)) programs[r.graph] = materials.program(shaders, r.graph, variant);
+
+    GLint viewport[4];
+    glGetIntegerv(GL_VIEWPORT, viewport);
+    const GLboolean depth_test = glIsEnabled(GL_DEPTH_TEST), cull = glIsEnabled(GL_CULL_FACE),
+                    blend = glIsEnabled(GL_BLEND), scissor = glIsEnabled(GL_SCISSOR_TEST);
+    glDisable(GL_DEPTH_TEST);
+    glDisable(GL_CULL_FACE);
+    glDisable(GL_BLEND);
+    glDisable(GL_SCISSOR_TEST);
+    glBindFramebuffer(GL_FRAMEBUFFER, fbo.get());
+    glViewport(0, 0, width, height);
+    texels_.assign(tile_count_ * per_tile * 3, 0.0f);
+    std::vector<float> pixels(std::size_t(width) * std::size_t(height) * 4);
+    for (std::size_t chunk = 0; chunk < tile_count_; chunk += chunk_tiles) {
+        const std::size_t chunk_end = std::min(chunk + chunk_tiles, tile_count_);
+        const float zero[4] = {0.0f, 0.0f, 0.0f, 0.0f};
+        glClearNamedFramebufferfv(fbo.get(), GL_COLOR, 0, zero);
+        for (std::size_t k = 0; k < bake_runs_.size(); ++k) {
+            const EmissionBakeRun& r = bake_runs_[k];
+            const std::size_t lo = std::max<std::size_t>(r.first_tile, chunk);
+            const std::size_t hi = std::min<std::size_t>(r.first_tile + r.count, chunk_end);
+            if (lo >= hi) continue;
+            EmissionBakeRun part = r;
+            part.first = r.first + std::uint32_t(lo - r.first_tile);
+            part.count = std::uint32_t(hi - lo);
+            part.first_tile = std::uint32_t(lo);
+            const GLuint program = programs.at(r.graph);
+            glUseProgram(program);
+            glUniform1ui(0, std::uint32_t(k));
+            glUniform1i(30, int(lo - chunk));
+            glUniform1ui(31, part.first);
+            glUniform4i(32, T, columns, width, height);
+            draw(part, program);
+        }
+        glGetTextureImage(target.get(), 0, GL_RGBA, GL_FLOAT, GLsizei(pixels.size() * sizeof(float)), pixels.data());
+        // Each tile's covered texels, rows j = 0.. after one another.
+        for (std::size_t tile = chunk; tile < chunk_end; ++tile) {
+            const std::size_t local = tile - chunk;
+            const std::size_t x0 = (local % std::size_t(columns)) * std::size_t(T);
+            const std::size_t y0 = (local / std::size_t(columns)) * std::size_t(T);
+            float* out = &texels_[tile * per_tile * 3];
+            for (int j = 0; j < T; ++j)
+                for (int i = 0; i + j <= T - 1; ++i) {
+                    const float* px = &pixels[((y0 + std::size_t(j)) * std::size_t(width) + x0 + std::size_t(i)) * 4];
+                    for (int c = 0; c < 3; ++c) *out++ = std::isfinite(px[c]) ? std::max(px[c], 0.0f) : 0.0f;
+                }
+        }
+    }
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    glViewport(viewport[0], viewport[1], viewport[2], viewport[3]);
+    if (depth_test) glEnable(GL_DEPTH_TEST);
+    if (cull) glEnable(GL_CULL_FACE);
+    if (blend) glEnable(GL_BLEND);
+    if (scissor) glEnable(GL_SCISSOR_TEST);
+    check_gl("emission bake");
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+std::size_t EmitterModule::finish() {
+    const std::size_t per_tile = std::size_t(tile_size_) * std::size_t(tile_size_ + 1) / 2;
+    const bool baked = !texels_.empty();
+    std::vector<gpu::GpuEmitterTriangle> kept;
+    std::vector<MeshLight> lights;
+    for (MeshLight light : lights_) {
+        const std::uint32_t first = std::uint32_t(kept.size());
+        light.area = light.power = light.max_radiance = 0.0;
+        glm::dvec3 lo(1e300), hi(-1e300);
+        for (std::uint32_t t = light.first; t < light.first + light.count; ++t) {
+            gpu::GpuEmitterTriangle g = triangles_[t];
+            const double area = double(g.e1.w);
+            glm::dvec3 mean(g.radiance.x, g.radiance.y, g.radiance.z), peak = mean;
+            if (g.radiance.w > 0.0f) {
+                // A baked triangle: its texels' mean and largest radiance
+                // (without a bake, a failed one, it emits nothing).
+                mean = peak = glm::dvec3(0.0);
+                if (baked) {
+                    float* px = &texels_[(std::size_t(g.radiance.w) - 1) * per_tile * 3];
+                    for (std::size_t k = 0; k < per_tile; ++k) {
+                        const glm::dvec3 c(px[3 * k], px[3 * k + 1], px[3 * k + 2]);
+                        mean += c;
+                        peak = glm::max(peak, c);
+                    }
+                    mean /= double(per_tile);
+                    // The lighting's limit on radiance (see sync()).
+                    const double cap = double(InputLimits::kMaxLightPower);
+                    if (peak.x > cap || peak.y > cap || peak.z > cap) {
+                        for (std::size_t k = 0; k < per_tile * 3; ++k) px[k] = std::min(px[k], float(cap));
+                        mean = glm::min(mean, glm::dvec3(cap));
+                        peak = glm::min(peak, glm::dvec3(cap));
+                    }
+                }
+                g.radiance = {float(mean.x), float(mean.y), float(mean.z), g.radiance.w};
+            }
+            const double power = area * luminance(mean);
+            if (!(power > 0.0) || !std::isfinite(power)) continue;  // lights nothing
+            g.e2.w = float(power);
+            kept.push_back(g);
+            light.area += area;
+            light.power += power;
+            light.max_radiance = std::max({light.max_radiance, peak.x, peak.y, peak.z});
+            const glm::dvec3 v0(g.v0.x, g.v0.y, g.v0.z), e1(g.e1.x, g.e1.y, g.e1.z), e2(g.e2.x, g.e2.y, g.e2.z);
+            for (const glm::dvec3& v : {v0, v0 + e1, v0 + e2}) {
+                lo = glm::min(lo, v);
+                hi = glm::max(hi, v);
+            }
+        }
+        light.first = first;
+        light.count = std::uint32_t(kept.size()) - first;
+        if (light.count == 0 || !(light.power > 0.0)) {
+            kept.resize(first);
+            continue;
+        }
+        // The CDF over the light's triangles by power: v0.w the running
+        // sum (ending at 1), e2.w the triangle's probability.
+        double running = 0.0;
+        for (std::uint32_t t = light.first; t < light.first + light.count; ++t) {
+            const double p = double(kept[t].e2.w) / light.power;
+            running += p;
+            kept[t].e2.w = float(p);
+            kept[t].v0.w = float(running);
+        }
+        kept[light.first + light.count - 1].v0.w = 1.0f;
+        light.center = 0.5 * (lo + hi);
+        light.radius = 0.5 * glm::length(hi - lo);
+        lights.push_back(light);
+    }
+    triangles_ = std::move(kept);
+    lights_ = std::move(lights);
+    bake_runs_.clear();
     if (!triangles_.empty())
         buffer_ = make_storage_buffer(triangles_.data(), triangles_.size() * sizeof(gpu::GpuEmitterTriangle),
                                       "emitter triangles");
+    if (baked && !triangles_.empty()) {
+        // Header (tile edge, 3 unused) and the texels (light_lib.glsl EmissionTexels).
+        std::vector<float> data(4 + texels_.size());
+        const std::uint32_t header[4] = {std::uint32_t(tile_size_), 0u, 0u, 0u};
+        std::memcpy(data.data(), header, sizeof(header));
+        std::copy(texels_.begin(), texels_.end(), data.begin() + 4);
+        texel_buffer_ = make_storage_buffer(data.data(), data.size() * sizeof(float), "emission texels");
+    }
     return triangles_.size();
+}
+
+glm::dvec3 EmitterModule::radiance_at(const gpu::GpuEmitterTriangle& t, double b1, double b2) const {
+    if (!(t.radiance.w > 0.0f) || texels_.empty())
+        return glm::dvec3(t.radiance.x, t.radiance.y, t.radiance.z);
+    const int T = tile_size_;
+    int i = std::clamp(int(std::floor(b1 * (T + 0.5))), 0, T - 1);
+    int j = std::clamp(int(std::floor(b2 * (T + 0.5))), 0, T - 1);
+    if (i + j > T - 1) {
+        if (b1 >= b2) i = T - 1 - j; else j = T - 1 - i;
+    }
+    const std::size_t per_tile = std::size_t(T) * std::size_t(T + 1) / 2;
+    const std::size_t texel = (std::size_t(t.radiance.w) - 1) * per_tile + std::size_t(j * T - j * (j - 1) / 2 + i);
+    return glm::dvec3(texels_[3 * texel], texels_[3 * texel + 1], texels_[3 * texel + 2]);
 }
 
 MeshLightPoint EmitterModule::sample_point(std::size_t k, const std::array<float, 2>& u) const {
@@ -196,13 +395,14 @@ MeshLightPoint EmitterModule::sample_point(std::size_t k, const std::array<float
     MeshLightPoint out;
     out.position = v0 + e1 * (r * (1.0 - b)) + e2 * (r * b);
     out.normal = glm::normalize(glm::cross(e1, e2));
-    out.radiance = glm::dvec3(t.radiance.x, t.radiance.y, t.radiance.z);
+    out.radiance = radiance_at(t, r * (1.0 - b), r * b);
     out.pdf = p / double(t.e1.w);
     return out;
 }
 
 void EmitterModule::bind() const {
     if (buffer_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_EMITTERS, buffer_.get());
+    if (texel_buffer_) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_EMISSION_TEXELS, texel_buffer_.get());
 }
 
 }  // namespace deferred

@@ -8,15 +8,24 @@
 // shadow module draws (a control variate: unbiased, no noise where nothing
 // occludes).
 //
-// Emission is two-sided (Cycles' emissive_simple_eval: |N.I|), constant per
-// material slot: colour x strength x alpha of a constant material,
-// averaged over its stochastic mix chain. Node materials' emission is not
-// known here (their graph runs in the geometry pass): they light nothing
-// (the add-on warns).
+// Emission is two-sided (Cycles' emissive_simple_eval: |N.I|). A constant
+// material's is colour x strength x alpha, averaged over its stochastic mix
+// chain; a node material gives a constant found by the add-on, or, when its
+// emission varies over the surface (textures, attributes, procedurals), it
+// is baked: every emitting triangle of such a material is drawn with the
+// graph's own program (EMISSION_BAKE, geometry_vert/frag.glsl) into a tile
+// of T(T + 1)/2 texels in barycentric coordinates, read back once per
+// render; lights then pick triangles by their baked power and take the
+// radiance at a point from the texel that holds it (piecewise constant at
+// T texels along an edge, T from a texel budget shared by all such
+// triangles). The bake sees the surface from its front along its normal as
+// a light sample does (Light Path outputs 0, as PATH_RAY_EMISSION).
 #pragma once
 
 #include "gl_util.h"
+#include "material_module.h"
 #include "scene_store.h"
+#include "shader_library.h"
 
 #include "../../shaders/shader_shared.h"
 
@@ -24,6 +33,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace deferred {
@@ -54,22 +64,66 @@ struct MeshLightPoint {
     double pdf = 0.0;
 };
 
+// One draw of the emission bake: triangles [first, first + count) of mesh
+// `mesh` as instance `instance` (the frame's instance index) draws them with
+// material `material` (node graph `graph`); their tiles start at `first_tile`.
+struct EmissionBakeRun {
+    std::uint32_t instance = 0, mesh = 0, material = 0, graph = 0;
+    std::uint32_t first = 0, count = 0;
+    std::uint32_t first_tile = 0;
+};
+
 class EmitterModule {
 public:
     // Finds the emitting triangles of the scene's instances (reading back
-    // only the meshes that emit) and uploads them. Returns the triangles found.
-    std::size_t sync(const SceneStore& scene, const glm::dvec3& camera_position);
+    // only the meshes that emit). Textured emitters then need bake(); every
+    // scene needs finish() before lights() is read.
+    void sync(const SceneStore& scene, const glm::dvec3& camera_position);
     void release() { *this = EmitterModule(); }
+
+    // The bake: the runs to draw, the tile size, and the draw itself. The
+    // caller binds the frame's instances, materials and a frame block, and
+    // `draw` binds the run's mesh and its material's images and attribute
+    // layout and draws the run's triangles with the bound program (instance
+    // offset uniform 0 = the run's index in the bake's instance remap, which
+    // bake() binds). Returns milliseconds; throws Error when a program does
+    // not compile or GL fails (the caller warns; those triangles emit nothing).
+    bool needs_bake() const { return !bake_runs_.empty(); }
+    double bake(ShaderLibrary& shaders, MaterialModule& materials,
+                const std::function<void(const EmissionBakeRun& run, GLuint program)>& draw);
+    // Powers, CDFs and upload; drops lights that emit nothing. Returns the
+    // emitting triangles.
+    std::size_t finish();
 
     const std::vector<MeshLight>& lights() const { return lights_; }
     // The point of light `k` for a film sample's point u in [0, 1)^2.
     MeshLightPoint sample_point(std::size_t k, const std::array<float, 2>& u) const;
+    // Textured emitters exist: the lighting reads the baked texels (HAS_EMISSION_TEXELS).
+    bool has_texels() const { return bool(texel_buffer_); }
+    int tile_size() const { return tile_size_; }
+    std::size_t baked_triangles() const { return tile_count_; }
     void bind() const;
 
+    // Budget of baked texels shared by all textured emitting triangles, and
+    // the largest tile edge (a panel of two triangles gets 128 texels along
+    // each edge; 5000 triangles get 28).
+    static constexpr std::size_t kTexelBudget = std::size_t(1) << 21;
+    static constexpr int kMaxTileSize = 128;
+
 private:
+    // The radiance of triangle t at barycentric weights (b1, b2) of its
+    // vertices 1 and 2 (light_lib.glsl's emitter_radiance).
+    glm::dvec3 radiance_at(const gpu::GpuEmitterTriangle& t, double b1, double b2) const;
+
     std::vector<MeshLight> lights_;
     std::vector<gpu::GpuEmitterTriangle> triangles_;
     Buffer buffer_;
+    // Textured emitters: the draws, the tile edge T, the triangles baked.
+    std::vector<EmissionBakeRun> bake_runs_;
+    int tile_size_ = 0;
+    std::size_t tile_count_ = 0;
+    std::vector<float> texels_;  // rgb per texel, T(T + 1)/2 per tile
+    Buffer texel_buffer_;
 };
 
 }  // namespace deferred

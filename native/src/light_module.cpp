@@ -84,6 +84,7 @@ void LightModule::sync(const std::vector<Light>& lights, const glm::dvec3& camer
         has_type_[static_cast<int>(l.type)] = true;
     }
     first_mesh_ = packed.size();
+    emission_texels_ = emitters && emitters->has_texels();
     if (emitters) {
         for (const MeshLight& m : emitters->lights()) {
             gpu::GpuLight g{};
@@ -140,6 +141,7 @@ void LightModule::add_defines(ShaderVariant& variant) const {
                                    "HAS_MESH_LIGHTS"};
     for (int i = 0; i < 5; ++i)
         if (has_type_[i]) variant.defines.push_back(names[i]);
+    if (emission_texels_ && has_type_[LIGHT_MESH]) variant.defines.push_back("HAS_EMISSION_TEXELS");
 }
 
 void LightModule::bind() const { glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_LIGHTS, buffer_.get()); }

@@ -58,6 +58,7 @@ private:
     std::vector<std::uint32_t> groups_;
     Buffer groups_buffer_;
     std::size_t first_mesh_ = 0;  // packed index of the first mesh light
+    bool emission_texels_ = false;  // some mesh light is baked (HAS_EMISSION_TEXELS)
 };
 
 }  // namespace deferred

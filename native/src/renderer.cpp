@@ -390,8 +390,47 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     // hdri_studio report); a constant world keeps one.
     const int world_maps = world_module.has_map() ? kWorldMapOcclusionDirections : 1;
     if (settings.shadows && (world_lights || ao_pass) && scene.instance_count() > 0) shadows.offer_world(world_maps);
-    // Emissive meshes become lights (constant emission; emitter_module.h).
-    result.timings.emitter_triangles = emitters.sync(scene, cam.position);
+    // Emissive meshes become lights (emitter_module.h); the triangles of
+    // node materials whose emission varies are baked with their graphs.
+    emitters.sync(scene, cam.position);
+    if (emitters.needs_bake()) {
+        gpu::FrameConstants bake_frame{};
+        bake_frame.view = to_gpu(cam.view);
+        bake_frame.camera_position = {float(cam.position.x), float(cam.position.y), float(cam.position.z),
+                                      cam.orthographic ? 1.0f : 0.0f};
+        bake_frame.viewport = {float(settings.width), float(settings.height), 1.0f / float(settings.width),
+                               1.0f / float(settings.height)};
+        Buffer bake_buffer = make_storage_buffer(&bake_frame, sizeof(bake_frame), "emission bake frame");
+        glBindBufferBase(GL_UNIFORM_BUFFER, UBO_FRAME, bake_buffer.get());
+        glBindVertexArray(empty_vao.get());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_INSTANCES, instance_buffer.get());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_MATERIAL_SLOTS, slot_buffer.get());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_MATERIALS, material_buffer.get());
+        this->materials.bind_constants();
+        try {
+            result.timings.emission_bake_ms = emitters.bake(
+                *shaders, this->materials, [&](const EmissionBakeRun& run, GLuint) {
+                    const GpuMesh& mesh = scene.meshes()[run.mesh];
+                    auto bind = [&](GLuint slot, const Buffer& b) {
+                        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, slot, b ? b.get() : dummy_ssbo.get());
+                    };
+                    bind(SSBO_POSITIONS, mesh.positions);
+                    bind(SSBO_INDICES, mesh.indices);
+                    bind(SSBO_NORMALS, mesh.normals);
+                    bind(SSBO_UVS, mesh.uvs);
+                    bind(SSBO_MATERIAL_INDICES, mesh.material_indices);
+                    bind(SSBO_ATTRIBUTES, mesh.attributes);
+                    this->materials.bind_for_draw(run.graph, mesh);
+                    glUniform1ui(1, mesh.flags);
+                    glDrawArraysInstanced(GL_TRIANGLES, GLint(run.first * 3), GLsizei(run.count * 3), 1);
+                });
+            result.timings.emission_baked_triangles = emitters.baked_triangles();
+        } catch (const Error& e) {
+            result.warnings.push_back(std::string("Emissive node materials light nothing around them (their "
+                                                  "emission could not be baked): ") + e.what());
+        }
+    }
+    result.timings.emitter_triangles = emitters.finish();
     lights.sync(scene.lights(), cam.position, settings.light_threshold, settings.shadows ? &shadows : nullptr,
                 &emitters);
     const bool culled = settings.light_culling && lights.count() >= kCullingMinLights;

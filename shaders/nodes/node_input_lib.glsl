@@ -126,11 +126,13 @@ void node_light_path(out float is_camera, out float is_shadow, out float is_diff
      * camera ray's (the shadow ray's receiver is not known here). */
     is_camera = 0.0;
     is_shadow = 1.0;
-#elif defined(WORLD_LIGHTING)
-    /* The world as lights see it (world_bake_comp.glsl): Cycles evaluates the
-     * background for a light sample with PATH_RAY_EMISSION alone
-     * (light_sample_shader_eval), so every ray-type output is 0: the "Is
-     * Camera Ray" trick of a backdrop that lights with another colour. */
+#elif defined(WORLD_LIGHTING) || defined(EMISSION_BAKE)
+    /* The world, or an emissive surface, as lights see it
+     * (world_bake_comp.glsl, emitter_module.h): Cycles evaluates the
+     * background or the emitting surface for a light sample with
+     * PATH_RAY_EMISSION alone (light_sample_shader_eval), so every ray-type
+     * output is 0: the "Is Camera Ray" trick of a backdrop or a panel that
+     * lights with another colour than the camera sees. */
     is_camera = 0.0;
     is_shadow = 0.0;
 #else

@@ -521,11 +521,12 @@ def _build(material, images, world=False):
                 g.note(f"{name} (not rendered)")
     aovs = [] if world else _emit_aov_outputs(g, tree)
     light_emission = None
+    emission_varies = False
     if not world and _graph_emits(g):
         light_emission = _constant_emission(g, surface)
-        if light_emission is None:
-            g.note("its emission lights nothing around it (it varies over the surface; only a constant "
-                   "emission makes a mesh a light; its own pixels show it)")
+        # Not a constant: the renderer bakes the graph's emission over the
+        # emitting triangles (native emitter_module.h) to light other surfaces.
+        emission_varies = light_emission is None
     if world:
         used = {n["func"] for n in g.nodes} & WORLD_UNSUPPORTED
         if used:
@@ -537,4 +538,5 @@ def _build(material, images, world=False):
           "closure_normal": g.closure_normal, "aovs": aovs}
     graph = MaterialGraph(ir, g.notes, list(g.attributes), g.sun_lamps)
     graph.light_emission = light_emission
+    graph.emission_varies = emission_varies
     return graph

@@ -185,6 +185,8 @@ struct FrameTimings {
     double world_bake_ms = 0;           // baking the world's node tree and its sampling CDF
     int world_map_width = 0;            // the baked world map's width (0: a constant world)
     std::size_t emitter_triangles = 0;  // emissive mesh triangles lighting the scene
+    double emission_bake_ms = 0;        // baking the emission of textured emitters (emitter_module.h)
+    std::size_t emission_baked_triangles = 0;  // ... the triangles baked
 };
 
 struct FrameResult {

@@ -77,6 +77,11 @@ struct Material {
     // A node material: index of its graph (Renderer::add_graph_material sets
     // it); -1 for a constant parameter set.
     std::int32_t graph = -1;
+    // A node material whose emission varies over the surface (a texture, an
+    // attribute, a procedural): its emitting triangles are baked with the
+    // graph to light other surfaces (emitter_module.h). Off: `emission` holds
+    // the constant radiance a graph emits (0: none).
+    bool emission_varies = false;
     // Blend mode (EEVEE's Blend): drawn after the opaque surfaces by the
     // forward pass (forward_module.h), lit where it is drawn and composited
     // over what is behind with its alpha, back to front per object: exact

@@ -9,7 +9,8 @@
  * sets it (kernel/geom/shader_data.h): P = D (the ray direction, so
  * Generated, Object and UV coordinates and the Environment Texture's
  * default vector are D), N = Ng = I = -D; Camera coordinates are D in the
- * camera's frame. */
+ * camera's frame, Window its raster position (the frame block carries the
+ * unjittered camera). */
 #include "frame_lib.glsl"
 #include "world_lib.glsl"
 
@@ -48,7 +49,18 @@ void main() {
     g_sd.dPdy = vec3(0.0);
     vec3 view = mat3(frame.view) * D;
     g_sd.P_view = vec3(view.xy, -view.z);
-    g_sd.window = vec2(0.0);
+    /* Window: Cycles' camera_world_to_ndc of P (svm_node_tex_coord), the
+     * frame's raster position of the direction: a perspective camera adds
+     * its position to P = D (so D's point at infinity projects where the
+     * camera sees D); an orthographic one projects the point D itself (what
+     * light samples see; its camera rays use their own origin, which a
+     * per-direction map cannot hold: the add-on warns). The projection
+     * divides by w whatever its sign, as transform_perspective does. */
+    {
+        vec3 P = frame.camera_position.w > 0.5 ? D - frame.camera_position.xyz : D;
+        vec4 clip = frame.projection * (frame.view * vec4(P, 1.0));
+        g_sd.window = clip.w != 0.0 ? clip.xy / clip.w * 0.5 + 0.5 : vec2(0.0);
+    }
     g_sd.barycentric = vec2(0.0);
     g_sd.normal_to_world = mat3(1.0);
     g_sd.object_to_world = mat3(1.0);

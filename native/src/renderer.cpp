@@ -362,10 +362,13 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     shadows.begin_frame(cam, settings.shadow_resolution, settings.shadow_quality, memory_budget_bytes() / 4);
     // A world node tree: baked into its environment map (with the sampling
     // distribution) before anything asks whether the world lights the scene.
-    // The bake reads the camera (Camera texture coordinates) from the frame block.
+    // The bake reads the camera (Camera and Window texture coordinates) from the frame block.
     {
         gpu::FrameConstants bake_frame{};
         bake_frame.view = to_gpu(cam.view);
+        bake_frame.projection = to_gpu(cam.projection);  // Window coordinates, unjittered
+        bake_frame.camera_position = {float(cam.position.x), float(cam.position.y), float(cam.position.z),
+                                      cam.orthographic ? 1.0f : 0.0f};
         Buffer bake_buffer = make_storage_buffer(&bake_frame, sizeof(bake_frame), "world bake frame");
         glBindBufferBase(GL_UNIFORM_BUFFER, UBO_FRAME, bake_buffer.get());
         try {

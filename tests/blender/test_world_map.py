@@ -19,6 +19,8 @@ the light the world casts, against the image itself and against Cycles.
     its sun disc, as Cycles';
   * bad input: an HDRI with NaN, Inf and negative texels, a 1x1 map and a
     strength of 1e9 give finite images (the non-finite texels warned about);
+  * Texture Coordinate Window in a world: the pixel's raster position, as
+    Cycles gives it (an orthographic camera warned);
   * only what the scene needs: a constant world bakes no map.
 
     blender -b --factory-startup --addons deferred_render -E DEFERRED_RENDER \
@@ -43,6 +45,7 @@ ENERGY_LIMIT = 2e-3       # mean of a white sphere under a white world (exactly 
 OBJECT_MEAN_LIMIT = 0.04  # per object, relative, ours 256 vs Cycles 256 samples
 RELMSE_LIMIT = 0.01       # whole image, ours 256 vs Cycles 256 samples
 SKY_LIMITS = (0.002, 0.03)  # Nishita sky: background, lit surfaces (measured: see the printout)
+WINDOW_LIMIT = 1e-4       # worst pixel of a Window background (measured 7.4e-6)
 SHARP_RELMSE_LIMIT = 0.1   # the sharp metal sphere's pixels (measured 0.072; AO alone 8.5)
 
 
@@ -411,23 +414,48 @@ def bad_input(checks):
         if image is bad:
             checks.check("NaN/inf" in messages, "the non-finite texels are warned about", messages[:200])
         if image is tiny and strength == 1.0:
-            # Window coordinates of a world are screen positions: not in a baked map, warned.
-            coords = scene.world.node_tree.nodes.new("ShaderNodeTexCoord")
-            scene.world.node_tree.links.new(coords.outputs["Window"], bg.inputs["Strength"])
-            render(scene, U.ENGINE, 1, "window")
-            warned = " ".join(m for _, m in U.last_messages())
-            checks.check("Window coordinates in a world are not rendered" in warned,
-                         "Window coordinates in a world are warned about", warned[:160])
-            scene.world.node_tree.nodes.remove(coords)
             checks.check(bool(np.allclose(ours[0, 0, :3], (0.3, 0.6, 0.9), atol=1e-5)),
                          "a 1x1 map is a constant background", ours[0, 0, :3].round(5).tolist())
+
+
+def window_world(checks):
+    """Texture Coordinate > Window in a world (Background colour = Window):
+    the background is the pixel's raster position, (i + 1/2) / width and
+    (j + 1/2) / height from the bottom left, as Cycles gives it; an
+    orthographic camera is warned about (its camera rays take Window from
+    their own origin, which a per-direction map cannot hold)."""
+    scene = reset_scene(200, 134)
+    nodes, links = scene.world.node_tree.nodes, scene.world.node_tree.links
+    coords = nodes.new("ShaderNodeTexCoord")
+    links.new(coords.outputs["Window"], nodes["Background"].inputs["Color"])
+    h, w = 134, 200
+    expected = np.zeros((h, w, 2))
+    expected[..., 0] = (np.arange(w)[None, :] + 0.5) / w
+    expected[..., 1] = (np.arange(h)[:, None] + 0.5) / h
+    ours, _ = render(scene, U.ENGINE, 1, "window_ours")
+    cyc, _ = render(scene, "CYCLES", 16, "window_cycles")
+    inner = (slice(2, -2), slice(2, -2))  # the filter's reach past the frame's edge
+    err_ours = float(np.abs(ours[..., :2] - expected)[inner].max())
+    err_cyc = float(np.abs(cyc[..., :2] - expected)[inner].max())
+    checks.check(err_ours < WINDOW_LIMIT and float(np.abs(ours[..., 2]).max()) < 1e-6,
+                 f"world Window coordinates: the pixel's raster position (within {WINDOW_LIMIT:g})",
+                 f"ours worst {err_ours:.2e}; Cycles' own at 16 samples {err_cyc:.2e}")
+    checks.check(err_cyc < 0.02, "Cycles' Window background follows the same convention", f"{err_cyc:.2e}")
+    messages = " ".join(m for _, m in U.last_messages())
+    checks.check("Window" not in messages, "a perspective camera: no warning", messages[:160])
+    scene.camera.data.type = "ORTHO"
+    render(scene, U.ENGINE, 1, "window_ortho")
+    warned = " ".join(m for _, m in U.last_messages())
+    checks.check("Window coordinates seen by an orthographic camera" in warned,
+                 "an orthographic camera's Window background is warned about", warned[:160])
 
 
 def main():
     checks = U.Checks("test_world_map")
     if not U.require_engine(checks):
         checks.finish()
-    for test in (background, energy, camera_ray_trick, procedural_world, sky_world, bad_input, against_cycles):
+    for test in (background, energy, camera_ray_trick, procedural_world, sky_world, window_world, bad_input,
+                 against_cycles):
         checks.run(test.__name__, test, checks)
     checks.finish()
 

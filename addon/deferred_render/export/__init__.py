@@ -44,7 +44,9 @@ def export_scene(depsgraph, renderer, warn=None, test_break=None, mesh_keeper=No
     completed = exporter.sync(depsgraph)
     if completed:
         scene_world = depsgraph.scene.world
+        camera = depsgraph.scene.camera
+        orthographic = camera is not None and getattr(camera.data, "type", "") == "ORTHO"
         world.export_world(scene_world, renderer, exporter.image_registry, warn,
-                           light_group=exporter.light_group_of(scene_world))
+                           light_group=exporter.light_group_of(scene_world), orthographic=orthographic)
     exporter.stats.cryptomatte = exporter.cryptomatte
     return exporter.stats, not completed

@@ -38,13 +38,14 @@ def _linked(socket):
     return None if node.mute else node
 
 
-def export_world(world, renderer, image_registry, warn=None, light_group=0):
+def export_world(world, renderer, image_registry, warn=None, light_group=0, orthographic=False):
     """Hand the world to ``renderer``: set_world(color=..., graph=IR or None).
 
     ``image_registry()`` gives the export's ImageRegistry (texture uploads).
     A graph the compiler cannot take falls back to the viewport colour with
     a warning naming why. ``light_group``: the world's light group (its sky
-    sun lamps too), 0 none."""
+    sun lamps too), 0 none. ``orthographic``: the scene camera is (Window
+    coordinates of the background then differ from Cycles')."""
     def note(message):
         if warn:
             warn(message)
@@ -57,8 +58,14 @@ def export_world(world, renderer, image_registry, warn=None, light_group=0):
         except (graph_builder.GraphCycle, graph_builder.SpecError, RecursionError) as ex:
             note(f"World '{world.name}': {ex} (rendered with the viewport colour)")
         else:
-            if graph.notes:
-                note(f"World '{world.name}': " + "; ".join(graph.notes))
+            notes = list(graph.notes)
+            if orthographic and getattr(graph, "world_window", False):
+                # Cycles' orthographic camera rays take Window from their own
+                # origin (the pixel); the baked map holds one value per direction.
+                notes.append("Window coordinates seen by an orthographic camera are those of light "
+                             "samples (the projection of the direction), not the pixel's")
+            if notes:
+                note(f"World '{world.name}': " + "; ".join(notes))
             try:
                 # The colour is the fallback if the native bake fails (warned).
                 renderer.set_world(color=_finite_color(world.color), graph=graph.ir, **group)

@@ -539,4 +539,5 @@ def _build(material, images, world=False):
     graph = MaterialGraph(ir, g.notes, list(g.attributes), g.sun_lamps)
     graph.light_emission = light_emission
     graph.emission_varies = emission_varies
+    graph.world_window = getattr(g, "world_window", False)
     return graph

@@ -30,8 +30,9 @@ def tex_coord(b):
     if b.node.from_instancer:
         b.unsupported("'From Instancer' (the instance's own coordinates are used)")
     if b._graph.world and b.node.outputs["Window"].is_linked:
-        # A baked world map holds directions, not screen positions.
-        b._graph.note(f"'{b.node.name}': Window coordinates in a world are not rendered (0)")
+        # The baked world map holds Window per direction: exact for a
+        # perspective camera; export_world warns for an orthographic one.
+        b._graph.world_window = True
     b.call("node_tex_coord", args,
            [("Generated", "vector"), ("Normal", "vector"), ("UV", "vector"), ("Object", "vector"),
             ("Camera", "vector"), ("Window", "vector"), ("Reflection", "vector")])

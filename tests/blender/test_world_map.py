@@ -19,6 +19,7 @@ the light the world casts, against the image itself and against Cycles.
     its sun disc, as Cycles';
   * bad input: an HDRI with NaN, Inf and negative texels, a 1x1 map and a
     strength of 1e9 give finite images (the non-finite texels warned about);
+    a 16k x 8k map is scaled to 8k x 4k with a warning and keeps its colour;
   * Texture Coordinate Window in a world: the pixel's raster position, as
     Cycles gives it (an orthographic camera warned);
   * only what the scene needs: a constant world bakes no map.
@@ -416,6 +417,36 @@ def bad_input(checks):
         if image is tiny and strength == 1.0:
             checks.check(bool(np.allclose(ours[0, 0, :3], (0.3, 0.6, 0.9), atol=1e-5)),
                          "a 1x1 map is a constant background", ours[0, 0, :3].round(5).tolist())
+    # A 16k x 8k map (2 GiB of float texels in Blender): scaled to 8192 x 4096
+    # with a warning naming both sizes; a constant one (Blender's generated
+    # colour, sRGB-encoded) stays that constant, on the background and on
+    # the white sphere it lights (measured: 20 s, 5.5 GB peak RSS here).
+    huge = bpy.data.images.new("huge_hdri", 16384, 8192, float_buffer=True)
+    huge.generated_color = (0.25, 0.5, 1.0, 1.0)
+    scene.world.node_tree.nodes.clear()
+    nodes = scene.world.node_tree.nodes
+    out = nodes.new("ShaderNodeOutputWorld")
+    bg = nodes.new("ShaderNodeBackground")
+    bg.name = "Background"
+    scene.world.node_tree.links.new(bg.outputs[0], out.inputs["Surface"])
+    environment_world(scene, huge)
+    scene.objects["Grey"].active_material.node_tree.nodes["Diffuse BSDF"].inputs["Color"].default_value = \
+        (1.0, 1.0, 1.0, 1.0)
+    ours, index = render(scene, U.ENGINE, 16, "huge")
+    messages = " ".join(m for _, m in U.last_messages())
+    expected = np.array([((c + 0.055) / 1.055) ** 2.4 for c in (0.25, 0.5, 1.0)])
+    sphere = U.interior_mask(index, 2) & (index == 1)
+    background = ours[index == 0][:, :3].mean(axis=0)
+    lit = ours[sphere][:, :3].mean(axis=0)
+    checks.check("scaled from 16384x8192 to 8192x4096" in messages and bool(np.isfinite(ours).all()),
+                 "a 16k x 8k map: scaled with a warning, finite image", messages[:160])
+    checks.check(float(np.abs(background / expected - 1).max()) < 1e-4 and
+                 float(np.abs(lit / expected - 1).max()) < 0.01,
+                 "a 16k x 8k constant map: its colour on the background and on the white sphere it lights",
+                 f"background {background.round(5).tolist()}, sphere {lit.round(5).tolist()}, "
+                 f"expected {expected.round(5).tolist()}")
+    bpy.data.images.remove(huge)
+
 
 
 def window_world(checks):

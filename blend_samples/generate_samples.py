@@ -2,7 +2,8 @@
 
     blender -b --factory-startup --python blend_samples/generate_samples.py [-- NAME ...]
 
-writes blend_samples/{showcase,box_room,many_lights,instancing,analytic,materials,hdri_studio}.blend
+writes blend_samples/{showcase,box_room,many_lights,instancing,analytic,materials,hdri_studio,sky_sun,
+emitters}.blend
 (all of them, or the NAMEs given after "--").
 
 The files do not select the Deferred engine (the add-on need not be loaded
@@ -806,8 +807,99 @@ def build_hdri_studio():
     save(scene, "hdri_studio")
 
 
+def build_sky_sun():
+    """Lit only by a Nishita Sky Texture (Blender 3.4's default model) with
+    its sun disc, low in the afternoon: a floor, a diffuse sphere, a rough
+    metal sphere and a box; the sky fills the top of the frame."""
+    scene = new_scene("SkySun", resolution=(320, 180))
+    world = set_world(scene, (0.3, 0.4, 0.6))
+    nt = world.node_tree
+    sky = nt.nodes.new("ShaderNodeTexSky")
+    sky.sky_type = 'NISHITA'
+    sky.sun_elevation = math.radians(20.0)
+    sky.sun_rotation = math.radians(140.0)
+    sky.sun_size = math.radians(1.5)
+    nt.links.new(sky.outputs["Color"], nt.nodes["Background"].inputs["Color"])
+    nt.nodes["Background"].inputs["Strength"].default_value = 0.1
+    mesh_object("Floor", plane_mesh("Floor", 40.0, 40.0), material=principled("Floor", (0.55, 0.55, 0.5),
+                                                                               roughness=0.8), pass_index=1)
+    primitive(bpy.ops.mesh.primitive_uv_sphere_add, "Diffuse", material=principled(
+        "Clay", (0.8, 0.5, 0.35), roughness=1.0, specular=0.0), pass_index=2, smooth=True,
+        radius=0.8, location=(-1.6, 0.5, 0.8), segments=64, ring_count=32)
+    primitive(bpy.ops.mesh.primitive_uv_sphere_add, "Metal", material=principled(
+        "Brushed", (0.9, 0.9, 0.9), metallic=1.0, roughness=0.35), pass_index=3, smooth=True,
+        radius=0.8, location=(1.6, 0.5, 0.8), segments=64, ring_count=32)
+    box = primitive(bpy.ops.mesh.primitive_cube_add, "Box", material=principled("Box", (0.2, 0.35, 0.7),
+                                                                                roughness=0.5),
+                    pass_index=4, size=1.0, location=(0.0, 2.2, 0.5))
+    box.rotation_euler = (0.0, 0.0, math.radians(30))
+    add_camera(scene, location=(0, -7.0, 1.6), target=(0, 0.8, 1.2), lens=30.0)
+    save(scene, "sky_sun")
+
+
+def build_emitters():
+    """Lit only by emissive meshes (a black world): a constant panel over the
+    floor, a standing panel whose emission is an orange/blue Checker
+    (baked), and 5000 small emissive triangles scattered in a ring above
+    the scene (fairy lights, one mesh); a diffuse sphere, a glossy Suzanne
+    and a box receive and cast the light."""
+    import random
+    scene = new_scene("Emitters", resolution=(320, 180))
+    set_world(scene, (0.0, 0.0, 0.0))
+    mesh_object("Floor", plane_mesh("Floor", 14.0, 14.0), material=principled("Floor", (0.6, 0.6, 0.6),
+                                                                               roughness=0.6), pass_index=1)
+    primitive(bpy.ops.mesh.primitive_uv_sphere_add, "Diffuse", material=principled(
+        "Clay", (0.8, 0.8, 0.8), roughness=1.0, specular=0.0), pass_index=2, smooth=True,
+        radius=0.7, location=(-1.5, 0.3, 0.7), segments=48, ring_count=24)
+    suzanne = primitive(bpy.ops.mesh.primitive_monkey_add, "Suzanne", material=principled(
+        "Glaze", (0.7, 0.3, 0.2), roughness=0.3), pass_index=3, smooth=True, size=1.2,
+        location=(1.4, 0.4, 0.7))
+    suzanne.rotation_euler = (0.0, 0.0, math.radians(-20))
+    primitive(bpy.ops.mesh.primitive_cube_add, "Box", material=principled("Box", (0.3, 0.5, 0.3), roughness=0.5),
+              pass_index=4, size=0.8, location=(0.0, -0.8, 0.4))
+    # A constant panel facing down, 2.6 above the floor.
+    panel = mesh_object("Panel", plane_mesh("Panel", 1.6, 1.0), location=(-0.8, 0.0, 2.6), pass_index=5,
+                        material=shader_material("PanelLight", lambda nodes, links: _node(
+                            nodes, "ShaderNodeEmission", {"Color": (1.0, 0.92, 0.8, 1.0), "Strength": 4.0}
+                        ).outputs[0], viewport=(1.0, 0.92, 0.8)))
+    panel.rotation_euler = (math.pi, 0.0, 0.0)
+
+    def checker(nodes, links):
+        emit = _node(nodes, "ShaderNodeEmission", {"Strength": 6.0})
+        tex = _node(nodes, "ShaderNodeTexChecker", {"Scale": 2.0, "Color1": (1.0, 0.45, 0.1, 1.0),
+                                                    "Color2": (0.1, 0.3, 1.0, 1.0)})
+        links.new(tex.outputs["Color"], emit.inputs["Color"])
+        return emit.outputs[0]
+
+    standing = mesh_object("Screen", plane_mesh("Screen", 2.4, 1.4), location=(0.3, 2.6, 1.2), pass_index=6,
+                           material=shader_material("ScreenLight", checker, viewport=(0.6, 0.4, 0.6)))
+    standing.rotation_euler = (math.pi / 2, 0.0, 0.0)
+    # 5000 small triangles (edge ~4 cm) in a ring of radius 3 at heights 2.2-3.
+    rng = random.Random(7)
+    verts, faces = [], []
+    for k in range(5000):
+        angle = rng.uniform(0.0, 2.0 * math.pi)
+        radius = 3.0 + rng.uniform(-0.3, 0.3)
+        c = (radius * math.cos(angle), radius * math.sin(angle), rng.uniform(2.2, 3.0))
+        for j in range(3):
+            a = rng.uniform(0.0, 2.0 * math.pi)
+            verts.append((c[0] + 0.025 * math.cos(a), c[1] + 0.025 * math.sin(a), c[2] + rng.uniform(-0.02, 0.02)))
+        faces.append((3 * k, 3 * k + 1, 3 * k + 2))
+    mesh = bpy.data.meshes.new("FairyLights")
+    mesh.from_pydata(verts, [], faces)
+    mesh.update()
+    mesh_object("FairyLights", mesh, pass_index=7, material=shader_material(
+        "FairyLight", lambda nodes, links: _node(
+            nodes, "ShaderNodeEmission", {"Color": (1.0, 0.8, 0.5, 1.0), "Strength": 60.0}).outputs[0],
+        viewport=(1.0, 0.8, 0.5)))
+    add_camera(scene, location=(0, -7.5, 3.0), target=(0, 0.6, 0.9), lens=32.0)
+    save(scene, "emitters")
+
+
 BUILDERS = {
     "hdri_studio": build_hdri_studio,
+    "sky_sun": build_sky_sun,
+    "emitters": build_emitters,
     "materials": build_materials,
     "showcase": build_showcase,
     "box_room": build_box_room,

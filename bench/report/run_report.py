@@ -101,6 +101,13 @@ PLANS = {
     # map-drawn occlusion directions); 256 samples show the convergence.
     "hdri_studio": {"ref_spp": 1024, "unocc_spp": 512, "ours": [1, 4, 16, 64, 256], "eevee": [1, 4, 16, 64],
                     "cycles": [1, 4, 16, 64, 256], "ours_noshadow": [64]},
+    # sky_sun: a Nishita sky and its sun disc (a sun lamp with shadow
+    # cascades); emitters: emissive meshes only (a constant panel, a baked
+    # Checker panel, 5000 small triangles); 256 samples show the convergence.
+    "sky_sun":     {"ref_spp": 1024, "unocc_spp": 512, "ours": [1, 4, 16, 64, 256], "eevee": [1, 4, 16, 64],
+                    "cycles": [1, 4, 16, 64, 256], "ours_noshadow": [64]},
+    "emitters":    {"ref_spp": 1024, "unocc_spp": 512, "ours": [1, 4, 16, 64, 256], "eevee": [1, 4, 16, 64],
+                    "cycles": [1, 4, 16, 64, 256], "ours_noshadow": [64]},
     # transparency: stochastic alpha (leaf cut-out, panes, a Transparent mix)
     # converging with its partial shadows; 256 samples show the convergence.
     "transparency": {"ref_spp": 1024, "unocc_spp": 256, "ours": [1, 4, 16, 64, 256], "eevee": [1, 4, 16, 64],

@@ -191,6 +191,22 @@ def main():
     checks.check(abs(ratio - 1.0) < 1e-4 and timings().get("emitter_triangles") == 2,
                  "a node material with a constant emission lights as a constant material does", f"ratio {ratio:.6f}")
 
+    # Cycles 3.4's per-material switch off light sampling (Settings >
+    # Multiple Importance, cycles.sample_as_light): Cycles then finds the
+    # emitter with its BSDF rays only, which at max_bounces 0 still reach it
+    # (PATH_RAY_TERMINATE_ON_NEXT_SURFACE): the same light, more noise. Ours
+    # keeps sampling it as a light, which converges to that same image.
+    scene = build("panel")
+    sampled, index = render(scene, "CYCLES", 64, "mis_on")
+    bpy.data.materials["emitter"].cycles.sample_as_light = False
+    unsampled, _ = render(scene, "CYCLES", 64, "mis_off")
+    ours_off, _ = render(scene, U.ENGINE, 16, "ours_mis_off")
+    inside = U.interior_mask(index, 2) & (index == 1)
+    ratio = unsampled[inside].mean() / sampled[inside].mean()
+    checks.check(abs(ratio - 1.0) < 0.02 and abs(ours_off[inside].mean() / constant[inside].mean() - 1.0) < 1e-6,
+                 "Multiple Importance off: Cycles lights as much (its BSDF rays find the emitter), ours unchanged",
+                 f"Cycles off/on {ratio:.4f}, ours off/on {ours_off[inside].mean() / constant[inside].mean():.6f}")
+
     scene = build("panel", strength=1e9)
     ours, _ = render(scene, U.ENGINE, 4, "strong")
     checks.check(bool(np.isfinite(ours).all()), "an emitter of strength 1e9: finite pixels",

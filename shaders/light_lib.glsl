@@ -386,7 +386,9 @@ layout(std430, binding = SSBO_EMISSION_TEXELS) readonly buffer EmissionTexels {
 /* The radiance of triangle t at the point with barycentric weights b of its
  * vertices 1 and 2 (X = v0 + b.x e1 + b.y e2): its constant radiance, or for
  * a textured one (radiance.w = its tile + 1) the texel holding that point,
- * the nearest of the tile's (EmitterModule::radiance_at does the same). */
+ * the nearest of the tile's (EmitterModule::radiance_at does the same).
+ * Every sampled or intersected point of a mesh light takes its radiance
+ * from here. */
 vec3 emitter_radiance(GpuLight light, GpuEmitterTriangle t, vec2 b) {
 #ifdef HAS_EMISSION_TEXELS
     if (t.radiance.w > 0.0) {
@@ -402,6 +404,7 @@ vec3 emitter_radiance(GpuLight light, GpuEmitterTriangle t, vec2 b) {
 #endif
     return t.radiance.rgb;
 }
+
 
 /* Light from point X (unit winding normal n, radiance Le, density pdf in
  * area measure) of an emitter: f cos Le cos_l / (d^2 pdf), cos_l = |N.I| for
@@ -426,11 +429,150 @@ LightContribution mesh_light_point(SurfaceParams s, PrincipledWeights w, vec3 P,
     return r;
 }
 
-/* An emissive mesh's unoccluded light: MESH_LIGHT_SAMPLES points of its
- * own (MESH_LIGHT_SAMPLES_NEAR within twice its bounding radius) per pixel
- * and film sample (a triangle by power from the light's CDF,
- * uniform on it, Turk 1990), stratified over the film's samples by the R2
- * sequence (Roberts 2018) rotated per pixel and light (pcg4d). */
+/* ---- Sampling a triangle by the solid angle it subtends ----
+ * Area sampling weighs a point by d^2 / cos_l: near the emitter (d small
+ * against the triangle) that ratio spans orders of magnitude over the
+ * triangle and the estimate is very noisy. A triangle that is large against
+ * its distance is instead sampled uniformly in the solid angle it subtends
+ * (Arvo 1995, "Stratified Sampling of Spherical Triangles"), as Cycles 3.4's
+ * triangle_light_sample does (kernel/light/triangle.h), with its choice:
+ * the spherical method where the longest edge exceeds the distance to the
+ * triangle's plane (Cycles compares with that distance divided by 2 x the
+ * area; here the distance itself), area sampling otherwise and where the
+ * spherical triangle is too small or thin for float (its formulas divide by
+ * sin b sin c and difference cosines near 1). The choice depends only on
+ * the shading point and the triangle, so each triangle is integrated by one
+ * unbiased technique; densities in solid-angle measure are
+ * P(triangle) / solid angle, or P(triangle) d^2 / (A cos_l) for area
+ * sampling. */
+struct SphericalTriangle {
+    vec3 A, B, C;              /* unit directions to v0, v1, v2 */
+    float cos_a, cos_b, cos_c; /* cosines of the sides: B.C, A.C, A.B */
+    float mixed;               /* |A . (B x C)| = sin(alpha) sin b sin c */
+    float solid_angle;
+};
+
+/* The spherical triangle of the triangle v0 = P + p0, edges e1 and e2 seen
+ * from P, if it is to be sampled by solid angle (else false). */
+bool emitter_spherical_triangle(vec3 p0, vec3 e1, vec3 e2, out SphericalTriangle st) {
+    st.solid_angle = 0.0;
+    vec3 n = cross(e1, e2);
+    float dist_n = dot(n, p0); /* distance to the plane x |n| */
+    float longest2 = max(max(dot(e1, e1), dot(e2, e2)), dot(e2 - e1, e2 - e1));
+    vec3 p1 = p0 + e1, p2 = p0 + e2;
+    float m2 = min(min(dot(p0, p0), dot(p1, p1)), dot(p2, p2));
+    if (!(longest2 * dot(n, n) > dist_n * dist_n) || !(m2 > 1e-24)) return false;
+    st.A = normalize(p0);
+    st.B = normalize(p1);
+    st.C = normalize(p2);
+    st.cos_a = dot(st.B, st.C);
+    st.cos_b = dot(st.A, st.C);
+    st.cos_c = dot(st.A, st.B);
+    st.mixed = abs(dot(st.A, cross(st.B, st.C)));
+    /* Van Oosterom and Strackee 1983: tan(omega / 2) = |A.(B x C)| / (1 + A.B + B.C + C.A). */
+    float omega = 2.0 * atan(st.mixed, 1.0 + st.cos_a + st.cos_b + st.cos_c);
+    /* Sides b and c at least ~0.01 rad, and at least 1e-3 sr: else area sampling. */
+    if (!(omega > 1e-3) || min(1.0 - st.cos_b * st.cos_b, 1.0 - st.cos_c * st.cos_c) < 1e-4) return false;
+    st.solid_angle = omega;
+    return true;
+}
+
+/* The direction for u in [0,1)^2, uniform in the spherical triangle. Arvo's
+ * construction: u.x picks the sub-triangle A B C' of area u.x x omega, C' on
+ * the arc AC, from the angle alpha at A (cos q = A.C' from
+ * cos(A') and the sides); u.y picks the point on the arc B C' by the cosine
+ * of its angle to B, uniform in [C'.B, 1]. Written as Cycles writes it, with
+ * cos(alpha) and sin(alpha) times sin b sin c (no inverse trigonometry):
+ *   k = sin b sin c cos(A' - alpha), t = (cos c - 1) k cos(alpha) / (sin b sin c)
+ *   cos q = (cos A' - cos c + t) / (1 - cos A' cos c + t). */
+vec3 sample_spherical_triangle(SphericalTriangle st, vec2 u) {
+    float sub_area = u.x * st.solid_angle;
+    float s = sin(sub_area), c = cos(sub_area);
+    float cos_alpha = st.cos_a - st.cos_b * st.cos_c; /* x sin b sin c */
+    float k = c * cos_alpha + s * st.mixed;
+    float t = (st.cos_c - 1.0) * k * cos_alpha / ((1.0 - st.cos_b * st.cos_b) * (1.0 - st.cos_c * st.cos_c));
+    float q = clamp((c - st.cos_c + t) / (1.0 - c * st.cos_c + t), -1.0, 1.0);
+    vec3 U = normalize(st.C - st.cos_b * st.A);
+    vec3 C2 = q * st.A + sqrt(max(1.0 - q * q, 0.0)) * U;
+    float cb = dot(C2, st.B);
+    float z = 1.0 - u.y * (1.0 - cb);
+    vec3 W = C2 - cb * st.B;
+    float w2 = dot(W, W);
+    return w2 > 0.0 ? z * st.B + sqrt(max(1.0 - z * z, 0.0)) * inversesqrt(w2) * W : st.B;
+}
+
+/* Where the ray from the shading point along D meets the triangle
+ * p0, e1, e2 (relative to it), Moller-Trumbore: distance in hit.x,
+ * barycentric weights of v1 and v2 in hit.yz. `clamp_inside`: a direction
+ * sampled inside the triangle, snapped into it where float puts it just
+ * outside (returns true); otherwise false when the ray misses. */
+bool emitter_triangle_hit(vec3 p0, vec3 e1, vec3 e2, vec3 D, bool clamp_inside, out vec3 hit) {
+    hit = vec3(0.0);
+    vec3 pv = cross(D, e2);
+    float det = dot(e1, pv);
+    if (det == 0.0) return clamp_inside;
+    float inv = 1.0 / det;
+    vec3 tv = -p0;
+    vec3 qv = cross(tv, e1);
+    vec2 b = vec2(dot(tv, pv), dot(D, qv)) * inv;
+    hit.x = dot(e2, qv) * inv;
+    if (clamp_inside) {
+        b = max(b, vec2(0.0));
+        float sum = b.x + b.y;
+        if (sum > 1.0) b /= sum;
+        hit.yz = b;
+        return true;
+    }
+    hit.yz = b;
+    return hit.x > 0.0 && b.x >= 0.0 && b.y >= 0.0 && b.x + b.y <= 1.0;
+}
+
+/* What a direction L of the mesh light gives, with weight Le / (its density
+ * in solid angle x the number of such samples); the specular lobe's share
+ * `spec_mis` (its MIS weight: the BSDF's own directions give the rest). */
+void mesh_light_add(inout LightContribution r, SurfaceParams s, PrincipledWeights w, vec3 N, vec3 V, vec3 L,
+                    vec3 weight, float spec_mis) {
+    /* A density near 0 (an area-sampled point almost on the receiver): no finite estimate. */
+    if (any(isinf(weight)) || any(isnan(weight))) return;
+    r.diffuse += principled_eval_diffuse(s, w, N, V, L) * weight;
+    r.glossy += (principled_specular(w, N, V, L) * spec_mis + vec3(principled_clearcoat(w, N, V, L))) *
+                (weight * smooth_side(s, L));
+}
+
+/* Power heuristic weight (Veach 1997) of a technique with n_a samples of
+ * density p_a against one with n_b samples of density p_b, from their ratio
+ * (either density alone may overflow float). */
+float power_heuristic(float n_a, float p_a, float n_b, float p_b) {
+    float ratio = min((n_b * p_b) / (n_a * p_a), 1e18);
+    return 1.0 / (1.0 + ratio * ratio);
+}
+
+/* The solid-angle density with which the light's own points reach the
+ * triangle p0, e1, e2 (relative to P; probability p) along D, hit at
+ * distance t: p / solid angle for a triangle sampled by it, else
+ * p t^2 / (A cos_l). */
+float emitter_direction_pdf(vec3 p0, vec3 e1, vec3 e2, float p, float area, vec3 D, float t) {
+    SphericalTriangle st;
+    if (emitter_spherical_triangle(p0, e1, e2, st)) return p / st.solid_angle;
+    vec3 n = cross(e1, e2);
+    float cos_l = abs(dot(n, D)) * inversesqrt(dot(n, n));
+    return p * t * t / (area * cos_l);
+}
+
+/* An emissive mesh's unoccluded light, per pixel and film sample:
+ *  - MESH_LIGHT_SAMPLES points of its own (MESH_LIGHT_SAMPLES_NEAR within
+ *    twice its bounding radius): a triangle by power from the light's CDF,
+ *    then a direction uniform in the solid angle it subtends where it is
+ *    large against its distance, or a point uniform on it (Turk 1990);
+ *  - for a sharp specular lobe and a light of at most
+ *    MESH_LIGHT_MIS_TRIANGLES triangles, MESH_LIGHT_BSDF_SAMPLES directions
+ *    of the lobe (GGX visible normals) traced against every triangle of the
+ *    light; the specular lobe of both kinds of samples is weighted by the
+ *    power heuristic, per triangle and direction (the unoccluded integral is
+ *    the sum over the triangles of their own integrals: a direction through
+ *    two of them counts both, as the light's points do).
+ * The numbers are stratified over the film's samples by the R2 sequence
+ * (Roberts 2018), rotated per pixel and light (pcg4d). */
 LightContribution mesh_light_unoccluded(GpuLight light, SurfaceParams s, PrincipledWeights w, vec3 P, vec3 N,
                                         vec3 V) {
     LightContribution r;
@@ -443,11 +585,17 @@ LightContribution mesh_light_unoccluded(GpuLight light, SurfaceParams s, Princip
     h.x += h.y * h.w; h.y += h.z * h.x; h.z += h.x * h.y; h.w += h.y * h.z;
     h ^= h >> 16u;
     h.x += h.y * h.w; h.y += h.z * h.x; h.z += h.x * h.y; h.w += h.y * h.z;
-    /* Near the emitter (within its size) the 1/d^2 of area sampling makes
-     * its own points' estimate noisy: more of them there. */
+    /* Near the emitter (within its size) its light varies fast over it:
+     * more points there. */
     vec3 to_center = light.position_type.xyz - P;
     float radius = light.direction.w;
     int points = dot(to_center, to_center) < 4.0 * radius * radius ? MESH_LIGHT_SAMPLES_NEAR : MESH_LIGHT_SAMPLES;
+    float side = light.axis_y.w;
+    /* As for the planar lights: rough lobes (alpha >= 0.25) are wide enough
+     * for the light's points alone; mirrors (alpha^2 <= 1e-7) are not lit. */
+    const bool mis = count <= uint(MESH_LIGHT_MIS_TRIANGLES) && w.specular != 0.0 && w.alpha2 > 1e-7 &&
+                     w.alpha2 < 0.0625;
+    const float n_light = float(points), n_bsdf = float(MESH_LIGHT_BSDF_SAMPLES);
     for (int k = 0; k < points; ++k) {
         uint index = uint(frame.sample_shift.w) * uint(MESH_LIGHT_SAMPLES_NEAR) + uint(k);
         uvec2 bits = h.xy + index * uvec2(0xC13FA9A9u, 0x91E10DA5u);
@@ -461,13 +609,66 @@ LightContribution mesh_light_unoccluded(GpuLight light, SurfaceParams s, Princip
         GpuEmitterTriangle t = emitters[lo];
         float p = t.e2.w;
         float a = p > 0.0 ? clamp((u.x - (t.v0.w - p)) / p, 0.0, 1.0) : 0.5;
-        float sa = sqrt(a);
-        vec3 X = t.v0.xyz + t.e1.xyz * (sa * (1.0 - u.y)) + t.e2.xyz * (sa * u.y);
-        vec3 n = normalize(cross(t.e1.xyz, t.e2.xyz));
-        vec3 Le = emitter_radiance(light, t, vec2(sa * (1.0 - u.y), sa * u.y));
-        LightContribution c = mesh_light_point(s, w, P, N, V, X, n, Le, p / t.e1.w, light.axis_y.w);
-        r.diffuse += c.diffuse * (1.0 / float(points));
-        r.glossy += c.glossy * (1.0 / float(points));
+        vec3 p0 = t.v0.xyz - P, e1 = t.e1.xyz, e2 = t.e2.xyz;
+        vec3 n = cross(e1, e2);
+        /* A closed mesh's triangle seen from its inner side: no light. */
+        if (side != 0.0 && side * dot(n, p0) >= 0.0) continue;
+        SphericalTriangle st;
+        vec3 L;
+        vec2 b;
+        float pdf; /* solid-angle density of this triangle and direction */
+        if (emitter_spherical_triangle(p0, e1, e2, st)) {
+            L = sample_spherical_triangle(st, vec2(a, u.y));
+            vec3 hit;
+            emitter_triangle_hit(p0, e1, e2, L, true, hit);
+            b = hit.yz;
+            pdf = p / st.solid_angle;
+        } else {
+            float sa = sqrt(a);
+            b = vec2(sa * (1.0 - u.y), sa * u.y);
+            vec3 X = p0 + e1 * b.x + e2 * b.y;
+            float d2 = dot(X, X);
+            if (!(d2 > 1e-20)) continue;
+            L = X * inversesqrt(d2);
+            float cos_l = abs(dot(n, L)) * inversesqrt(dot(n, n));
+            pdf = p * d2 / (t.e1.w * cos_l);
+        }
+        if (!(pdf > 0.0)) continue;
+        float spec_mis = mis ? power_heuristic(n_light, pdf, n_bsdf, principled_specular_pdf(w, N, V, L)) : 1.0;
+        mesh_light_add(r, s, w, N, V, L, emitter_radiance(light, t, b) / (pdf * n_light), spec_mis);
+    }
+    if (mis) {
+        /* The lobe's directions that can reach the light's bounding sphere,
+         * then every triangle against all of them at once. */
+        float alpha = sqrt(w.alpha2);
+        float radius2 = radius * radius, center2 = dot(to_center, to_center);
+        vec3 Lb[MESH_LIGHT_BSDF_SAMPLES], spec[MESH_LIGHT_BSDF_SAMPLES], Le[MESH_LIGHT_BSDF_SAMPLES];
+        float pb[MESH_LIGHT_BSDF_SAMPLES];
+        bool any_ray = false;
+        for (int j = 0; j < MESH_LIGHT_BSDF_SAMPLES; ++j) {
+            uint index = uint(frame.sample_shift.w) * uint(MESH_LIGHT_BSDF_SAMPLES) + uint(j);
+            uvec2 bits = h.zw + index * uvec2(0xC13FA9A9u, 0x91E10DA5u);
+            Lb[j] = sample_ggx_vndf(N, V, alpha, vec2(bits >> 8u) * (1.0 / 16777216.0));
+            pb[j] = principled_specular_pdf(w, N, V, Lb[j]);
+            spec[j] = pb[j] > 1e-30 ? principled_specular(w, N, V, Lb[j]) * smooth_side(s, Lb[j]) : vec3(0.0);
+            float along = dot(to_center, Lb[j]);
+            if ((along < 0.0 && center2 > radius2) || center2 - along * along > radius2) spec[j] = vec3(0.0);
+            Le[j] = vec3(0.0);
+            any_ray = any_ray || spec[j] != vec3(0.0);
+        }
+        for (uint i = first; any_ray && i < first + count; ++i) {
+            GpuEmitterTriangle t = emitters[i];
+            vec3 p0 = t.v0.xyz - P, e1 = t.e1.xyz, e2 = t.e2.xyz;
+            if (side != 0.0 && side * dot(cross(e1, e2), p0) >= 0.0) continue;
+            for (int j = 0; j < MESH_LIGHT_BSDF_SAMPLES; ++j) {
+                vec3 hit;
+                if (spec[j] == vec3(0.0) || !emitter_triangle_hit(p0, e1, e2, Lb[j], false, hit)) continue;
+                float pl = emitter_direction_pdf(p0, e1, e2, t.e2.w, t.e1.w, Lb[j], hit.x);
+                Le[j] += emitter_radiance(light, t, hit.yz) * power_heuristic(n_bsdf, pb[j], n_light, pl);
+            }
+        }
+        for (int j = 0; j < MESH_LIGHT_BSDF_SAMPLES; ++j)
+            if (spec[j] != vec3(0.0)) r.glossy += spec[j] * Le[j] / (pb[j] * n_bsdf);
     }
     return r;
 }

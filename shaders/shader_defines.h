@@ -76,6 +76,11 @@
 /* Points per pixel and film sample on each emissive mesh light. */
 #define MESH_LIGHT_SAMPLES 2
 #define MESH_LIGHT_SAMPLES_NEAR 8 /* ... within twice its bounding radius */
+/* Directions of a sharp specular lobe per pixel and film sample traced against
+ * the triangles of a mesh light with at most MESH_LIGHT_MIS_TRIANGLES of them
+ * (multiple importance with its points, light_lib.glsl). */
+#define MESH_LIGHT_BSDF_SAMPLES 2
+#define MESH_LIGHT_MIS_TRIANGLES 64
 
 /* Fragment outputs of the geometry pass (G-buffer MRT) */
 #define OUT_EMISSION 0

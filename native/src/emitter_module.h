@@ -2,7 +2,10 @@
 // material slots emit becomes one light (LIGHT_MESH) over its emitting
 // triangles, in world space (camera-relative), with a CDF that picks a
 // triangle by its power (area x luminance of its radiance) and a point
-// uniform on it. The lighting (shaders/light_lib.glsl) integrates it like
+// uniform on it (the sample's shared point; the lighting's own points take a
+// direction uniform in the triangle's solid angle where it is near, and
+// glossy lobes trace their directions against the triangles of small
+// lights). The lighting (shaders/light_lib.glsl) integrates it like
 // the world: per pixel, points of its own (unoccluded light), minus the
 // light blocked at the sample's shared point, whose cube shadow map the
 // shadow module draws (a control variate: unbiased, no noise where nothing

@@ -19,9 +19,15 @@
  *  ids           RG32UI        object pass index, material pass index             IndexOB/IndexMA (GBUF_IDS)
  *                (RGBA32UI)    ... z instance, w material id                      Cryptomatte (GBUF_INSTANCE_IDS)
  *  uv            RG32F         active UV map                                      UV pass (GBUF_UV)
- *  smooth normal RG16 unorm    the interpolated (smooth) normal, octahedral,      a node material bends its
- *                              when closures take another (Bump, Normal Map):     closure normals
- *                              light samples below its horizon give nothing       (GBUF_SMOOTH_NORMAL)
+ *  geometry      RGBA32UI      x: the interpolated (smooth) normal, octahedral    shadows, or a node material
+ *                              unorm16 (closures may take another: Bump, Normal   bending its closures'
+ *                              Map; light samples below its horizon give          normals (GBUF_GEOMETRY)
+ *                              nothing); y: the true (triangle) normal facing
+ *                              the viewer, octahedral unorm16 (shadow maps
+ *                              compare against its plane); z, w: half floats:
+ *                              the shadow terminator offset (Cycles'
+ *                              shadow_ray_smooth_surface_offset, world, xyz)
+ *                              and the object's Geometry Offset cutoff
  *
  * Half floats keep 11 significant bits (2.4e-4 relative), well inside the
  * lighting's accuracy budget; emission is float so node outputs reach the
@@ -39,6 +45,12 @@ struct SurfaceParams {
     float sheen, sheen_tint, clearcoat, clearcoat_roughness;
     vec3 N;
     vec3 Ns; /* the smooth normal (Cycles' sd->N); N where closures keep it */
+    /* Shadow receivers (GBUF_GEOMETRY; else Ng = N and no offset): the true
+     * normal facing the viewer (Cycles' sd->Ng), the shadow terminator
+     * offset at full amount (world) and the object's Geometry Offset. */
+    vec3 Ng;
+    vec3 terminator;
+    float terminator_cutoff;
 };
 
 /* What the G-buffer's storage keeps of a value: half floats for base and
@@ -65,5 +77,21 @@ SurfaceParams gbuffer_unpack(vec4 base, vec4 params0, vec4 params1, vec2 normal_
     s.clearcoat_roughness = params1.w;
     s.N = octahedral_decode(normal_enc);
     s.Ns = s.N;
+    s.Ng = s.N;
+    s.terminator = vec3(0.0);
+    s.terminator_cutoff = 0.0;
     return s;
+}
+
+/* The geometry target's fields into s (see the table above). */
+void gbuffer_unpack_geometry(inout SurfaceParams s, uvec4 g) {
+    s.Ns = octahedral_decode(unpackUnorm2x16(g.x));
+    s.Ng = octahedral_decode(unpackUnorm2x16(g.y));
+    vec2 zw = unpackHalf2x16(g.w);
+    s.terminator = vec3(unpackHalf2x16(g.z), zw.x);
+    s.terminator_cutoff = zw.y;
+}
+uvec4 gbuffer_pack_geometry(vec3 Ns, vec3 Ng, vec3 terminator, float cutoff) {
+    return uvec4(packUnorm2x16(octahedral_encode(Ns)), packUnorm2x16(octahedral_encode(Ng)),
+                 packHalf2x16(terminator.xy), packHalf2x16(vec2(terminator.z, cutoff)));
 }

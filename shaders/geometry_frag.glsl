@@ -12,6 +12,7 @@
  * emitting triangle's tile of the bake target (geometry_vert.glsl). */
 #include "frame_lib.glsl"
 #include "octahedral_lib.glsl"
+#include "gbuffer_lib.glsl"
 #ifdef FORWARD_PASS
 #include "lighting_lib.glsl"
 #endif
@@ -55,9 +56,6 @@ layout(location = OUT_EMISSION) out vec4 out_emission;
 layout(location = OUT_BASE) out vec4 out_base;
 layout(location = OUT_PARAMS0) out vec4 out_params0;
 layout(location = OUT_NORMAL) out vec2 out_normal;
-#ifdef GBUF_SMOOTH_NORMAL
-layout(location = OUT_SMOOTH_NORMAL) out vec2 out_smooth_normal;
-#endif
 #endif
 #if !defined(FORWARD_PASS) && !defined(AOV_PASS) && !defined(EMISSION_BAKE)
 #ifdef GBUF_PARAMS1
@@ -71,6 +69,48 @@ layout(location = OUT_IDS) out uvec2 out_ids;
 #ifdef GBUF_UV
 layout(location = OUT_UV) out vec2 out_uv;
 #endif
+#endif
+#if defined(GBUF_GEOMETRY) && !defined(SHADOW_PASS) && !defined(FORWARD_PASS) && !defined(AOV_PASS) && \
+    !defined(EMISSION_BAKE)
+#define GEOMETRY_OUT
+layout(location = OUT_GEOMETRY) out uvec4 out_geometry;
+flat in vec3 v_term_a;
+flat in vec3 v_term_b;
+in vec3 v_term_dir;
+in vec2 v_term_bary;
+flat in float v_term_cutoff;
+
+/* Cycles 3.4's shadow_ray_smooth_surface_offset (kernel/light/sample.h;
+ * Hanika 2021, "Hacking the Shadow Terminator", Ray Tracing Gems II ch. 4):
+ * the lift h of the shading point towards the smooth surface the vertex
+ * normals describe, a parabola over the triangle bounded by the linear
+ * envelope of the corners' tangent planes, along the interpolated normal
+ * n (object_dir_transform, not normalised). Ng: the true normal facing the
+ * ray, as Cycles flips it; the vertex normals are the mesh's own, so n
+ * against Ng tells which side is hit. With Gij = dot(V_j - V_i, N_i):
+ * dot(V_i - P, N_i) = -sum_j b_j Gij, a = G20 + G02, b = G21 + G12,
+ * c = -(G10 + G01). */
+vec3 terminator_offset(vec3 Ng) {
+    const float G01 = v_term_a.x, G02 = v_term_a.y, G10 = v_term_a.z;
+    const float G12 = v_term_b.x, G20 = v_term_b.y, G21 = v_term_b.z;
+    const float u = v_term_bary.x, v = v_term_bary.y, w = 1.0 - u - v;
+    const float D0 = -(v * G01 + w * G02), D1 = -(u * G10 + w * G12), D2 = -(u * G20 + v * G21);
+    const float a = G20 + G02, b = G21 + G12, c = -(G10 + G01);
+    float h = a * u * (u - 1.0) + (a + b + c) * u * v + b * v * (v - 1.0);
+    if (dot(v_term_dir, Ng) > 0.0) {
+        float h0 = max(D0 + max(max(G01, G02), 0.0), 0.0);
+        float h1 = max(D1 + max(max(G10, G12), 0.0), 0.0);
+        float h2 = max(D2 + max(max(G20, G21), 0.0), 0.0);
+        h = max(min(min(h0, h1), h2), h * 0.5);
+    } else {
+        float h0 = max(-D0 + max(max(-G01, -G02), 0.0), 0.0);
+        float h1 = max(-D1 + max(max(-G10, -G12), 0.0), 0.0);
+        float h2 = max(-D2 + max(max(-G20, -G21), 0.0), 0.0);
+        h = min(-min(min(h0, h1), h2), h * 0.5);
+    }
+    vec3 o = v_term_dir * h;
+    return (isnan(o.x + o.y + o.z) || isinf(o.x + o.y + o.z)) ? vec3(0.0) : clamp(o, vec3(-65504.0), vec3(65504.0));
+}
 #endif
 
 #ifdef MATERIAL_GRAPH
@@ -219,11 +259,13 @@ vec3 finite_or(vec3 v, vec3 fallback) {
 #ifdef FORWARD_PASS
 /* The surface lit as the lighting pass lights a G-buffer pixel: every light
  * (forward_module.h caps their number), the world, its emission. */
-vec3 forward_light(vec4 emission, vec4 base, vec4 params0, vec4 params1, vec3 N, vec3 Ns) {
+vec3 forward_light(vec4 emission, vec4 base, vec4 params0, vec4 params1, vec3 N, vec3 Ns, vec3 Ng) {
     /* The values at the G-buffer's precision, as the lighting pass reads them. */
     SurfaceParams s = gbuffer_unpack(gbuffer_half(base), gbuffer_half(params0), gbuffer_half(params1),
                                      gbuffer_unorm16(octahedral_encode(N)));
     s.Ns = octahedral_decode(gbuffer_unorm16(octahedral_encode(Ns)));
+    /* Shadow maps compare against the triangle's plane (no terminator offset here). */
+    s.Ng = Ng;
     N = s.N;
     PrincipledWeights w = principled_weights(s);
     vec3 P = v_position;
@@ -356,7 +398,7 @@ void main() {
     }
 #ifdef FORWARD_PASS
     if (surf_alpha <= 0.0) discard;
-    out_forward = vec4(forward_light(surf_emission, surf_base, surf_params0, surf_params1, shading_normal, N) *
+    out_forward = vec4(forward_light(surf_emission, surf_base, surf_params0, surf_params1, shading_normal, N, Ng) *
                        surf_alpha, surf_alpha);
 #else
     out_emission = surf_emission;
@@ -373,9 +415,8 @@ void main() {
 #endif
 #endif
 #endif
-#if defined(GBUF_SMOOTH_NORMAL) && !defined(SHADOW_PASS) && !defined(FORWARD_PASS) && !defined(AOV_PASS) && \
-    !defined(EMISSION_BAKE)
-    out_smooth_normal = octahedral_encode(N);
+#ifdef GEOMETRY_OUT
+    out_geometry = gbuffer_pack_geometry(N, Ng, terminator_offset(Ng), v_term_cutoff);
 #endif
 #if defined(GBUF_UV) && !defined(FORWARD_PASS) && !defined(AOV_PASS) && !defined(EMISSION_BAKE)
     out_uv = v_uv;

@@ -51,6 +51,19 @@ out vec4 v_attr[MATERIAL_ATTRIBUTE_COUNT];
 #endif
 #endif
 
+#ifdef GBUF_GEOMETRY
+/* The shadow terminator offset (geometry_frag.glsl terminator_offset), per
+ * triangle: Cycles' terms dot(V_j - V_i, N_i) in object space (V the
+ * corners' positions, N their normals), the interpolated object normal as
+ * a world direction (object_dir_transform), the corner weights, and the
+ * object's Geometry Offset (0 without normals: a flat surface). */
+flat out vec3 v_term_a;  /* G01, G02, G10 with Gij = dot(V_j - V_i, N_i) */
+flat out vec3 v_term_b;  /* G12, G20, G21 */
+out vec3 v_term_dir;
+out vec2 v_term_bary;    /* weights of corners 0 and 1 */
+flat out float v_term_cutoff;
+#endif
+
 /* The same depth from every geometry program: node materials test for equal
  * depth against the depth pre-pass drawn with the constant-material program. */
 invariant gl_Position;
@@ -128,6 +141,23 @@ void main() {
 #endif
 #endif
     v_uv = (mesh_flags & 2u) != 0u ? corner_uvs[corner] : vec2(0.0);
+#ifdef GBUF_GEOMETRY
+    {
+        vec3 V[3], Nc[3];
+        for (uint k = 0u; k < 3u; ++k) {
+            const uint ck = 3u * triangle + k, vk = indices[ck];
+            V[k] = vec3(positions[3u * vk], positions[3u * vk + 1u], positions[3u * vk + 2u]);
+            Nc[k] = (mesh_flags & 1u) != 0u
+                ? vec3(corner_normals[3u * ck], corner_normals[3u * ck + 1u], corner_normals[3u * ck + 2u])
+                : vec3(0.0);
+        }
+        v_term_a = vec3(dot(V[1] - V[0], Nc[0]), dot(V[2] - V[0], Nc[0]), dot(V[0] - V[1], Nc[1]));
+        v_term_b = vec3(dot(V[2] - V[1], Nc[1]), dot(V[0] - V[2], Nc[2]), dot(V[1] - V[2], Nc[2]));
+        v_term_dir = mat3(inst.model) * n;
+        v_term_bary = vec2(corner % 3u == 0u ? 1.0 : 0.0, corner % 3u == 1u ? 1.0 : 0.0);
+        v_term_cutoff = (mesh_flags & 1u) != 0u ? inst.info.y : 0.0;
+    }
+#endif
 
     /* Slot -> material id through the instance's slot map; out-of-range slots
      * were rejected on upload, the clamp only guards against driver surprises. */

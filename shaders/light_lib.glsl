@@ -690,7 +690,7 @@ LightContribution shade_light(GpuLight light, SurfaceParams s, PrincipledWeights
 #ifdef HAS_SHADOWS
         int shadow = int(light.params.w);
         if (shadow >= 0) {
-            float blocked = 1.0 - shadow_visibility(shadow, P, N);
+            float blocked = 1.0 - shadow_visibility(shadow, P, s);
             if (blocked > 0.0) {
                 LightContribution c = mesh_light_point(s, w, P, N, V, light.axis_x.xyz, light.axis_y.xyz,
                                                        light.strength.rgb, light.axis_x.w, light.axis_y.w);
@@ -706,7 +706,7 @@ LightContribution shade_light(GpuLight light, SurfaceParams s, PrincipledWeights
     visible = 1.0;
 #ifdef HAS_SHADOWS
     int shadow = int(light.params.w);
-    if (shadow >= 0 && (r.diffuse != vec3(0.0) || r.glossy != vec3(0.0))) visible = shadow_visibility(shadow, P, N);
+    if (shadow >= 0 && (r.diffuse != vec3(0.0) || r.glossy != vec3(0.0))) visible = shadow_visibility(shadow, P, s);
 #endif
     return r;
 }

@@ -30,8 +30,8 @@ layout(binding = TEX_GBUF_NORMAL) uniform sampler2D gbuf_normal;
 #ifdef GBUF_PARAMS1
 layout(binding = TEX_GBUF_PARAMS1) uniform sampler2D gbuf_params1;
 #endif
-#ifdef GBUF_SMOOTH_NORMAL
-layout(binding = TEX_GBUF_SMOOTH_NORMAL) uniform sampler2D gbuf_smooth_normal;
+#ifdef GBUF_GEOMETRY
+layout(binding = TEX_GBUF_GEOMETRY) uniform usampler2D gbuf_geometry;
 #endif
 #ifdef FORWARD_LAYER
 /* This sample's Blend-mode layers over the pixel: rgb their light
@@ -140,8 +140,8 @@ void main() {
 #endif
     SurfaceParams s = gbuffer_unpack(texelFetch(gbuf_base, pixel, 0), texelFetch(gbuf_params0, pixel, 0), params1,
                                      texelFetch(gbuf_normal, pixel, 0).rg);
-#ifdef GBUF_SMOOTH_NORMAL
-    s.Ns = octahedral_decode(texelFetch(gbuf_smooth_normal, pixel, 0).rg);
+#ifdef GBUF_GEOMETRY
+    gbuffer_unpack_geometry(s, texelFetch(gbuf_geometry, pixel, 0));
 #endif
     PrincipledWeights w = principled_weights(s);
     vec3 P = frame_position_from_depth(pixel, depth);

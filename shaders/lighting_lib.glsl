@@ -327,7 +327,7 @@ LightContribution world_light(PrincipledWeights w, SurfaceParams s, vec3 P, vec3
         float cos_u = abs(c);
         float inv_q = share / sh.params.z; /* 1 / the pair's density, this map's share */
         if (cos_u <= 0.0) continue;
-        float blocked = 1.0 - world_visibility(sh, P, N, side);
+        float blocked = 1.0 - world_visibility(sh, P, s, side);
         vec3 Lu = world_radiance_from(u) * inv_q;
 #ifdef HAS_WORLD_MAP
         r.diffuse -= Lu * principled_eval_diffuse(s, w, N, V, u) * blocked;

@@ -46,7 +46,7 @@
 #define TEX_SHADOW_MAPS 10
 #define TEX_SHADOW_LIGHT 11
 #define TEX_WORLD_MAP 12    /* RG32F array: (-nearest, farthest) depth along each world direction */
-#define TEX_GBUF_SMOOTH_NORMAL 13
+#define TEX_GBUF_GEOMETRY 13
 #define TEX_WORLD_RADIANCE 14 /* RGBA32F equirectangular: the world's radiance for light (world_lib.glsl) */
 #define TEX_WORLD_CAMERA 15   /* ... as camera rays see it (differs with Light Path Is Camera Ray) */
 /* The forward pass's layer (rgb light, a transmittance) read by the lighting
@@ -74,6 +74,11 @@
  * this many from the map and as many from the BSDF (multiple importance). */
 #define WORLD_LIGHT_SAMPLES 2
 /* Points per pixel and film sample on each emissive mesh light. */
+/* Shadow maps (shadow_lib.glsl): the bias left by the receiver-plane
+ * comparison, in texels, and the smallest |cos| between the receiver's plane
+ * and a map's ray for which that comparison is used. */
+#define SHADOW_PLANE_BIAS 0.5
+#define SHADOW_PLANE_MIN_COS 0.01
 #define MESH_LIGHT_SAMPLES 2
 #define MESH_LIGHT_SAMPLES_NEAR 8 /* ... within twice its bounding radius */
 /* Directions of a sharp specular lobe per pixel and film sample traced against
@@ -90,7 +95,7 @@
 #define OUT_PARAMS1 4
 #define OUT_IDS 5
 #define OUT_UV 6
-#define OUT_SMOOTH_NORMAL 7
+#define OUT_GEOMETRY 7
 
 /* Pass ids (deferred::Pass; static_assert'ed in native/src/passes.cpp) */
 #define PASS_COMBINED 0

@@ -101,7 +101,8 @@ SHARED_ASSERT_SIZE(GpuMaterial, 80);
  *                   the slot buffer, z slot count, w flags: 1 mirrored (negative
  *                   determinant), 2 holdout (Object > Visibility > Holdout)
  *   color         : Object > Viewport Display colour (Object Info Color, Alpha)
- *   info          : x Object Info Random (Cycles' per-object/per-instance value), yzw unused */
+ *   info          : x Object Info Random (Cycles' per-object/per-instance value), y Shadow
+ *                   Terminator Geometry Offset (shadow_lib.glsl shadow_ray_origin), zw unused */
 SHARED_STRUCT(GpuInstance) {
     mat4 model;
     mat4 normal_matrix;

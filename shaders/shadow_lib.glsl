@@ -11,9 +11,47 @@
  * Cycles' result when the light's contribution varies little across it
  * (the usual case; at grazing distances from large lights it is a bias).
  *
- * Bias, in shadow-map texels at the receiver's distance: normal offset of
- * 1.5 texels scaled by sin(theta) (theta between the normal and the light),
- * plus a slope-scaled depth bias of 1 + 2 tan(theta) texels clamped at 10. */
+ * The comparison (receiver_plane_depth): a map stores, per texel, the
+ * nearest caster's depth at the texel's centre. The receiver is compared
+ * by the depth its own plane (through P, true normal Ng: the triangle
+ * itself) has at that same centre (Isidoro 2006, "Shadow Mapping: GPU-based
+ * Tips and Techniques": receiver plane depth bias), so a triangle never
+ * shadows itself and the bias left is SHADOW_PLANE_BIAS texels: contact
+ * shadows reach to a fraction of a texel of their caster. Where the plane
+ * nearly contains the ray (|cos| < SHADOW_PLANE_MIN_COS) the old bias
+ * stands: a normal offset of 1.5 texels x sin(theta) plus a slope-scaled
+ * depth bias of 1 + 2 tan(theta) texels clamped at 10.
+ *
+ * Before the comparison the receiver moves by Cycles' shadow terminator
+ * offset (shadow_ray_origin): smooth-shaded low-poly meshes shadow
+ * themselves as Cycles' shadow rays do, with the object's Geometry Offset. */
+
+/* Cycles 3.4's shadow_ray_offset (kernel/light/sample.h): the shadow ray's
+ * origin for light direction L: P lifted by the terminator offset (the
+ * G-buffer's, full amount) scaled by how close L is to the terminator,
+ * offset_cutoff being the object's Geometry Offset:
+ *   NL = |N.L|, NgL = Ng.L (Ng flipped to L's side when N.L < 0),
+ *   amount = NL < cutoff ? clamp(2 - (NgL + NL) / cutoff) : clamp(1 - NgL / cutoff). */
+vec3 shadow_ray_origin(SurfaceParams s, vec3 P, vec3 L) {
+    if (!(s.terminator_cutoff > 0.0) || s.terminator == vec3(0.0)) return P;
+    float NL = dot(s.N, L);
+    vec3 Ng = NL < 0.0 ? -s.Ng : s.Ng;
+    NL = abs(NL);
+    float NgL = dot(Ng, L);
+    float cutoff = s.terminator_cutoff;
+    float amount = NL < cutoff ? clamp(2.0 - (NgL + NL) / cutoff, 0.0, 1.0) : clamp(1.0 - NgL / cutoff, 0.0, 1.0);
+    return P + s.terminator * amount;
+}
+
+/* The receiver's own plane (through P, normal Ng) along a ray of the map:
+ * the parameter t where origin + t dir meets it, with ok = false where the
+ * plane nearly contains the ray or lies behind its origin. */
+float receiver_plane_hit(vec3 P, vec3 Ng, vec3 origin, vec3 dir, out bool ok) {
+    float c = dot(dir, Ng);
+    float t = dot(P - origin, Ng) / c;
+    ok = abs(c) >= SHADOW_PLANE_MIN_COS * length(dir) && t > 0.0 && !isinf(t) && !isnan(t);
+    return t;
+}
 
 layout(std430, binding = SSBO_SHADOWS) readonly buffer Shadows { GpuShadow shadows[]; };
 layout(binding = TEX_SHADOW_MAPS) uniform sampler2DArray shadow_maps;
@@ -47,16 +85,27 @@ vec2 shadow_map_uv(GpuShadow sh, vec2 uv) {
 
 /* Orthographic map `m` (layer first + offset) along sh.point.xyz, the
  * direction the light travels: a sun cascade or the world's map. */
-float ortho_visibility(GpuShadow sh, mat4 m, int offset, vec3 P, vec3 N) {
+float ortho_visibility(GpuShadow sh, mat4 m, int offset, vec3 P, SurfaceParams s) {
     vec3 axis = sh.point.xyz;
-    float texel = 2.0 / (length(vec3(m[0][0], m[1][0], m[2][0])) * sh.params.y);
-    float sin_t;
-    float slope = shadow_bias_scale(N, -axis, sin_t);
-    vec3 Pb = P + N * (1.5 * texel * sin_t);
-    vec4 clip = m * vec4(Pb, 1.0);
+    float res = sh.params.y;
+    vec3 r0 = vec3(m[0][0], m[1][0], m[2][0]), r1 = vec3(m[0][1], m[1][1], m[2][1]);
+    float texel = 2.0 / (length(r0) * res);
+    P = shadow_ray_origin(s, P, -axis);
+    vec4 clip = m * vec4(P, 1.0);
     vec2 uv = clip.xy * 0.5 + 0.5;
     if (any(lessThan(uv, vec2(0.0))) || any(greaterThan(uv, vec2(1.0)))) return 1.0;
     float stored = texture(shadow_maps, vec3(shadow_map_uv(sh, uv), sh.point.w + float(offset))).r;
+    /* The line through the texel's centre (uv = 0.5 (r.X + m[3]) + 0.5). */
+    vec2 centre = (floor(uv * res) + 0.5) / res;
+    vec3 line = P + r0 * (2.0 * (centre.x - uv.x) / dot(r0, r0)) + r1 * (2.0 * (centre.y - uv.y) / dot(r1, r1));
+    bool ok;
+    float t = receiver_plane_hit(P, s.Ng, line, axis, ok);
+    if (ok) return dot(line, axis) + t - SHADOW_PLANE_BIAS * texel <= stored ? 1.0 : 0.0;
+    float sin_t;
+    float slope = shadow_bias_scale(s.N, -axis, sin_t);
+    vec3 Pb = P + s.N * (1.5 * texel * sin_t);
+    stored = texture(shadow_maps, vec3(shadow_map_uv(sh, (m * vec4(Pb, 1.0)).xy * 0.5 + 0.5),
+                                       sh.point.w + float(offset))).r;
     return dot(Pb, axis) - slope * texel <= stored ? 1.0 : 0.0;
 }
 
@@ -66,30 +115,42 @@ layout(binding = TEX_WORLD_MAP) uniform sampler2DArray world_map; /* layer: the 
 /* 1 where P (normal N) sees the world along u = -side * axis (side +1: where
  * the map looks from, -1: the opposite direction), 0 where geometry blocks
  * it. The map holds (-nearest, farthest) depth along the axis. */
-float world_visibility(GpuShadow sh, vec3 P, vec3 N, float side) {
+float world_visibility(GpuShadow sh, vec3 P, SurfaceParams s, float side) {
     vec3 axis = sh.point.xyz;
     mat4 m = sh.cascade[0];
-    float texel = 2.0 / (length(vec3(m[0][0], m[1][0], m[2][0])) * sh.params.y);
-    float sin_t;
-    float slope = shadow_bias_scale(N, -axis * side, sin_t);
-    vec3 Pb = P + N * (1.5 * texel * sin_t);
-    vec4 clip = m * vec4(Pb, 1.0);
+    float res = sh.params.y;
+    vec3 r0 = vec3(m[0][0], m[1][0], m[2][0]), r1 = vec3(m[0][1], m[1][1], m[2][1]);
+    float texel = 2.0 / (length(r0) * res);
+    P = shadow_ray_origin(s, P, -axis * side);
+    vec4 clip = m * vec4(P, 1.0);
     vec2 uv = clip.xy * 0.5 + 0.5;
     if (any(lessThan(uv, vec2(0.0))) || any(greaterThan(uv, vec2(1.0)))) return 1.0;
     vec2 stored = texture(world_map, vec3(shadow_map_uv(sh, uv), sh.point.w)).rg;
+    vec2 centre = (floor(uv * res) + 0.5) / res;
+    vec3 line = P + r0 * (2.0 * (centre.x - uv.x) / dot(r0, r0)) + r1 * (2.0 * (centre.y - uv.y) / dot(r1, r1));
+    /* The plane's depth along the axis at the centre's line (either side). */
+    float c = dot(axis, s.Ng);
+    if (abs(c) >= SHADOW_PLANE_MIN_COS) {
+        float d = dot(line, axis) + dot(P - line, s.Ng) / c;
+        float bias = SHADOW_PLANE_BIAS * texel;
+        return side > 0.0 ? (d - bias <= -stored.r ? 1.0 : 0.0) : (d + bias >= stored.g ? 1.0 : 0.0);
+    }
+    float sin_t;
+    float slope = shadow_bias_scale(s.N, -axis * side, sin_t);
+    vec3 Pb = P + s.N * (1.5 * texel * sin_t);
+    stored = texture(world_map, vec3(shadow_map_uv(sh, (m * vec4(Pb, 1.0)).xy * 0.5 + 0.5), sh.point.w)).rg;
     float d = dot(Pb, axis);
     return side > 0.0 ? (d - slope * texel <= -stored.r ? 1.0 : 0.0) : (d + slope * texel >= stored.g ? 1.0 : 0.0);
 }
 #endif
 
 /* 1 where this sample's light point sees P (normal N), 0 in shadow. */
-float shadow_visibility(int index, vec3 P, vec3 N) {
+float shadow_visibility(int index, vec3 P, SurfaceParams s) {
     GpuShadow sh = shadows[index];
-    float res = sh.params.y;
     if (int(sh.params.x) == SHADOW_CASCADES) {
         float d = frame_view_depth(P);
         int c = d <= sh.cascade_split.x ? 0 : d <= sh.cascade_split.y ? 1 : d <= sh.cascade_split.z ? 2 : 3;
-        return ortho_visibility(sh, sh.cascade[c], c, P, N);
+        return ortho_visibility(sh, sh.cascade[c], c, P, s);
     }
     /* The face from the light's centre; its light point is on the disk
      * perpendicular to the face's axis (sh.cascade_split.xy, see ShadowModule). */
@@ -112,18 +173,33 @@ float shadow_visibility(int index, vec3 P, vec3 N) {
     /* A light point below the receiver's horizon: the unshadowed term already
      * left that part of the light out (horizon clipping), and the receiver's
      * own surface is no shadow; only occlusion by other geometry counts. */
-    if (dist <= 0.0 || dot(N, v) >= 0.0) return 1.0;
+    if (dist <= 0.0 || dot(s.N, v) >= 0.0) return 1.0;
+    P = shadow_ray_origin(s, P, -v / dist);
+    v = P - light_point;
+    dist = length(v);
     float texel = dist * sh.params.z;
-    float sin_t;
-    float slope = shadow_bias_scale(N, -v / dist, sin_t);
-    vec3 Pb = P + N * (1.5 * texel * sin_t);
-    vec3 vb = Pb - light_point;
-    float fwd = max(dot(vb, F), 1e-20);
-    vec2 uv = vec2(dot(vb, R), dot(vb, U)) / (fwd * SHADOW_CUBE_OVERLAP) * 0.5 + 0.5;
+    float res = sh.params.y;
+    float fwd = max(dot(v, F), 1e-20);
+    vec2 uv = vec2(dot(v, R), dot(v, U)) / (fwd * SHADOW_CUBE_OVERLAP) * 0.5 + 0.5;
     float stored = texture(shadow_maps, vec3(shadow_map_uv(sh, uv), sh.point.w + float(face))).r;
     /* An emissive mesh's point lies on its own surface, which curves away
      * from it: the texels around its tangent plane see that surface at
      * almost no distance. Occluders nearer than cascade_split.z (a fraction
      * of the emitter's size; 0 for lights) are that surface, not a shadow. */
+    if (stored < sh.cascade_split.z) return 1.0;
+    /* The ray through the texel's centre, and the receiver's plane on it. */
+    vec2 centre = (floor(uv * res) + 0.5) / res;
+    vec2 xy = (2.0 * centre - 1.0) * SHADOW_CUBE_OVERLAP;
+    vec3 dir = F + R * xy.x + U * xy.y;
+    bool ok;
+    float t = receiver_plane_hit(P, s.Ng, light_point, dir, ok);
+    if (ok) return t * length(dir) - SHADOW_PLANE_BIAS * texel <= stored ? 1.0 : 0.0;
+    float sin_t;
+    float slope = shadow_bias_scale(s.N, -v / dist, sin_t);
+    vec3 Pb = P + s.N * (1.5 * texel * sin_t);
+    vec3 vb = Pb - light_point;
+    fwd = max(dot(vb, F), 1e-20);
+    uv = vec2(dot(vb, R), dot(vb, U)) / (fwd * SHADOW_CUBE_OVERLAP) * 0.5 + 0.5;
+    stored = texture(shadow_maps, vec3(shadow_map_uv(sh, uv), sh.point.w + float(face))).r;
     return (length(vb) - slope * texel <= stored || stored < sh.cascade_split.z) ? 1.0 : 0.0;
 }

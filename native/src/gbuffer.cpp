@@ -26,7 +26,7 @@ void GBuffer::ensure(int width, int height, const GBufferFeatures& f) {
     if (f.params1) make(params1_, GL_RGBA16F, "gbuffer params1");
     if (f.ids || f.instance_ids) make(ids_, f.instance_ids ? GL_RGBA32UI : GL_RG32UI, "gbuffer ids");
     if (f.uv) make(uv_, GL_RG32F, "gbuffer uv");
-    if (f.smooth_normal) make(smooth_normal_, GL_RG16, "gbuffer smooth normal");
+    if (f.geometry) make(geometry_, GL_RGBA32UI, "gbuffer geometry");
 
     GLuint fbo = 0;
     glCreateFramebuffers(1, &fbo);
@@ -45,7 +45,7 @@ void GBuffer::ensure(int width, int height, const GBufferFeatures& f) {
     attach(params1_, OUT_PARAMS1);
     attach(ids_, OUT_IDS);
     attach(uv_, OUT_UV);
-    attach(smooth_normal_, OUT_SMOOTH_NORMAL);
+    attach(geometry_, OUT_GEOMETRY);
     glNamedFramebufferDrawBuffers(fbo, static_cast<GLsizei>(draw.size()), draw.data());
     GLenum status = glCheckNamedFramebufferStatus(fbo, GL_FRAMEBUFFER);
     if (status != GL_FRAMEBUFFER_COMPLETE)
@@ -61,9 +61,10 @@ void GBuffer::bind_for_geometry() const {
     const GLuint uzero[4] = {0, 0, 0, 0};
     const float depth_far = 0.0f;  // reversed Z: far plane is 0
     glClearNamedFramebufferfv(fbo_.get(), GL_DEPTH, 0, &depth_far);
-    for (int slot : {OUT_EMISSION, OUT_BASE, OUT_PARAMS0, OUT_NORMAL, OUT_PARAMS1, OUT_UV, OUT_SMOOTH_NORMAL})
+    for (int slot : {OUT_EMISSION, OUT_BASE, OUT_PARAMS0, OUT_NORMAL, OUT_PARAMS1, OUT_UV})
         glClearNamedFramebufferfv(fbo_.get(), GL_COLOR, slot, zero);
     if (ids_) glClearNamedFramebufferuiv(fbo_.get(), GL_COLOR, OUT_IDS, uzero);
+    if (geometry_) glClearNamedFramebufferuiv(fbo_.get(), GL_COLOR, OUT_GEOMETRY, uzero);
 }
 
 void GBuffer::bind_textures() const {
@@ -75,7 +76,7 @@ void GBuffer::bind_textures() const {
     if (params1_) glBindTextureUnit(TEX_GBUF_PARAMS1, params1_.get());
     if (ids_) glBindTextureUnit(TEX_GBUF_IDS, ids_.get());
     if (uv_) glBindTextureUnit(TEX_GBUF_UV, uv_.get());
-    if (smooth_normal_) glBindTextureUnit(TEX_GBUF_SMOOTH_NORMAL, smooth_normal_.get());
+    if (geometry_) glBindTextureUnit(TEX_GBUF_GEOMETRY, geometry_.get());
 }
 
 }  // namespace deferred

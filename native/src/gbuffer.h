@@ -1,7 +1,8 @@
 // G-buffer targets and their framebuffer (layout: shaders/gbuffer_lib.glsl).
 // Only the targets a frame needs are allocated: params1 when a material uses
-// sheen or clearcoat, ids for IndexOB/IndexMA, uv for UV, smooth_normal when a
-// node material bends its closures' normal (Bump, Normal Map). The G-buffer holds
+// sheen or clearcoat, ids for IndexOB/IndexMA, uv for UV, geometry (smooth and
+// true normals, shadow terminator offset) when shadow maps are drawn or a node
+// material bends its closures' normal (Bump, Normal Map). The G-buffer holds
 // one film sample; the accumulations live in the Film's targets.
 #pragma once
 
@@ -12,10 +13,10 @@
 namespace deferred {
 
 struct GBufferFeatures {
-    bool params1 = false, ids = false, uv = false, smooth_normal = false;
+    bool params1 = false, ids = false, uv = false, geometry = false;
     bool instance_ids = false;  // ids also hold the instance and material ids (RGBA32UI; Cryptomatte, light groups)
     bool operator==(const GBufferFeatures& o) const {
-        return params1 == o.params1 && ids == o.ids && uv == o.uv && smooth_normal == o.smooth_normal &&
+        return params1 == o.params1 && ids == o.ids && uv == o.uv && geometry == o.geometry &&
                instance_ids == o.instance_ids;
     }
 };
@@ -38,7 +39,7 @@ private:
     GBufferFeatures features_;
     bool allocated_ = false;
     std::size_t bytes_ = 0;
-    Texture depth_, emission_, base_, params0_, normal_, params1_, ids_, uv_, smooth_normal_;
+    Texture depth_, emission_, base_, params0_, normal_, params1_, ids_, uv_, geometry_;
     Framebuffer fbo_;
 };
 

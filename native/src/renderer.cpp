@@ -244,7 +244,9 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     for (const Material& m : scene.materials())
         if (m.graph < 0 && (m.sheen > 1e-5f || m.clearcoat > 1e-5f)) features.params1 = true;
     if (materials.uses_params1()) features.params1 = true;
-    features.smooth_normal = materials.uses_smooth_normal();
+    // Shadow maps compare against the true normal's plane and move the
+    // receiver by its terminator offset (geometry target), as do bent closures.
+    features.geometry = materials.uses_smooth_normal() || settings.shadows;
     features.ids = wanted.contains(Pass::IndexOB) || wanted.contains(Pass::IndexMA);
     features.uv = wanted.contains(Pass::UV);
     features.instance_ids = !settings.cryptomatte.empty() || settings.light_groups > 0;
@@ -270,7 +272,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     const std::size_t pixels = std::size_t(settings.width > 0 ? settings.width : 0) *
                                std::size_t(settings.height > 0 ? settings.height : 0);
     std::size_t per_pixel = 4 + 16 + 8 + 8 + 4 + (features.params1 ? 8 : 0) + (features.ids ? 8 : 0) +
-                            (features.uv ? 8 : 0) + (features.smooth_normal ? 4 : 0) + 16 + (light_split ? 32 : 0) + (shadow_pass ? 16 : 0);
+                            (features.uv ? 8 : 0) + (features.geometry ? 16 : 0) + 16 + (light_split ? 32 : 0) + (shadow_pass ? 16 : 0);
     for (Pass p : wanted.list()) per_pixel += (p == Pass::Combined ? 0 : 16) + 4 * std::size_t(pass_info(p).channels);
     if (features.instance_ids) per_pixel += 16;  // the ids target grows to RGBA32UI
     if (settings.light_groups < 0 || settings.light_groups > kMaxLightGroups)
@@ -325,7 +327,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
             g.ids = {b.object_indices[i], slot_offset, static_cast<std::uint32_t>(b.material_slots.size()),
                      (det < 0 ? 1u : 0u) | (b.holdout ? 2u : 0u)};
             g.color = {b.colors[i * 4], b.colors[i * 4 + 1], b.colors[i * 4 + 2], b.colors[i * 4 + 3]};
-            g.info = {b.randoms[i], 0.0f, 0.0f, 0.0f};
+            g.info = {b.randoms[i], b.terminator_offsets[i], 0.0f, 0.0f};
             instances.push_back(g);
             if (!settings.cryptomatte.empty())
                 crypto_instances.insert(crypto_instances.end(), {b.crypto[2 * i], b.crypto[2 * i + 1]});
@@ -501,7 +503,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     if (features.ids) base_variant.defines.push_back("GBUF_IDS");
     if (features.instance_ids) base_variant.defines.push_back("GBUF_INSTANCE_IDS");
     if (features.uv) base_variant.defines.push_back("GBUF_UV");
-    if (features.smooth_normal) base_variant.defines.push_back("GBUF_SMOOTH_NORMAL");
+    if (features.geometry) base_variant.defines.push_back("GBUF_GEOMETRY");
     // Stochastic transparency, only when some constant material is partly
     // transparent (node materials carry their own switch, MATERIAL_ALPHA).
     bool scene_alpha = false;
@@ -1063,7 +1065,11 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
                 }
                 shadows.fit(receivers, visible_depths);
             }
-            shadows.render_sample(*shaders, {u[2], u[3]}, world_dirs, draw_shadow_casters,
+            // The maps' grid offset: the R2 sequence (Roberts 2018) over the
+            // samples, apart from the light points' numbers.
+            const std::array<float, 2> grid = {float(std::fmod(0.5 + sample * 0.7548776662466927, 1.0)),
+                                               float(std::fmod(0.5 + sample * 0.5698402909980532, 1.0))};
+            shadows.render_sample(*shaders, {u[2], u[3]}, grid, world_dirs, draw_shadow_casters,
                                   caster_defines, scene_alpha || alpha_graphs);
             shadow_ms += timer.lap_ms();
         }
@@ -1279,10 +1285,11 @@ std::uint32_t Renderer::add_graph_material(const Material& base, const MaterialG
 void Renderer::add_instances(std::uint32_t mesh_id, const double* matrices, std::size_t count,
                              const std::uint32_t* object_indices, const std::vector<std::uint32_t>& material_slots,
                              bool cast_shadow, const float* colors, const float* randoms,
-                             const std::uint32_t* crypto, bool holdout, std::uint32_t light_group) {
+                             const std::uint32_t* crypto, bool holdout, std::uint32_t light_group,
+                             const float* terminator_offsets) {
     impl_->thread.run([&] {
         impl_->scene.add_instances(mesh_id, matrices, count, object_indices, material_slots, cast_shadow, colors,
-                                   randoms, crypto, holdout, light_group);
+                                   randoms, crypto, holdout, light_group, terminator_offsets);
     });
 }
 

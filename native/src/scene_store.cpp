@@ -376,13 +376,21 @@ std::uint32_t SceneStore::add_material(const Material& m) {
 void SceneStore::add_instances(std::uint32_t mesh_id, const double* matrices, std::size_t count,
                                const std::uint32_t* object_indices, const std::vector<std::uint32_t>& slots,
                                bool cast_shadow, const float* colors, const float* randoms,
-                               const std::uint32_t* crypto, bool holdout, std::uint32_t light_group) {
+                               const std::uint32_t* crypto, bool holdout, std::uint32_t light_group,
+                               const float* terminator_offsets) {
     if (mesh_id >= meshes_.size() || !mesh_slots_[mesh_id].alive)
         invalid("add_instances: mesh id " + std::to_string(mesh_id) + " does not exist (" +
                 std::to_string(meshes_.size()) + " meshes)");
     validate_instances(matrices, count);
     if (colors) require_finite(colors, count * 4, "colors");
     if (randoms) require_finite(randoms, count, "randoms");
+    if (terminator_offsets) {
+        require_finite(terminator_offsets, count, "terminator_offsets");
+        for (std::size_t i = 0; i < count; ++i)
+            if (terminator_offsets[i] < 0.0f || terminator_offsets[i] > 1.0f)
+                invalid("terminator_offsets: " + std::to_string(terminator_offsets[i]) + " is outside 0..1 "
+                        "(Blender's Shadow Terminator Geometry Offset range)");
+    }
     for (std::uint32_t s : slots)
         if (s >= materials_.size())
             invalid("material_slots: material id " + std::to_string(s) + " does not exist (" +
@@ -403,6 +411,8 @@ void SceneStore::add_instances(std::uint32_t mesh_id, const double* matrices, st
     b.object_indices = object_indices ? std::vector<std::uint32_t>(object_indices, object_indices + count)
                                       : std::vector<std::uint32_t>(count, 0u);
     b.colors = colors ? std::vector<float>(colors, colors + count * 4) : std::vector<float>(count * 4, 1.0f);
+    b.terminator_offsets = terminator_offsets ? std::vector<float>(terminator_offsets, terminator_offsets + count)
+                                              : std::vector<float>(count, 0.0f);
     b.randoms = randoms ? std::vector<float>(randoms, randoms + count) : std::vector<float>(count, 0.0f);
     b.crypto = crypto ? std::vector<std::uint32_t>(crypto, crypto + count * 2) : std::vector<std::uint32_t>(count * 2, 0u);
     if (slots.empty()) {

@@ -83,6 +83,7 @@ struct InstanceBatch {
     std::uint32_t light_group = 0;             // its emission's light group, 0 none
     std::vector<float> colors;                 // RGBA per instance (Object Info)
     std::vector<float> randoms;                // one per instance (Object Info Random)
+    std::vector<float> terminator_offsets;     // one per instance: Shadow Terminator Geometry Offset
     std::vector<std::uint32_t> crypto;         // two per instance: Cryptomatte object and asset hashes
 };
 
@@ -107,7 +108,7 @@ public:
                        const std::uint32_t* object_indices, const std::vector<std::uint32_t>& slots,
                        bool cast_shadow = true, const float* colors = nullptr, const float* randoms = nullptr,
                        const std::uint32_t* crypto = nullptr, bool holdout = false,
-                       std::uint32_t light_group = 0);
+                       std::uint32_t light_group = 0, const float* terminator_offsets = nullptr);
     void add_light(const Light& light);
     void set_world(const World& world);
 

@@ -96,7 +96,10 @@ public:
     // casters' program (SCENE_ALPHA: partly transparent constant materials).
     // `casters_vary`: some caster is drawn stochastically (transparency), so
     // even the maps of lights without size are drawn again every sample.
-    void render_sample(ShaderLibrary& shaders, const std::array<float, 2>& u, const std::vector<glm::dvec4>& world_dirs,
+    // `grid`: this sample's point in [0, 1)^2 for the orthographic maps' texel
+    // grid offset (maps drawn again every sample).
+    void render_sample(ShaderLibrary& shaders, const std::array<float, 2>& u, const std::array<float, 2>& grid,
+                       const std::vector<glm::dvec4>& world_dirs,
                        const DrawCasters& draw_casters, const std::vector<std::string>& caster_defines = {},
                        bool casters_vary = false);
     int world_index() const { return world_index_; }  // shadow index of the world's first map, -1: none

@@ -73,7 +73,7 @@ TEST_F(ShaderErrors, EveryShipedVariantFamilyCompiles) {
     // Geometry with every optional target, lighting with every light type and
     // the light split, and every pass.
     ShaderVariant full;
-    full.defines = {"GBUF_PARAMS1", "GBUF_IDS", "GBUF_UV", "GBUF_SMOOTH_NORMAL", "GBUF_EMIT"};
+    full.defines = {"GBUF_PARAMS1", "GBUF_IDS", "GBUF_UV", "GBUF_GEOMETRY", "GBUF_EMIT"};
     EXPECT_NE(shaders().graphics_program("geometry_vert.glsl", "geometry_frag.glsl", full), 0u);
     ShaderVariant lighting = full;
     lighting.defines.insert(lighting.defines.end(), {"HAS_POINT_LIGHTS", "HAS_SPOT_LIGHTS", "HAS_SUN_LIGHTS",
@@ -87,7 +87,7 @@ TEST_F(ShaderErrors, EveryShipedVariantFamilyCompiles) {
     }
     // Each optional G-buffer target alone (a target's declaration must not
     // hide inside another's block), with every light type.
-    for (const char* target : {"GBUF_PARAMS1", "GBUF_IDS", "GBUF_UV", "GBUF_SMOOTH_NORMAL"}) {
+    for (const char* target : {"GBUF_PARAMS1", "GBUF_IDS", "GBUF_UV", "GBUF_GEOMETRY"}) {
         ShaderVariant one;
         one.defines = {target, "HAS_POINT_LIGHTS", "HAS_SPOT_LIGHTS", "HAS_SUN_LIGHTS", "HAS_AREA_LIGHTS",
                        "HAS_SHADOWS", "OUT_LIGHT_SPLIT"};

@@ -27,6 +27,7 @@ without geometry (paths) and mesh objects whose modifiers leave no faces
 (e.g. geometry nodes that output only instances), as Cycles does.
 """
 
+import math
 import time
 
 import numpy as np
@@ -123,9 +124,22 @@ def object_random(inst, ob):
     return random_id * (1.0 / 0xFFFFFFFF)
 
 
+def terminator_offset(ob):
+    """Cycles' Object > Shading > Shadow Terminator > Geometry Offset (0..1,
+    default 0.1): how far shadow rays from smooth-shaded triangles near the
+    terminator start above them (shadow_lib.glsl shadow_ray_origin)."""
+    cycles = getattr(ob, "cycles", None)
+    value = getattr(cycles, "shadow_terminator_geometry_offset", 0.1) if cycles is not None else 0.1
+    try:
+        value = float(value)
+    except (TypeError, ValueError):
+        return 0.1
+    return min(max(value, 0.0), 1.0) if math.isfinite(value) else 0.1
+
+
 class _Group:
     __slots__ = ("mesh_id", "material_ids", "cast_shadow", "holdout", "light_group", "matrices", "object_indices",
-                 "names", "colors", "randoms", "crypto")
+                 "names", "colors", "randoms", "crypto", "terminator_offsets")
 
     def __init__(self, mesh_id, material_ids, cast_shadow, holdout=False):
         self.mesh_id = mesh_id
@@ -139,6 +153,7 @@ class _Group:
         self.colors = []
         self.randoms = []
         self.crypto = []    # (object hash, asset hash) per instance, when Cryptomatte is asked for
+        self.terminator_offsets = []  # Object > Shading > Shadow Terminator > Geometry Offset
 
 
 class MeshKeeper:
@@ -445,6 +460,11 @@ class SceneExporter:
         # Object > Visibility > Ray Visibility > Shadow: off, the object
         # blocks no light (Cycles' shadow rays pass it) and no world light.
         cast_shadow = bool(getattr(ob, "visible_shadow", True))
+        shading_offset = getattr(getattr(ob, "cycles", None), "shadow_terminator_offset", 0.0)
+        if isinstance(shading_offset, (int, float)) and shading_offset > 0.0:
+            self._warn_once(("terminator-shading", ob.name),
+                            f"Object '{ob.name}': Shadow Terminator Shading Offset is not rendered "
+                            "(the Geometry Offset is)")
         # Object > Visibility > Holdout, or a holdout collection of the view
         # layer: a hole in the image (Cycles' SD_OBJECT_HOLDOUT_MASK).
         holdout = bool(getattr(ob, "is_holdout", False)) or ob.original.name in self._holdout_objects
@@ -459,6 +479,7 @@ class SceneExporter:
         group.names.append(ob.name)
         group.colors.append(tuple(ob.color))
         group.randoms.append(object_random(inst, ob))
+        group.terminator_offsets.append(terminator_offset(ob))
         if self.cryptomatte.layers:
             group.crypto.append((self.cryptomatte.hash("CryptoObject", ob.name),
                                  self.cryptomatte.hash("CryptoAsset", crypto_export.asset_object(inst, ob).name)))
@@ -497,6 +518,8 @@ class SceneExporter:
                 extras["holdout"] = True
             if group.light_group:
                 extras["light_group"] = group.light_group
+            if any(group.terminator_offsets):
+                extras["terminator_offsets"] = np.ascontiguousarray(group.terminator_offsets, dtype=np.float32)
             try:
                 self.renderer.add_instances(group.mesh_id, matrices,
                                             object_indices=object_indices,

@@ -56,6 +56,7 @@ TESTS = {
     "aovs": (ANALYTIC, True),
     "light_groups": (ANALYTIC, True),
     "emissive": (ANALYTIC, True),
+    "shadow_terminator": (ANALYTIC, True),
 }
 BENCHMARKS = {"bench_export": (None, True)}
 

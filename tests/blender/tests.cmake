@@ -34,6 +34,7 @@ set(DEFERRED_BLENDER_TESTS
     node_materials
     node_probes
     emissive
+    shadow_terminator
     transparency
     bump_lighting
     world_map

@@ -212,8 +212,15 @@ void shading_point_init(vec3 N, vec3 Ng, vec3 V, bool back) {
     /* The camera ray's length: from the camera, or for an orthographic one from
      * its origin on the near plane (Cycles' camera_sample_orthographic). */
     g_sd.view_distance = frame.camera_position.w > 0.5 ? -view.z - frame.jitter.z : length(v_position);
+#ifdef EMISSION_BAKE
+    /* A light sample's Window: Cycles' camera_world_to_ndc of P (the bake's
+     * frame block holds the unjittered camera; its pixels are the tiles'). */
+    vec4 clip = frame.projection * (frame.view * vec4(v_position, 1.0));
+    g_sd.window = clip.w != 0.0 ? clip.xy / clip.w * 0.5 + 0.5 : vec2(0.0);
+#else
     vec2 ndc = gl_FragCoord.xy * frame.viewport.zw * 2.0 - 1.0 - frame.jitter.xy;
     g_sd.window = ndc * 0.5 + 0.5;
+#endif
     g_sd.dPdx = dFdxFine(v_position);
     g_sd.dPdy = dFdyFine(v_position);
     for (int k = 0; k < 8; ++k) g_sd.attr[k] = vec4(0.0);

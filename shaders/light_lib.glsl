@@ -370,6 +370,14 @@ LightContribution shade_light_unshadowed(GpuLight light, SurfaceParams s, Princi
 }
 
 #ifdef HAS_MESH_LIGHTS
+/* The pixel being shaded: the lighting pass's invocation, or the forward
+ * pass's fragment (gl_GlobalInvocationID exists in compute shaders only). */
+#ifdef FORWARD_PASS
+uvec2 shading_pixel() { return uvec2(gl_FragCoord.xy); }
+#else
+uvec2 shading_pixel() { return gl_GlobalInvocationID.xy; }
+#endif
+
 layout(std430, binding = SSBO_EMITTERS) readonly buffer Emitters { GpuEmitterTriangle emitters[]; };
 #ifdef HAS_EMISSION_TEXELS
 /* Textured emitters (emitter_module.h): each such triangle's radiance baked
@@ -580,7 +588,7 @@ LightContribution mesh_light_unoccluded(GpuLight light, SurfaceParams s, Princip
     r.glossy = vec3(0.0);
     uint first = uint(light.direction.x), count = uint(light.direction.y);
     if (count == 0u) return r;
-    uvec4 h = uvec4(gl_GlobalInvocationID.xy, first * 0x9E3779B9u + 0x632BE5ABu, 0x85EBCA6Bu);
+    uvec4 h = uvec4(shading_pixel(), first * 0x9E3779B9u + 0x632BE5ABu, 0x85EBCA6Bu);
     h = h * 1664525u + 1013904223u;
     h.x += h.y * h.w; h.y += h.z * h.x; h.z += h.x * h.y; h.w += h.y * h.z;
     h ^= h >> 16u;

@@ -73,12 +73,12 @@
 /* Directions per pixel and film sample for the world's unoccluded light:
  * this many from the map and as many from the BSDF (multiple importance). */
 #define WORLD_LIGHT_SAMPLES 2
-/* Points per pixel and film sample on each emissive mesh light. */
 /* Shadow maps (shadow_lib.glsl): the bias left by the receiver-plane
  * comparison, in texels, and the smallest |cos| between the receiver's plane
  * and a map's ray for which that comparison is used. */
 #define SHADOW_PLANE_BIAS 0.5
 #define SHADOW_PLANE_MIN_COS 0.01
+/* Points per pixel and film sample on each emissive mesh light. */
 #define MESH_LIGHT_SAMPLES 2
 #define MESH_LIGHT_SAMPLES_NEAR 8 /* ... within twice its bounding radius */
 /* Directions of a sharp specular lobe per pixel and film sample traced against

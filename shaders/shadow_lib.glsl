@@ -30,11 +30,12 @@
  * origin for light direction L: P lifted by the terminator offset (the
  * G-buffer's, full amount) scaled by how close L is to the terminator,
  * offset_cutoff being the object's Geometry Offset:
- *   NL = |N.L|, NgL = Ng.L (Ng flipped to L's side when N.L < 0),
+ *   NL = |Ns.L|, NgL = Ng.L (Ng flipped to L's side when Ns.L < 0),
  *   amount = NL < cutoff ? clamp(2 - (NgL + NL) / cutoff) : clamp(1 - NgL / cutoff). */
 vec3 shadow_ray_origin(SurfaceParams s, vec3 P, vec3 L) {
     if (!(s.terminator_cutoff > 0.0) || s.terminator == vec3(0.0)) return P;
-    float NL = dot(s.N, L);
+    /* Cycles' sd->N: the interpolated normal, not a closure's bent one. */
+    float NL = dot(s.Ns, L);
     vec3 Ng = NL < 0.0 ? -s.Ng : s.Ng;
     NL = abs(NL);
     float NgL = dot(Ng, L);
@@ -43,9 +44,10 @@ vec3 shadow_ray_origin(SurfaceParams s, vec3 P, vec3 L) {
     return P + s.terminator * amount;
 }
 
-/* The receiver's own plane (through P, normal Ng) along a ray of the map:
- * the parameter t where origin + t dir meets it, with ok = false where the
- * plane nearly contains the ray or lies behind its origin. */
+/* A cube face's ray from the light point `origin` along `dir`: the
+ * parameter t where it meets the receiver's own plane (through P, normal
+ * Ng), with ok = false where the plane nearly contains the ray or lies
+ * behind the light point. */
 float receiver_plane_hit(vec3 P, vec3 Ng, vec3 origin, vec3 dir, out bool ok) {
     float c = dot(dir, Ng);
     float t = dot(P - origin, Ng) / c;
@@ -85,6 +87,19 @@ vec2 shadow_map_uv(GpuShadow sh, vec2 uv) {
 
 /* Orthographic map `m` (layer first + offset) along sh.point.xyz, the
  * direction the light travels: a sun cascade or the world's map. */
+/* An orthographic map (rows r0, r1 of its matrix; light travelling along
+ * `axis`): the depth along the axis that the receiver's own plane (through
+ * P, normal Ng) has on the line through the centre of the texel holding uv
+ * (uv = 0.5 (r.X + m[3]) + 0.5), with ok = false where the plane nearly
+ * contains the axis. */
+float ortho_plane_depth(vec3 P, vec3 Ng, vec3 axis, vec3 r0, vec3 r1, vec2 uv, float res, out bool ok) {
+    vec2 centre = (floor(uv * res) + 0.5) / res;
+    vec3 line = P + r0 * (2.0 * (centre.x - uv.x) / dot(r0, r0)) + r1 * (2.0 * (centre.y - uv.y) / dot(r1, r1));
+    float c = dot(axis, Ng);
+    ok = abs(c) >= SHADOW_PLANE_MIN_COS;
+    return dot(line, axis) + (ok ? dot(P - line, Ng) / c : 0.0);
+}
+
 float ortho_visibility(GpuShadow sh, mat4 m, int offset, vec3 P, SurfaceParams s) {
     vec3 axis = sh.point.xyz;
     float res = sh.params.y;
@@ -95,12 +110,9 @@ float ortho_visibility(GpuShadow sh, mat4 m, int offset, vec3 P, SurfaceParams s
     vec2 uv = clip.xy * 0.5 + 0.5;
     if (any(lessThan(uv, vec2(0.0))) || any(greaterThan(uv, vec2(1.0)))) return 1.0;
     float stored = texture(shadow_maps, vec3(shadow_map_uv(sh, uv), sh.point.w + float(offset))).r;
-    /* The line through the texel's centre (uv = 0.5 (r.X + m[3]) + 0.5). */
-    vec2 centre = (floor(uv * res) + 0.5) / res;
-    vec3 line = P + r0 * (2.0 * (centre.x - uv.x) / dot(r0, r0)) + r1 * (2.0 * (centre.y - uv.y) / dot(r1, r1));
     bool ok;
-    float t = receiver_plane_hit(P, s.Ng, line, axis, ok);
-    if (ok) return dot(line, axis) + t - SHADOW_PLANE_BIAS * texel <= stored ? 1.0 : 0.0;
+    float d = ortho_plane_depth(P, s.Ng, axis, r0, r1, uv, res, ok);
+    if (ok) return d - SHADOW_PLANE_BIAS * texel <= stored ? 1.0 : 0.0;
     float sin_t;
     float slope = shadow_bias_scale(s.N, -axis, sin_t);
     vec3 Pb = P + s.N * (1.5 * texel * sin_t);
@@ -112,7 +124,7 @@ float ortho_visibility(GpuShadow sh, mat4 m, int offset, vec3 P, SurfaceParams s
 #ifdef HAS_WORLD_OCCLUSION
 layout(binding = TEX_WORLD_MAP) uniform sampler2DArray world_map; /* layer: the map's point.w */
 
-/* 1 where P (normal N) sees the world along u = -side * axis (side +1: where
+/* 1 where P (surface s) sees the world along u = -side * axis (side +1: where
  * the map looks from, -1: the opposite direction), 0 where geometry blocks
  * it. The map holds (-nearest, farthest) depth along the axis. */
 float world_visibility(GpuShadow sh, vec3 P, SurfaceParams s, float side) {
@@ -126,12 +138,10 @@ float world_visibility(GpuShadow sh, vec3 P, SurfaceParams s, float side) {
     vec2 uv = clip.xy * 0.5 + 0.5;
     if (any(lessThan(uv, vec2(0.0))) || any(greaterThan(uv, vec2(1.0)))) return 1.0;
     vec2 stored = texture(world_map, vec3(shadow_map_uv(sh, uv), sh.point.w)).rg;
-    vec2 centre = (floor(uv * res) + 0.5) / res;
-    vec3 line = P + r0 * (2.0 * (centre.x - uv.x) / dot(r0, r0)) + r1 * (2.0 * (centre.y - uv.y) / dot(r1, r1));
-    /* The plane's depth along the axis at the centre's line (either side). */
-    float c = dot(axis, s.Ng);
-    if (abs(c) >= SHADOW_PLANE_MIN_COS) {
-        float d = dot(line, axis) + dot(P - line, s.Ng) / c;
+    /* The plane's depth along the axis at the texel's centre (either side). */
+    bool ok;
+    float d = ortho_plane_depth(P, s.Ng, axis, r0, r1, uv, res, ok);
+    if (ok) {
         float bias = SHADOW_PLANE_BIAS * texel;
         return side > 0.0 ? (d - bias <= -stored.r ? 1.0 : 0.0) : (d + bias >= stored.g ? 1.0 : 0.0);
     }
@@ -139,12 +149,12 @@ float world_visibility(GpuShadow sh, vec3 P, SurfaceParams s, float side) {
     float slope = shadow_bias_scale(s.N, -axis * side, sin_t);
     vec3 Pb = P + s.N * (1.5 * texel * sin_t);
     stored = texture(world_map, vec3(shadow_map_uv(sh, (m * vec4(Pb, 1.0)).xy * 0.5 + 0.5), sh.point.w)).rg;
-    float d = dot(Pb, axis);
+    d = dot(Pb, axis);
     return side > 0.0 ? (d - slope * texel <= -stored.r ? 1.0 : 0.0) : (d + slope * texel >= stored.g ? 1.0 : 0.0);
 }
 #endif
 
-/* 1 where this sample's light point sees P (normal N), 0 in shadow. */
+/* 1 where this sample's light point sees P (surface s), 0 in shadow. */
 float shadow_visibility(int index, vec3 P, SurfaceParams s) {
     GpuShadow sh = shadows[index];
     if (int(sh.params.x) == SHADOW_CASCADES) {

@@ -183,8 +183,36 @@ void EmitterModule::sync(const SceneStore& scene, const glm::dvec3& camera_posit
     }
 }
 
+namespace {
+// Restores what the bake changes of the GL state, also when it throws.
+struct BakeStateGuard {
+    GLint viewport[4];
+    GLboolean depth_test, cull, blend, scissor;
+    BakeStateGuard() {
+        glGetIntegerv(GL_VIEWPORT, viewport);
+        depth_test = glIsEnabled(GL_DEPTH_TEST);
+        cull = glIsEnabled(GL_CULL_FACE);
+        blend = glIsEnabled(GL_BLEND);
+        scissor = glIsEnabled(GL_SCISSOR_TEST);
+        glDisable(GL_DEPTH_TEST);
+        glDisable(GL_CULL_FACE);
+        glDisable(GL_BLEND);
+        glDisable(GL_SCISSOR_TEST);
+    }
+    ~BakeStateGuard() {
+        glBindFramebuffer(GL_FRAMEBUFFER, 0);
+        glViewport(viewport[0], viewport[1], viewport[2], viewport[3]);
+        if (depth_test) glEnable(GL_DEPTH_TEST);
+        if (cull) glEnable(GL_CULL_FACE);
+        if (blend) glEnable(GL_BLEND);
+        if (scissor) glEnable(GL_SCISSOR_TEST);
+    }
+};
+}  // namespace
+
 double EmitterModule::bake(ShaderLibrary& shaders, MaterialModule& materials,
-                           const std::function<void(const EmissionBakeRun& run, GLuint program)>& draw) {
+                           const std::function<void(const EmissionBakeRun& run, GLuint program)>& draw,
+                           std::vector<std::string>& warnings) {
     if (bake_runs_.empty()) return 0.0;
     const auto start = std::chrono::steady_clock::now();
     // The tile edge: the largest T whose T(T + 1)/2 texels per triangle fit the budget.
@@ -214,20 +242,23 @@ double EmitterModule::bake(ShaderLibrary& shaders, MaterialModule& materials,
     for (const EmissionBakeRun& r : bake_runs_) remap.push_back(r.instance);
     Buffer remap_buffer = make_storage_buffer(remap.data(), remap.size() * sizeof(std::uint32_t), "bake remap");
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_INSTANCE_REMAP, remap_buffer.get());
-    std::map<std::uint32_t, GLuint> programs;  // graph -> its bake program
+    // graph -> its bake program; 0 where it does not compile (its triangles
+    // then emit nothing, warned, and the other graphs still bake).
+    std::map<std::uint32_t, GLuint> programs;
     ShaderVariant variant;
     variant.defines.push_back("EMISSION_BAKE");
-    for (const EmissionBakeRun& r : bake_runs_)
-        if (!programs.count(r.graph)) programs[r.graph] = materials.program(shaders, r.graph, variant);
+    for (const EmissionBakeRun& r : bake_runs_) {
+        if (programs.count(r.graph)) continue;
+        try {
+            programs[r.graph] = materials.program(shaders, r.graph, variant);
+        } catch (const Error& e) {
+            programs[r.graph] = 0;
+            warnings.push_back("Material '" + materials.name(r.graph) + "': its emission lights nothing around "
+                               "it (its emission bake did not compile): " + e.what());
+        }
+    }
 
-    GLint viewport[4];
-    glGetIntegerv(GL_VIEWPORT, viewport);
-    const GLboolean depth_test = glIsEnabled(GL_DEPTH_TEST), cull = glIsEnabled(GL_CULL_FACE),
-                    blend = glIsEnabled(GL_BLEND), scissor = glIsEnabled(GL_SCISSOR_TEST);
-    glDisable(GL_DEPTH_TEST);
-    glDisable(GL_CULL_FACE);
-    glDisable(GL_BLEND);
-    glDisable(GL_SCISSOR_TEST);
+    const BakeStateGuard guard;
     glBindFramebuffer(GL_FRAMEBUFFER, fbo.get());
     glViewport(0, 0, width, height);
     texels_.assign(tile_count_ * per_tile * 3, 0.0f);
@@ -246,6 +277,7 @@ double EmitterModule::bake(ShaderLibrary& shaders, MaterialModule& materials,
             part.count = std::uint32_t(hi - lo);
             part.first_tile = std::uint32_t(lo);
             const GLuint program = programs.at(r.graph);
+            if (program == 0) continue;
             glUseProgram(program);
             glUniform1ui(0, std::uint32_t(k));
             glUniform1i(30, int(lo - chunk));
@@ -267,13 +299,12 @@ double EmitterModule::bake(ShaderLibrary& shaders, MaterialModule& materials,
                 }
         }
     }
-    glBindFramebuffer(GL_FRAMEBUFFER, 0);
-    glViewport(viewport[0], viewport[1], viewport[2], viewport[3]);
-    if (depth_test) glEnable(GL_DEPTH_TEST);
-    if (cull) glEnable(GL_CULL_FACE);
-    if (blend) glEnable(GL_BLEND);
-    if (scissor) glEnable(GL_SCISSOR_TEST);
-    check_gl("emission bake");
+    try {
+        check_gl("emission bake");
+    } catch (...) {
+        texels_.clear();  // finish() then lets the baked triangles emit nothing
+        throw;
+    }
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
 

@@ -37,6 +37,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <string>
 #include <vector>
 
 namespace deferred {
@@ -89,11 +90,13 @@ public:
     // `draw` binds the run's mesh and its material's images and attribute
     // layout and draws the run's triangles with the bound program (instance
     // offset uniform 0 = the run's index in the bake's instance remap, which
-    // bake() binds). Returns milliseconds; throws Error when a program does
-    // not compile or GL fails (the caller warns; those triangles emit nothing).
+    // bake() binds). Returns milliseconds. A graph whose bake program does
+    // not compile adds a warning and its triangles emit nothing; a GL
+    // failure throws Error (the caller warns; no baked triangle emits).
     bool needs_bake() const { return !bake_runs_.empty(); }
     double bake(ShaderLibrary& shaders, MaterialModule& materials,
-                const std::function<void(const EmissionBakeRun& run, GLuint program)>& draw);
+                const std::function<void(const EmissionBakeRun& run, GLuint program)>& draw,
+                std::vector<std::string>& warnings);
     // Powers, CDFs and upload; drops lights that emit nothing. Returns the
     // emitting triangles.
     std::size_t finish();

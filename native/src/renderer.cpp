@@ -365,13 +365,31 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     // A world node tree: baked into its environment map (with the sampling
     // distribution) before anything asks whether the world lights the scene.
     // The bake reads the camera (Camera and Window texture coordinates) from the frame block.
+    // The frame block of the bakes (world, emission): the unjittered camera,
+    // for Camera and Window coordinates and the Bump's differential.
+    auto make_bake_frame = [&]() {
+        gpu::FrameConstants f{};
+        f.view = to_gpu(cam.view);
+        f.projection = to_gpu(cam.projection);
+        f.camera_position = {float(cam.position.x), float(cam.position.y), float(cam.position.z),
+                             cam.orthographic ? 1.0f : 0.0f};
+        f.viewport = {float(settings.width), float(settings.height), 1.0f / float(settings.width),
+                      1.0f / float(settings.height)};
+        return make_storage_buffer(&f, sizeof(f), "bake frame");
+    };
+    // A mesh's buffers for vertex pulling (geometry_vert.glsl).
+    auto bind_mesh = [&](const GpuMesh& mesh) {
+        auto bind = [&](GLuint slot, const Buffer& b) {
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, slot, b ? b.get() : dummy_ssbo.get());
+        };
+        bind(SSBO_POSITIONS, mesh.positions);
+        bind(SSBO_INDICES, mesh.indices);
+        bind(SSBO_NORMALS, mesh.normals);
+        bind(SSBO_UVS, mesh.uvs);
+        bind(SSBO_MATERIAL_INDICES, mesh.material_indices);
+    };
     {
-        gpu::FrameConstants bake_frame{};
-        bake_frame.view = to_gpu(cam.view);
-        bake_frame.projection = to_gpu(cam.projection);  // Window coordinates, unjittered
-        bake_frame.camera_position = {float(cam.position.x), float(cam.position.y), float(cam.position.z),
-                                      cam.orthographic ? 1.0f : 0.0f};
-        Buffer bake_buffer = make_storage_buffer(&bake_frame, sizeof(bake_frame), "world bake frame");
+        Buffer bake_buffer = make_bake_frame();
         glBindBufferBase(GL_UNIFORM_BUFFER, UBO_FRAME, bake_buffer.get());
         try {
             result.timings.world_bake_ms = world_module.prepare(*shaders, materials, world_graph);
@@ -399,13 +417,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     // node materials whose emission varies are baked with their graphs.
     emitters.sync(scene, cam.position);
     if (emitters.needs_bake()) {
-        gpu::FrameConstants bake_frame{};
-        bake_frame.view = to_gpu(cam.view);
-        bake_frame.camera_position = {float(cam.position.x), float(cam.position.y), float(cam.position.z),
-                                      cam.orthographic ? 1.0f : 0.0f};
-        bake_frame.viewport = {float(settings.width), float(settings.height), 1.0f / float(settings.width),
-                               1.0f / float(settings.height)};
-        Buffer bake_buffer = make_storage_buffer(&bake_frame, sizeof(bake_frame), "emission bake frame");
+        Buffer bake_buffer = make_bake_frame();
         glBindBufferBase(GL_UNIFORM_BUFFER, UBO_FRAME, bake_buffer.get());
         glBindVertexArray(empty_vao.get());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_INSTANCES, instance_buffer.get());
@@ -416,19 +428,14 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
             result.timings.emission_bake_ms = emitters.bake(
                 *shaders, this->materials, [&](const EmissionBakeRun& run, GLuint) {
                     const GpuMesh& mesh = scene.meshes()[run.mesh];
-                    auto bind = [&](GLuint slot, const Buffer& b) {
-                        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, slot, b ? b.get() : dummy_ssbo.get());
-                    };
-                    bind(SSBO_POSITIONS, mesh.positions);
-                    bind(SSBO_INDICES, mesh.indices);
-                    bind(SSBO_NORMALS, mesh.normals);
-                    bind(SSBO_UVS, mesh.uvs);
-                    bind(SSBO_MATERIAL_INDICES, mesh.material_indices);
-                    bind(SSBO_ATTRIBUTES, mesh.attributes);
+                    bind_mesh(mesh);
+                    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_ATTRIBUTES,
+                                     mesh.attributes ? mesh.attributes.get() : dummy_ssbo.get());
                     this->materials.bind_for_draw(run.graph, mesh);
                     glUniform1ui(1, mesh.flags);
                     glDrawArraysInstanced(GL_TRIANGLES, GLint(run.first * 3), GLsizei(run.count * 3), 1);
-                });
+                },
+                result.warnings);
             result.timings.emission_baked_triangles = emitters.baked_triangles();
         } catch (const Error& e) {
             result.warnings.push_back(std::string("Emissive node materials light nothing around them (their "
@@ -539,16 +546,6 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     const GLuint groups_y = GLuint((settings.height + LIGHTING_GROUP_SIZE - 1) / LIGHTING_GROUP_SIZE);
     double geometry_ms = 0, lighting_ms = 0, passes_ms = 0, culling_ms = 0, shadow_ms = 0, forward_ms = 0;
 
-    auto bind_mesh = [&](const GpuMesh& mesh) {
-        auto bind = [&](GLuint slot, const Buffer& b) {
-            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, slot, b ? b.get() : dummy_ssbo.get());
-        };
-        bind(SSBO_POSITIONS, mesh.positions);
-        bind(SSBO_INDICES, mesh.indices);
-        bind(SSBO_NORMALS, mesh.normals);
-        bind(SSBO_UVS, mesh.uvs);
-        bind(SSBO_MATERIAL_INDICES, mesh.material_indices);
-    };
     auto bind_scene_buffers = [&]() {
         glBindVertexArray(empty_vao.get());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_INSTANCES, instance_buffer.get());

@@ -387,7 +387,10 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
     // its texels, and moving the grid over the samples averages that out (a
     // 1-texel box filter instead of a fixed staircase; Suzanne under a 1
     // degree sun against Cycles, shadow quality 1: see README).
+    // Maps drawn once (a light without size) keep an unshifted grid. The
+    // shifted ones span a texel more, so no receiver leaves the map.
     const glm::dvec2 shift(double(grid[0]) - 0.5, double(grid[1]) - 0.5);
+    auto padded = [](double radius, int resolution) { return radius * (1.0 + 2.0 / double(resolution)); };
     if (entries_.empty()) return;
     ShaderVariant variant;
     variant.defines = caster_defines;
@@ -440,8 +443,8 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
             const std::size_t k = i - std::size_t(world_index_);
             const glm::dvec4 d = k < world_dirs.size() ? world_dirs[k] : glm::dvec4(0.0, 0.0, 1.0, 0.5 / M_PI);
             const glm::dvec3 axis = -glm::dvec3(d);
-            const glm::dmat4 m =
-                ortho_map(axis, receivers_center_, receivers_radius_, camera_.clip_end, shift, e.resolution);
+            const glm::dmat4 m = ortho_map(axis, receivers_center_, padded(receivers_radius_, e.resolution),
+                                           camera_.clip_end, shift, e.resolution);
             g.cascade[0] = to_gpu_mat(m);
             g.point = {float(axis.x), float(axis.y), float(axis.z), float(k)};
             g.params = {float(SHADOW_WORLD), float(e.resolution), float(d.w), 1.0f};
@@ -460,8 +463,11 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
                 axis = -glm::normalize(-axis + t * d.x + b * d.y);
             }
             for (int k = 0; k < SHADOW_CASCADE_COUNT; ++k) {
-                const glm::dmat4 m = ortho_map(axis, cs.center[k], cs.radius[k], camera_.clip_end,
-                                               draw ? shift : glm::dvec2(0.0), e.resolution);
+                const bool shifted = !(e.fixed_point && !casters_vary);
+                const glm::dmat4 m =
+                    shifted ? ortho_map(axis, cs.center[k], padded(cs.radius[k], e.resolution), camera_.clip_end,
+                                        shift, e.resolution)
+                            : ortho_map(axis, cs.center[k], cs.radius[k], camera_.clip_end);
                 g.cascade[k] = to_gpu_mat(m);
                 if (draw)
                     draw_layer(e.first_layer + k, m, glm::dvec3(0.0), SHADOW_CASCADES, axis,

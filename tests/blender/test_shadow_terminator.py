@@ -13,7 +13,9 @@ terminator of smooth low-poly meshes, contact lines, and closed rooms
     Before the receiver-plane comparison and the terminator offset (the
     1.5-texel normal offset and slope bias of up to 10 texels) the same
     cases measured 0.10 / 0.19 (Suzanne, sun / point, offset 0.1) and
-    0.30 / 0.75 (offset 0): the bounds below fail on that code.
+    0.30 / 0.75 (offset 0), and the sphere 7.6e-3 / 3.3e-2 at offset 0:
+    those bounds fail on that code (the sphere at the default offset was
+    already close: 2e-6, 1e-6).
     The Geometry Offset must matter as in Cycles: lowering it to 0 darkens
     the object (the facets near the terminator shadow themselves) in ours
     as in Cycles, by at least a quarter of Cycles' change (measured: a third to two
@@ -42,9 +44,9 @@ import blender_test_utils as U  # noqa: E402
 # relMSE over the object's interior pixels, ours 64 vs Cycles 256 samples
 # (measured: see the printout; the margin is about 1.5x).
 TERMINATOR_LIMITS = {
-    ("sphere", "sun", 0.1): 1e-4, ("sphere", "sun", 0.0): 4e-3,
+    ("sphere", "sun", 0.1): 1e-4, ("sphere", "sun", 0.0): 2e-3,
     ("sphere", "point", 0.1): 1e-4, ("sphere", "point", 0.0): 0.012,
-    ("suzanne", "sun", 0.1): 0.05, ("suzanne", "sun", 0.0): 0.14,
+    ("suzanne", "sun", 0.1): 0.01, ("suzanne", "sun", 0.0): 0.05,
     ("suzanne", "point", 0.1): 0.01, ("suzanne", "point", 0.0): 0.07,
 }
 CONTACT_LIMIT = 0.02   # measured -0.13 % (1878 pixels)

@@ -77,7 +77,8 @@ TEST_F(ShaderErrors, EveryShipedVariantFamilyCompiles) {
     EXPECT_NE(shaders().graphics_program("geometry_vert.glsl", "geometry_frag.glsl", full), 0u);
     ShaderVariant lighting = full;
     lighting.defines.insert(lighting.defines.end(), {"HAS_POINT_LIGHTS", "HAS_SPOT_LIGHTS", "HAS_SUN_LIGHTS",
-                                                     "HAS_AREA_LIGHTS", "OUT_LIGHT_SPLIT"});
+                                                     "HAS_AREA_LIGHTS", "HAS_MESH_LIGHTS", "HAS_EMISSION_TEXELS",
+                                                     "HAS_SHADOWS", "OUT_LIGHT_SPLIT"});
     EXPECT_NE(shaders().compute_program("lighting_comp.glsl", lighting), 0u);
     for (int p = 1; p < int(kPassCount); ++p) {
         ShaderVariant v = full;
@@ -121,11 +122,16 @@ TEST_F(ShaderErrors, EveryNodeFileCompilesInEveryGraphVariant) {
     source += "void material_graph_eval(out Closure surface) { surface = closure_none(); }\n";
     const std::vector<std::vector<std::string>> variants = {
         {},
+        {"GBUF_GEOMETRY"},
         {"FORWARD_PASS", "FORWARD_MAX_LIGHTS 512", "HAS_POINT_LIGHTS", "HAS_SUN_LIGHTS", "HAS_AREA_LIGHTS",
          "HAS_SPOT_LIGHTS", "HAS_SHADOWS", "HAS_WORLD_OCCLUSION"},
-        {"AOV_PASS"},
-        {"SHADOW_PASS"},
+        // Emissive meshes lighting a Blend-mode surface (the forward pass is
+        // a fragment shader: no compute built-ins in the mesh lights' code).
+        {"FORWARD_PASS", "FORWARD_MAX_LIGHTS 512", "HAS_MESH_LIGHTS", "HAS_EMISSION_TEXELS", "HAS_SHADOWS"},
+        {"AOV_PASS", "GBUF_GEOMETRY"},
+        {"SHADOW_PASS", "GBUF_GEOMETRY"},
         {"SHADOW_PASS", "WORLD_MAP"},
+        {"EMISSION_BAKE"},
     };
     for (const std::vector<std::string>& extra : variants) {
         ShaderVariant v;

@@ -10,7 +10,7 @@ and an area light, against Cycles:
   * a constant world-up normal (Combine XYZ (0, 0, 1)) into a diffuse and a
     metal Principled: closure normals are bent by ensure_valid_reflection
     (svm_node_closure_bsdf) before all that (without it: 45 % too dark,
-    the metal black; with it 0.15 % and 1.8 %, see LIMITS);
+    the metal black; with it 0.15 % and 4.7 %, see LIMITS);
   * the smooth normal (control).
 Per sphere (object index, eroded), the mean of ours (64 samples) must be
 within MEAN_LIMIT of Cycles' (256 samples).
@@ -31,10 +31,16 @@ import blender_test_utils as U  # noqa: E402
 
 OUT = U.out_dir("bump_lighting")
 MEAN_LIMIT = 0.01   # measured worst 0.15 %, except:
-# the metal under a bent normal: 1.8 % dark, the share Cycles' BSDF samples
-# (MIS) keep below the smooth normal's horizon, where this engine's light
-# samples give a glossy lobe nothing and it has no BSDF samples of its own.
-LIMITS = {"world-up normal, metal": 0.03}
+# the metal under a bent normal: 4.7 % dark. 1.8 % of it is the share
+# Cycles' BSDF samples (MIS) keep below the smooth normal's horizon, where
+# this engine's light samples give a glossy lobe nothing and it has no BSDF
+# samples of its own. The rest came with the receiver-plane shadow
+# comparison (shadow_lib.glsl): the highlight this normal puts on the
+# sphere's lower edge, where the light meets the facets at grazing angles,
+# is partly shadowed there. Comparing grazing planes (|cos| < 0.25) with the
+# old slope bias instead gives 2.0 % here but loses the shadow terminator
+# (Suzanne under a sun 0.005 -> 0.056 relMSE, blender_shadow_terminator).
+LIMITS = {"world-up normal, metal": 0.06}
 
 
 def principled(nodes, metallic, normal_from):

@@ -45,9 +45,11 @@ class Recorder:
         self.materials.append(params)
         return len(self.materials) - 1
 
-    def add_instances(self, mesh_id, matrices, object_indices=None, material_slots=None, cast_shadow=True):
+    def add_instances(self, mesh_id, matrices, object_indices=None, material_slots=None, cast_shadow=True,
+                      terminator_offsets=None):
         self.instances.append(dict(mesh_id=mesh_id, matrices=matrices, object_indices=object_indices,
-                                   material_slots=list(material_slots or []), cast_shadow=cast_shadow))
+                                   material_slots=list(material_slots or []), cast_shadow=cast_shadow,
+                                   terminator_offsets=terminator_offsets))
 
     def add_light(self, **params):
         self.lights.append(params)

@@ -127,8 +127,10 @@ def object_random(inst, ob):
 def terminator_offset(ob):
     """Cycles' Object > Shading > Shadow Terminator > Geometry Offset (0..1,
     default 0.1): how far shadow rays from smooth-shaded triangles near the
-    terminator start above them (shadow_lib.glsl shadow_ray_origin)."""
-    cycles = getattr(ob, "cycles", None)
+    terminator start above them (shadow_lib.glsl shadow_ray_origin). Read
+    from the original object: reading the add-on's property group on an
+    instancer's temporary object creates ID properties Blender never frees."""
+    cycles = getattr(getattr(ob, "original", None) or ob, "cycles", None)
     value = getattr(cycles, "shadow_terminator_geometry_offset", 0.1) if cycles is not None else 0.1
     try:
         value = float(value)
@@ -460,7 +462,8 @@ class SceneExporter:
         # Object > Visibility > Ray Visibility > Shadow: off, the object
         # blocks no light (Cycles' shadow rays pass it) and no world light.
         cast_shadow = bool(getattr(ob, "visible_shadow", True))
-        shading_offset = getattr(getattr(ob, "cycles", None), "shadow_terminator_offset", 0.0)
+        original = getattr(ob, "original", None) or ob
+        shading_offset = getattr(getattr(original, "cycles", None), "shadow_terminator_offset", 0.0)
         if isinstance(shading_offset, (int, float)) and shading_offset > 0.0:
             self._warn_once(("terminator-shading", ob.name),
                             f"Object '{ob.name}': Shadow Terminator Shading Offset is not rendered "

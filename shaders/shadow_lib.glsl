@@ -85,8 +85,6 @@ vec2 shadow_map_uv(GpuShadow sh, vec2 uv) {
     return clamp(uv, vec2(0.0), vec2(1.0 - 0.5 / sh.params.y)) * sh.params.w;
 }
 
-/* Orthographic map `m` (layer first + offset) along sh.point.xyz, the
- * direction the light travels: a sun cascade or the world's map. */
 /* An orthographic map (rows r0, r1 of its matrix; light travelling along
  * `axis`): the depth along the axis that the receiver's own plane (through
  * P, normal Ng) has on the line through the centre of the texel holding uv
@@ -100,6 +98,8 @@ float ortho_plane_depth(vec3 P, vec3 Ng, vec3 axis, vec3 r0, vec3 r1, vec2 uv, f
     return dot(line, axis) + (ok ? dot(P - line, Ng) / c : 0.0);
 }
 
+/* Orthographic map `m` (layer first + offset) along sh.point.xyz, the
+ * direction the light travels: a sun cascade or the world's map. */
 float ortho_visibility(GpuShadow sh, mat4 m, int offset, vec3 P, SurfaceParams s) {
     vec3 axis = sh.point.xyz;
     float res = sh.params.y;

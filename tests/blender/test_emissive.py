@@ -247,6 +247,17 @@ def main():
                  f"{baked} baked, floor ratio {ratio:.4f}, bake {timings().get('emission_bake_ms', 0):.0f} ms")
     messages = " ".join(m for _, m in U.last_messages())
     checks.check("lights nothing" not in messages, "no warning that textured emission lights nothing", messages[:160])
+
+    # An emission that depends on the view (Layer Weight): Cycles evaluates it
+    # towards every point it lights, the bake along the normal: warned.
+    scene = build("standing", textured=True)
+    nt = bpy.data.materials["emitter"].node_tree
+    weight = nt.nodes.new("ShaderNodeLayerWeight")
+    nt.links.new(weight.outputs["Facing"], nt.nodes["Emission"].inputs["Strength"])
+    render(scene, U.ENGINE, 1, "view_dependent")
+    messages = " ".join(m for _, m in U.last_messages())
+    checks.check("view-dependent nodes (Layer Weight)" in messages,
+                 "a view-dependent emission is warned about", messages[:200])
     checks.finish()
 
 

@@ -384,6 +384,17 @@ def sky_world(checks):
     checks.check("not rendered" not in lights and "sun disc" not in lights, "Nishita sky: no warning", lights[:200])
 
 
+def bare_background(scene):
+    """The world's tree reduced to a Background node named "Background"
+    into the World Output (environment_world links into it)."""
+    nodes = scene.world.node_tree.nodes
+    nodes.clear()
+    out = nodes.new("ShaderNodeOutputWorld")
+    bg = nodes.new("ShaderNodeBackground")
+    bg.name = "Background"
+    scene.world.node_tree.links.new(bg.outputs[0], out.inputs["Surface"])
+
+
 def bad_input(checks):
     scene = reset_scene(64, 64)
     scene.camera.location = (0.0, -4.0, 0.0)
@@ -401,12 +412,7 @@ def bad_input(checks):
     tiny.pack()
     for label, image, strength in (("NaN/Inf/negative texels", bad, 1.0), ("a 1x1 map", tiny, 1.0),
                                    ("strength 1e9", tiny, 1e9)):
-        scene.world.node_tree.nodes.clear()
-        nodes = scene.world.node_tree.nodes
-        out = nodes.new("ShaderNodeOutputWorld")
-        bg = nodes.new("ShaderNodeBackground")
-        bg.name = "Background"
-        scene.world.node_tree.links.new(bg.outputs[0], out.inputs["Surface"])
+        bare_background(scene)
         environment_world(scene, image, strength=strength)
         ours, _ = render(scene, U.ENGINE, 4, "bad_" + image.name)
         messages = " ".join(m for _, m in U.last_messages())
@@ -423,12 +429,7 @@ def bad_input(checks):
     # the white sphere it lights (measured: 20 s, 5.5 GB peak RSS here).
     huge = bpy.data.images.new("huge_hdri", 16384, 8192, float_buffer=True)
     huge.generated_color = (0.25, 0.5, 1.0, 1.0)
-    scene.world.node_tree.nodes.clear()
-    nodes = scene.world.node_tree.nodes
-    out = nodes.new("ShaderNodeOutputWorld")
-    bg = nodes.new("ShaderNodeBackground")
-    bg.name = "Background"
-    scene.world.node_tree.links.new(bg.outputs[0], out.inputs["Surface"])
+    bare_background(scene)
     environment_world(scene, huge)
     scene.objects["Grey"].active_material.node_tree.nodes["Diffuse BSDF"].inputs["Color"].default_value = \
         (1.0, 1.0, 1.0, 1.0)

@@ -410,6 +410,12 @@ def _graph_emits(g):
     return False
 
 
+# Node functions whose value depends on the incoming direction, and their
+# Blender names (for the emission bake's warning).
+_VIEW_NAMES = {"node_fresnel": "Fresnel", "node_layer_weight": "Layer Weight", "node_camera_data": "Camera Data"}
+_VIEW_DEPENDENT = set(_VIEW_NAMES)
+
+
 def _constant_emission(g, surface):
     """The radiance the surface closure emits when the graph makes it a
     constant: an Emission shader or a Principled BSDF (emission x strength x
@@ -527,6 +533,12 @@ def _build(material, images, world=False):
         # Not a constant: the renderer bakes the graph's emission over the
         # emitting triangles (native emitter_module.h) to light other surfaces.
         emission_varies = light_emission is None
+        viewed = sorted({n["func"] for n in g.nodes} & _VIEW_DEPENDENT)
+        if emission_varies and viewed:
+            # Cycles evaluates them towards each shading point it lights; the
+            # bake sees the surface along its normal, once.
+            g.note("its light on other surfaces takes the view-dependent nodes (" +
+                   ", ".join(_VIEW_NAMES[f] for f in viewed) + ") as seen along the surface normal")
     if world:
         used = {n["func"] for n in g.nodes} & WORLD_UNSUPPORTED
         if used:

@@ -33,6 +33,14 @@
 #include "shadow_lib.glsl"
 #endif
 
+/* The pixel being shaded: the lighting pass's invocation, or the forward
+ * pass's fragment (gl_GlobalInvocationID exists in compute shaders only). */
+#ifdef FORWARD_PASS
+uvec2 shading_pixel() { return uvec2(gl_FragCoord.xy); }
+#else
+uvec2 shading_pixel() { return gl_GlobalInvocationID.xy; }
+#endif
+
 struct LightContribution {
     vec3 diffuse; /* radiance through the diffuse group (with albedo) */
     vec3 glossy;
@@ -370,13 +378,6 @@ LightContribution shade_light_unshadowed(GpuLight light, SurfaceParams s, Princi
 }
 
 #ifdef HAS_MESH_LIGHTS
-/* The pixel being shaded: the lighting pass's invocation, or the forward
- * pass's fragment (gl_GlobalInvocationID exists in compute shaders only). */
-#ifdef FORWARD_PASS
-uvec2 shading_pixel() { return uvec2(gl_FragCoord.xy); }
-#else
-uvec2 shading_pixel() { return gl_GlobalInvocationID.xy; }
-#endif
 
 layout(std430, binding = SSBO_EMITTERS) readonly buffer Emitters { GpuEmitterTriangle emitters[]; };
 #ifdef HAS_EMISSION_TEXELS
@@ -598,6 +599,11 @@ LightContribution mesh_light_unoccluded(GpuLight light, SurfaceParams s, Princip
     vec3 to_center = light.position_type.xyz - P;
     float radius = light.direction.w;
     int points = dot(to_center, to_center) < 4.0 * radius * radius ? MESH_LIGHT_SAMPLES_NEAR : MESH_LIGHT_SAMPLES;
+#ifdef SHADOW_RAYS
+    /* Shadow rays: each sample's own visibility (a shadowed mesh light has a
+     * shadow entry, params.w >= 0), so the result is the occluded light. */
+    const bool traced = int(light.params.w) >= 0;
+#endif
     float side = light.axis_y.w;
     /* As for the planar lights: rough lobes (alpha >= 0.25) are wide enough
      * for the light's points alone; mirrors (alpha^2 <= 1e-7) are not lit. */
@@ -624,12 +630,14 @@ LightContribution mesh_light_unoccluded(GpuLight light, SurfaceParams s, Princip
         SphericalTriangle st;
         vec3 L;
         vec2 b;
+        float dist; /* to the sampled point */
         float pdf; /* solid-angle density of this triangle and direction */
         if (emitter_spherical_triangle(p0, e1, e2, st)) {
             L = sample_spherical_triangle(st, vec2(a, u.y));
             vec3 hit;
             emitter_triangle_hit(p0, e1, e2, L, true, hit);
             b = hit.yz;
+            dist = hit.x;
             pdf = p / st.solid_angle;
         } else {
             float sa = sqrt(a);
@@ -638,12 +646,18 @@ LightContribution mesh_light_unoccluded(GpuLight light, SurfaceParams s, Princip
             float d2 = dot(X, X);
             if (!(d2 > 1e-20)) continue;
             L = X * inversesqrt(d2);
+            dist = sqrt(d2);
             float cos_l = abs(dot(n, L)) * inversesqrt(dot(n, n));
             pdf = p * d2 / (t.e1.w * cos_l);
         }
         if (!(pdf > 0.0)) continue;
         float spec_mis = mis ? power_heuristic(n_light, pdf, n_bsdf, principled_specular_pdf(w, N, V, L)) : 1.0;
-        mesh_light_add(r, s, w, N, V, L, emitter_radiance(light, t, b) / (pdf * n_light), spec_mis);
+        float visible = 1.0;
+#ifdef SHADOW_RAYS
+        if (traced) visible = shadow_ray(s, P, L, dist);
+        if (visible <= 0.0) continue;
+#endif
+        mesh_light_add(r, s, w, N, V, L, emitter_radiance(light, t, b) * (visible / (pdf * n_light)), spec_mis);
     }
     if (mis) {
         /* The lobe's directions that can reach the light's bounding sphere,
@@ -672,13 +686,158 @@ LightContribution mesh_light_unoccluded(GpuLight light, SurfaceParams s, Princip
                 vec3 hit;
                 if (spec[j] == vec3(0.0) || !emitter_triangle_hit(p0, e1, e2, Lb[j], false, hit)) continue;
                 float pl = emitter_direction_pdf(p0, e1, e2, t.e2.w, t.e1.w, Lb[j], hit.x);
-                Le[j] += emitter_radiance(light, t, hit.yz) * power_heuristic(n_bsdf, pb[j], n_light, pl);
+                float visible = 1.0;
+#ifdef SHADOW_RAYS
+                if (traced) visible = shadow_ray(s, P, Lb[j], hit.x);
+#endif
+                Le[j] += emitter_radiance(light, t, hit.yz) * (power_heuristic(n_bsdf, pb[j], n_light, pl) * visible);
             }
         }
         for (int j = 0; j < MESH_LIGHT_BSDF_SAMPLES; ++j)
             if (spec[j] != vec3(0.0)) r.glossy += spec[j] * Le[j] / (pb[j] * n_bsdf);
     }
     return r;
+}
+#endif
+
+#ifdef SHADOW_RAYS
+/* This sample's visibility of a light seen as one point per sample: the
+ * sun's disk point the unshadowed term used (frame.sample_shift), a delta
+ * point or spot light. The product with the unshadowed term is exactly that
+ * point's shadowed light. */
+float light_ray_visibility(GpuLight light, vec3 P, SurfaceParams s) {
+    if (int(light.position_type.w) == LIGHT_SUN) {
+        vec3 L = -light.direction.xyz;
+        float tan_r = light.axis_x.w;
+        if (tan_r > 0.0) {
+            vec3 t, bt;
+            make_basis(L, t, bt);
+            vec2 d = concentric_disk(frame.sample_shift.xy) * tan_r;
+            L = normalize(L + t * d.x + bt * d.y);
+        }
+        return shadow_ray(s, P, L, -1.0);
+    }
+    vec3 v = light.position_type.xyz - P;
+    float dist = length(v);
+    return dist > 0.0 ? shadow_ray(s, P, v / dist, dist) : 1.0;
+}
+
+/* Two numbers in [0, 1) per pixel, film sample and `salt`: the R2 sequence
+ * over the samples (Roberts 2018, in 32-bit fixed point), rotated per pixel
+ * and salt by a pcg4d hash (decorrelated pixels: noise, not bands). */
+vec2 light_ray_sequence(uint salt) {
+    uvec4 v = uvec4(shading_pixel(), salt * 0x9E3779B9u + 0x7F4A7C15u, 0x2545F491u);
+    v = v * 1664525u + 1013904223u;
+    v.x += v.y * v.w; v.y += v.z * v.x; v.z += v.x * v.y; v.w += v.y * v.z;
+    v ^= v >> 16u;
+    v.x += v.y * v.w; v.y += v.z * v.x; v.z += v.x * v.y; v.w += v.y * v.z;
+    uvec2 x = v.xy + uint(frame.sample_shift.w) * uvec2(0xC13FA9A9u, 0x91E10DA5u);
+    return vec2(x >> 8u) * (1.0 / 16777216.0);
+}
+
+/* The light a disk or area light's shadows take away this sample, for
+ * shade_planar_light's arguments (c, a, b: centre and half axes relative to
+ * P): the blocked light as a control variate, the way the world's occlusion
+ * is estimated (lighting_lib.glsl): each strategy of the unshadowed term
+ * draws one more sample, and its light times 1 - V (its ray's transmittance)
+ * is subtracted:
+ *  - a point uniform on the light (density 1 / area): f cos Le cos_l A / t^2
+ *    with the specular lobe's power-heuristic weight where the lobe is also
+ *    sampled by direction;
+ *  - that lobe's own GGX direction, where it meets the light, with its weight;
+ *  - a mirror lobe's reflected ray.
+ * Each has the expectation of its strategy's blocked light, so unshadowed
+ * minus this converges to the shadowed integral Cycles computes (an
+ * unbiased estimate, exact where nothing occludes), where the product with
+ * one point's visibility would weigh the light's near and far parts alike
+ * (a bias under large lights). */
+LightContribution planar_light_blocked(vec3 c, vec3 a, vec3 b, bool ellipse, vec3 emit_dir, vec3 radiance,
+                                       GpuLight light, bool spot, uint salt, SurfaceParams s, PrincipledWeights w,
+                                       vec3 P, vec3 N, vec3 V) {
+    LightContribution r;
+    r.diffuse = vec3(0.0);
+    r.glossy = vec3(0.0);
+    float area = ellipse ? M_PI_F * length(a) * length(b) : 4.0 * length(a) * length(b);
+    const bool bsdf_sampling = w.specular != 0.0 && w.alpha2 > 1e-7 && w.alpha2 < 0.0625;
+    vec2 u = light_ray_sequence(salt);
+    vec2 xy = ellipse ? concentric_disk(u) : 2.0 * u - 1.0;
+    vec3 pt = c + a * xy.x + b * xy.y;
+    float t2 = dot(pt, pt);
+    if (t2 > 1e-20) {
+        float t = sqrt(t2);
+        vec3 L = pt / t;
+        float cos_l = -dot(emit_dir, L);
+        if (cos_l > 0.0) {
+            float geom = cos_l / t2 * area;
+            float att = spot ? spot_attenuation(light, -L) : 1.0;
+            float side = smooth_side(s, L);
+            vec3 diff = principled_eval_diffuse(s, w, N, V, L) * att;
+            vec3 spec = principled_specular(w, N, V, L) * side;
+            float cc = principled_clearcoat(w, N, V, L) * side;
+            if (bsdf_sampling) {
+                float ratio = min(principled_specular_pdf(w, N, V, L) * cos_l * area / t2, 1e18);
+                spec *= 1.0 / (1.0 + ratio * ratio);
+            }
+            vec3 gl = (spec + vec3(cc)) * att;
+            if (any(greaterThan(diff + gl, vec3(0.0)))) {
+                float blocked = 1.0 - shadow_ray(s, P, L, t);
+                r.diffuse += diff * (geom * blocked);
+                r.glossy += gl * (geom * blocked);
+            }
+        }
+    }
+    if (bsdf_sampling) {
+        vec3 Lb = sample_ggx_vndf(N, V, sqrt(w.alpha2), light_ray_sequence(salt + 1u));
+        float tb, cos_b;
+        if (emitter_hit(c, a, b, ellipse, emit_dir, Lb, tb, cos_b)) {
+            float pb = principled_specular_pdf(w, N, V, Lb);
+            if (pb > 1e-30) {
+                float ratio = min(tb * tb / (cos_b * area * pb), 1e18);
+                float attb = spot ? spot_attenuation(light, -Lb) : 1.0;
+                vec3 value = principled_specular(w, N, V, Lb) * (attb / pb / (1.0 + ratio * ratio));
+                if (any(greaterThan(value, vec3(0.0)))) r.glossy += value * (1.0 - shadow_ray(s, P, Lb, tb));
+            }
+        }
+    }
+    vec3 mirror = principled_mirror_weight(w, N, V);
+    if (mirror != vec3(0.0)) {
+        vec3 R = reflect(-V, N);
+        float tr, cos_r;
+        if (emitter_hit(c, a, b, ellipse, emit_dir, R, tr, cos_r))
+            r.glossy += mirror * ((spot ? spot_attenuation(light, -R) : 1.0) * (1.0 - shadow_ray(s, P, R, tr)));
+    }
+    r.diffuse *= radiance;
+    r.glossy *= radiance;
+    return r;
+}
+
+/* The blocked light of a sized light (planar_light_blocked with the
+ * unshadowed term's shapes: a sphere light's disk facing P, an area light);
+ * false for a light seen as one point (sun, delta lights). */
+bool light_blocked(GpuLight light, uint salt, SurfaceParams s, PrincipledWeights w, vec3 P, vec3 N, vec3 V,
+                   out LightContribution blocked) {
+    const int type = int(light.position_type.w);
+    if (type == LIGHT_AREA) {
+        vec3 c = light.position_type.xyz - P;
+        float A = light.params.x;
+        blocked = planar_light_blocked(c, light.axis_x.xyz, light.axis_y.xyz, int(light.axis_y.w) == AREA_ELLIPSE,
+                                       light.direction.xyz, light.strength.rgb / (4.0 * A), light, false, salt, s,
+                                       w, P, N, V);
+        return true;
+    }
+    if ((type == LIGHT_POINT || type == LIGHT_SPOT) && light.strength.w > 0.0) {
+        vec3 to_light = light.position_type.xyz - P;
+        float d2 = dot(to_light, to_light);
+        float R = light.strength.w;
+        vec3 L = to_light * inversesqrt(d2);
+        vec3 a, b;
+        make_basis(L, a, b);
+        blocked = planar_light_blocked(to_light, a * R, b * R, true, -L,
+                                       light.strength.rgb / (4.0 * M_PI_F * M_PI_F * R * R), light,
+                                       type == LIGHT_SPOT, salt, s, w, P, N, V);
+        return true;
+    }
+    return false;
 }
 #endif
 
@@ -695,7 +854,7 @@ LightContribution shade_light(GpuLight light, SurfaceParams s, PrincipledWeights
     if (int(light.position_type.w) == LIGHT_MESH) {
         LightContribution r = mesh_light_unoccluded(light, s, w, P, N, V);
         visible = 1.0;
-#ifdef HAS_SHADOWS
+#if defined(HAS_SHADOWS) && !defined(SHADOW_RAYS)
         int shadow = int(light.params.w);
         if (shadow >= 0) {
             float blocked = 1.0 - shadow_visibility(shadow, P, s);
@@ -714,7 +873,19 @@ LightContribution shade_light(GpuLight light, SurfaceParams s, PrincipledWeights
     visible = 1.0;
 #ifdef HAS_SHADOWS
     int shadow = int(light.params.w);
+#ifdef SHADOW_RAYS
+    if (shadow >= 0 && (r.diffuse != vec3(0.0) || r.glossy != vec3(0.0))) {
+        LightContribution blocked;
+        if (light_blocked(light, uint(shadow) * 2u, s, w, P, N, V, blocked)) {
+            r.diffuse -= blocked.diffuse;
+            r.glossy -= blocked.glossy;
+        } else {
+            visible = light_ray_visibility(light, P, s);
+        }
+    }
+#else
     if (shadow >= 0 && (r.diffuse != vec3(0.0) || r.glossy != vec3(0.0))) visible = shadow_visibility(shadow, P, s);
+#endif
 #endif
     return r;
 }

@@ -132,8 +132,14 @@ float screen_space_visibility(vec3 P, vec3 N, vec3 L, float jitter) {
 
 /* Sharp glossy light along L: added with its screen-space visibility where
  * that is known, kept apart for AO otherwise. */
-void add_sharp_glossy(inout vec3 known, inout vec3 unknown, vec3 value, vec3 P, vec3 N, vec3 L, float jitter) {
+void add_sharp_glossy(inout vec3 known, inout vec3 unknown, vec3 value, SurfaceParams s, vec3 P, vec3 N, vec3 L,
+                      float jitter) {
     if (value == vec3(0.0)) return;
+#ifdef SHADOW_RAYS
+    /* Shadow rays: the direction's own ray, as Cycles traces it. */
+    known += value * shadow_ray(s, P, L, -1.0);
+    return;
+#endif
     float v = screen_space_visibility(P, N, L, jitter);
     if (v < 0.0) unknown += value;
     else known += value * v;
@@ -156,7 +162,7 @@ LightContribution world_constant_unoccluded(PrincipledWeights w, SurfaceParams s
     bool sharp = w.alpha2 < GLOSSY_OCCLUSION_MIN_ALPHA2;
     r.diffuse = w.diffuse * diffuse_lobe_albedo(s, NdotV);
     r.glossy = vec3(0.0);
-    add_sharp_glossy(r.glossy, sharp_unknown, principled_mirror_weight(w, N, V) * Lw, P, N, reflect(-V, N), jitter);
+    add_sharp_glossy(r.glossy, sharp_unknown, principled_mirror_weight(w, N, V) * Lw, s, P, N, reflect(-V, N), jitter);
     bool spec_lobe = w.specular != 0.0 && w.alpha2 > 1e-7;
     if (spec_lobe || w.sheen != vec3(0.0)) {
         vec3 T, B;
@@ -169,7 +175,7 @@ LightContribution world_constant_unoccluded(PrincipledWeights w, SurfaceParams s
                     vec3 L = sample_ggx_vndf(N, V, alpha, u);
                     float pdf = principled_specular_pdf(w, N, V, L);
                     vec3 value = pdf > 0.0 ? principled_specular(w, N, V, L) * (0.25 / pdf) * Lw : vec3(0.0);
-                    if (sharp) add_sharp_glossy(r.glossy, sharp_unknown, value, P, N, L, jitter);
+                    if (sharp) add_sharp_glossy(r.glossy, sharp_unknown, value, s, P, N, L, jitter);
                     else r.glossy += value;
                 }
                 if (w.sheen != vec3(0.0)) {
@@ -274,7 +280,7 @@ void world_map_add(inout LightContribution r, inout vec3 sharp_unknown, Principl
     LobeEval e = principled_eval(s, w, N, V, L);
     r.diffuse += e.diffuse * Le;
     vec3 glossy = e.glossy * (Le * smooth_side(s, L));
-    if (w.alpha2 < GLOSSY_OCCLUSION_MIN_ALPHA2) add_sharp_glossy(r.glossy, sharp_unknown, glossy, P, N, L, jitter);
+    if (w.alpha2 < GLOSSY_OCCLUSION_MIN_ALPHA2) add_sharp_glossy(r.glossy, sharp_unknown, glossy, s, P, N, L, jitter);
     else r.glossy += glossy;
 }
 
@@ -296,7 +302,7 @@ LightContribution world_map_unoccluded(PrincipledWeights w, SurfaceParams s, vec
         }
     }
     vec3 R = reflect(-V, N);
-    add_sharp_glossy(r.glossy, sharp_unknown, principled_mirror_weight(w, N, V) * world_light_radiance(R), P, N, R,
+    add_sharp_glossy(r.glossy, sharp_unknown, principled_mirror_weight(w, N, V) * world_light_radiance(R), s, P, N, R,
                      jitter);
     return r;
 }

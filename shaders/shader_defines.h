@@ -31,6 +31,7 @@
 #define SSBO_LIGHT_GROUPS 21     /* light groups: each packed light's group, 0 none (light_module.h) */
 #define SSBO_INSTANCE_GROUPS 22  /* ... each instance's group, for its emission */
 #define SSBO_EMISSION_TEXELS 23   /* textured emitters' baked radiance (emitter_module.h) */
+#define SSBO_RAY_SCENE 24         /* shadow rays' hierarchies and triangles (ray_scene.h, ray_lib.glsl) */
 
 /* Textures sampled by compute passes (G-buffer inputs) */
 #define TEX_DEPTH 0
@@ -86,6 +87,12 @@
  * (multiple importance with its points, light_lib.glsl). */
 #define MESH_LIGHT_BSDF_SAMPLES 2
 #define MESH_LIGHT_MIS_TRIANGLES 64
+/* Shadow rays (ray_scene.h, ray_lib.glsl): levels of a hierarchy at most
+ * (the traversal's stack depth), and node visits per ray at most (llvmpipe
+ * ends all loops of an invocation after 65535 iterations: lighting batches
+ * are sized with this; a ray past it counts as unblocked). */
+#define RAY_MAX_DEPTH 48
+#define RAY_MAX_STEPS 4096
 
 /* Fragment outputs of the geometry pass (G-buffer MRT) */
 #define OUT_EMISSION 0

@@ -44,6 +44,41 @@ vec3 shadow_ray_origin(SurfaceParams s, vec3 P, vec3 L) {
     return P + s.terminator * amount;
 }
 
+layout(std430, binding = SSBO_SHADOWS) readonly buffer Shadows { GpuShadow shadows[]; };
+
+#ifdef SHADOW_RAYS
+/* Shadow rays (settings.shadow_rays): visibility traced against the scene's
+ * triangles (ray_lib.glsl) instead of looked up in maps; the lights' and
+ * the world's sample directions are those the maps would use, so both
+ * methods estimate the same integral, the rays without a map's resolution. */
+#include "ray_lib.glsl"
+
+/* The light passing from surface point P (surface s) along unit L over
+ * distance `dist` (< 0: unbounded): the ray starts at Cycles' shadow
+ * terminator origin, lifted off its own surface by a distance relative to
+ * its camera-relative coordinates (the float precision of the depth buffer's
+ * position and of the triangles), and stops that far short of its end (a
+ * light point on a surface, an emitter's own triangle). */
+float shadow_ray(SurfaceParams s, vec3 P, vec3 L, float dist) {
+    vec3 O = shadow_ray_origin(s, P, L);
+    vec3 Ng = dot(s.Ng, L) < 0.0 ? -s.Ng : s.Ng;
+    float eps = 2e-5 * max(max(abs(O.x), abs(O.y)), max(abs(O.z), 1e-2));
+    O += Ng * eps;
+    float tmax = dist < 0.0 ? 1e30 : dist - 2.0 * eps;
+    if (!(tmax > 0.0)) return 1.0;
+    return ray_transmittance(O, L, tmax);
+}
+
+#ifdef HAS_WORLD_OCCLUSION
+/* 1 where P sees the world along u = -side * axis, 0 where geometry blocks
+ * it (the map-based version below). */
+float world_visibility(GpuShadow sh, vec3 P, SurfaceParams s, float side) {
+    return shadow_ray(s, P, -sh.point.xyz * side, -1.0);
+}
+#endif
+
+#else /* shadow maps */
+
 /* A cube face's ray from the light point `origin` along `dir`: the
  * parameter t where it meets the receiver's own plane (through P, normal
  * Ng), with ok = false where the plane nearly contains the ray or lies
@@ -55,7 +90,6 @@ float receiver_plane_hit(vec3 P, vec3 Ng, vec3 origin, vec3 dir, out bool ok) {
     return t;
 }
 
-layout(std430, binding = SSBO_SHADOWS) readonly buffer Shadows { GpuShadow shadows[]; };
 layout(binding = TEX_SHADOW_MAPS) uniform sampler2DArray shadow_maps;
 
 /* The cube face of direction v (+X -X +Y -Y +Z -Z) and its basis: forward F,
@@ -213,3 +247,4 @@ float shadow_visibility(int index, vec3 P, SurfaceParams s) {
     stored = texture(shadow_maps, vec3(shadow_map_uv(sh, uv), sh.point.w + float(face))).r;
     return (length(vb) - slope * texel <= stored || stored < sh.cascade_split.z) ? 1.0 : 0.0;
 }
+#endif /* SHADOW_RAYS */

@@ -11,6 +11,7 @@ JOB.json (written by run_report.py):
      "eevee": {...}, "cycles": {...} # engine settings (see apply_* below)
      "index_pass": false,            # also keep IndexOB (multilayer EXR; the reference)
      "no_shadows": false,            # nothing occludes: see disable_shadows()
+     "deferred_settings": {...},     # scene.deferred_render properties to set (e.g. shadow_method)
      "renders": [{"samples": 16, "seed": 7, "out": "/abs/x.exr", "min_reps": 1}, ...],
      "results": "/abs/results.json"}
 
@@ -214,6 +215,8 @@ def main():
     apply_eevee(scene, job.get("eevee"))
     if job.get("no_shadows"):
         disable_shadows()
+    for key, value in (job.get("deferred_settings") or {}).items():
+        setattr(scene.deferred_render, key, value)
 
     out = {"engine": engine, "blend": bpy.data.filepath, "width": size[0], "height": size[1],
            "percentage": scene.render.resolution_percentage, "filter_size": scene.render.filter_size,

@@ -10,8 +10,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-COLORS = {"ours": "#d62728", "eevee": "#1f77b4", "cycles": "#2ca02c"}
-MARKERS = {"ours": "o", "eevee": "s", "cycles": "^"}
+COLORS = {"ours": "#d62728", "ours_rays": "#9467bd", "eevee": "#1f77b4", "cycles": "#2ca02c"}
+MARKERS = {"ours": "o", "ours_rays": "D", "eevee": "s", "cycles": "^"}
 
 
 def _engine_rows(rows, key):
@@ -19,7 +19,7 @@ def _engine_rows(rows, key):
 
 
 def _plot_metric(ax, rows, info, labels, metric, noise_key, title):
-    for key in ("ours", "eevee", "cycles"):
+    for key in ("ours", "ours_rays", "eevee", "cycles"):
         rs = _engine_rows(rows, key)
         if not rs:
             continue

@@ -74,8 +74,11 @@ sys.path.insert(0, HERE)
 import metrics  # noqa: E402
 import figures  # noqa: E402
 
-ENGINES = {"ours": "DEFERRED_RENDER", "eevee": "BLENDER_EEVEE", "cycles": "CYCLES"}
-LABEL = {"ours": "Deferred (ours)", "eevee": "EEVEE", "cycles": "Cycles"}
+ENGINES = {"ours": "DEFERRED_RENDER", "ours_rays": "DEFERRED_RENDER", "eevee": "BLENDER_EEVEE", "cycles": "CYCLES"}
+LABEL = {"ours": "Deferred (ours)", "ours_rays": "Deferred, shadow rays", "eevee": "EEVEE", "cycles": "Cycles"}
+# Engine settings per series beyond the scene's own (ours_rays: Shadows = Shadow Rays).
+SERIES_SETTINGS = {"ours_rays": {"deferred_settings": {"shadow_method": "RAYS"}}}
+OURS = ("ours", "ours_rays")
 
 # Per-scene plan. Costs measured on this machine (2 cores, llvmpipe) at
 # 320x180: Cycles ~0.1-0.2 s per sample (many_lights ~0.55 s: 1024 lights);
@@ -85,9 +88,9 @@ LABEL = {"ours": "Deferred (ours)", "eevee": "EEVEE", "cycles": "Cycles"}
 # would cost more than ~1-2 minutes.
 # unocc_spp: the shadow-free reference (cheaper: it only checks ours).
 PLANS = {
-    "showcase":    {"ref_spp": 1024, "unocc_spp": 512, "ours": [1, 4, 16, 64], "eevee": [1, 4, 16, 64],
+    "showcase":    {"ref_spp": 1024, "unocc_spp": 512, "ours_rays": [1, 4, 16, 64, 256], "ours": [1, 4, 16, 64], "eevee": [1, 4, 16, 64],
                     "cycles": [1, 4, 16, 64], "ours_noshadow": [16, 64]},
-    "box_room":    {"ref_spp": 1024, "unocc_spp": 512, "ours": [1, 4, 16, 64], "eevee": [1, 4, 16, 64],
+    "box_room":    {"ref_spp": 1024, "unocc_spp": 512, "ours_rays": [1, 4, 16, 64, 256], "ours": [1, 4, 16, 64], "eevee": [1, 4, 16, 64],
                     "cycles": [1, 4, 16, 64], "ours_noshadow": [16, 64]},
     # many_lights: its 1024 small lights already have use_shadow off; only the
     # moon (0.05 W/m2) casts shadow maps, so no extra shadow-free run.
@@ -95,20 +98,20 @@ PLANS = {
                     "cycles": [1, 4, 16, 64], "ours_noshadow": []},
     "instancing":  {"ref_spp": 512, "unocc_spp": 256, "ours": [1, 4, 16, 64], "eevee": [1, 4, 16],
                     "cycles": [1, 4, 16, 64], "ours_noshadow": [16, 64]},
-    "analytic":    {"ref_spp": 1024, "unocc_spp": 1024, "ours": [1, 4, 16, 64], "eevee": [1, 4, 16, 64],
+    "analytic":    {"ref_spp": 1024, "unocc_spp": 1024, "ours_rays": [1, 4, 16, 64, 256], "ours": [1, 4, 16, 64], "eevee": [1, 4, 16, 64],
                     "cycles": [1, 4, 16, 64], "ours_noshadow": [4, 16, 64]},
     # hdri_studio: lit by an HDRI only (world map, importance sampling,
     # map-drawn occlusion directions); 256 samples show the convergence.
-    "hdri_studio": {"ref_spp": 1024, "unocc_spp": 512, "ours": [1, 4, 16, 64, 256], "eevee": [1, 4, 16, 64],
+    "hdri_studio": {"ref_spp": 1024, "unocc_spp": 512, "ours_rays": [1, 4, 16, 64, 256], "ours": [1, 4, 16, 64, 256], "eevee": [1, 4, 16, 64],
                     "cycles": [1, 4, 16, 64, 256], "ours_noshadow": [64]},
     # sky_sun: a Nishita sky and its sun disc (a sun lamp with shadow
     # cascades); emitters: emissive meshes only (a constant panel, a baked
     # Checker panel, 5000 small triangles); 256 samples show the convergence.
-    "sky_sun":     {"ref_spp": 1024, "unocc_spp": 512, "ours": [1, 4, 16, 64, 256], "eevee": [1, 4, 16, 64],
+    "sky_sun":     {"ref_spp": 1024, "unocc_spp": 512, "ours_rays": [1, 4, 16, 64, 256], "ours": [1, 4, 16, 64, 256], "eevee": [1, 4, 16, 64],
                     "cycles": [1, 4, 16, 64, 256], "ours_noshadow": [64]},
     # emitters: no shadow-free run (its lights are meshes, which have no
     # use_shadow switch: the run shadowed them anyway, mean/ref 1.18).
-    "emitters":    {"ref_spp": 1024, "unocc_spp": 512, "ours": [1, 4, 16, 64, 256], "eevee": [1, 4, 16, 64],
+    "emitters":    {"ref_spp": 1024, "unocc_spp": 512, "ours_rays": [1, 4, 16, 64, 256], "ours": [1, 4, 16, 64, 256], "eevee": [1, 4, 16, 64],
                     "cycles": [1, 4, 16, 64, 256], "ours_noshadow": []},
     # transparency: stochastic alpha (leaf cut-out, panes, a Transparent mix)
     # converging with its partial shadows; 256 samples show the convergence.
@@ -315,11 +318,12 @@ LABEL_NOSHADOW = "Deferred, shadows off"
 
 def measure(args, name, blend, plan):
     runs = {}
-    jobs = [(key, engine, plan[key], {}) for key, engine in ENGINES.items()]
+    jobs = [(key, engine, plan.get(key, []), SERIES_SETTINGS.get(key, {})) for key, engine in ENGINES.items()]
     if not args.no_unoccluded and plan.get("ours_noshadow"):
         jobs.append((UNOCC_KEY, "DEFERRED_RENDER", plan["ours_noshadow"], {"no_shadows": True}))
     for key, engine, counts, extra in jobs:
-        if (key if key in ENGINES else "ours") in args.skip or not counts:
+        if (key if key in ENGINES else "ours") in args.skip or (key == "ours_rays" and "ours" in args.skip) \
+                or not counts:
             continue
         label = LABEL.get(key, LABEL_NOSHADOW)
         rdir = os.path.join(args.out, "renders", name)
@@ -369,7 +373,7 @@ def load_measured(args, name):
             for r in res.get("renders", []):   # the EXRs next to the JSON, wherever --out was then
                 r["out"] = os.path.join(args.out, "renders", name, os.path.basename(r["out"]))
             log_path = os.path.join(args.out, "logs", f"{name}_{key}.log")
-            if key in ("ours", UNOCC_KEY) and os.path.exists(log_path):
+            if key in (*OURS, UNOCC_KEY) and os.path.exists(log_path):
                 attach_deferred_breakdown(res, log_path)
             runs[key] = res
     return runs
@@ -441,8 +445,9 @@ def comparisons(rows, info):
     others' time to our error (RMSE), as ratios other/ours."""
     cs = curves(rows, info)
     out = []
-    for r in sorted((r for r in rows if r["engine"] == "ours"), key=lambda r: r["samples"]):
-        c = {"scene": info["scene"], "samples": r["samples"], "seconds": r["seconds"], "rmse": r["rmse"]}
+    for r in sorted((r for r in rows if r["engine"] in OURS), key=lambda r: (r["engine"], r["samples"])):
+        c = {"scene": info["scene"], "engine": r["engine"], "samples": r["samples"], "seconds": r["seconds"],
+             "rmse": r["rmse"]}
         for key in ("eevee", "cycles"):
             if key not in cs:
                 continue
@@ -568,9 +573,9 @@ def markdown(all_rows, infos, comps, header=""):
              "`slower` = the engine's fastest render is slower than ours; "
              "`never` = below what Cycles can reach against this reference.")
     L.append("")
-    L.append("| scene | ours samples | ours time s | ours RMSE | EEVEE err ratio @ equal time | "
+    L.append("| scene | ours | ours samples | ours time s | ours RMSE | EEVEE err ratio @ equal time | "
              "Cycles err ratio @ equal time | EEVEE time ratio @ equal error | Cycles time ratio @ equal error |")
-    L.append("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
+    L.append("| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
     for c in comps:
         cells = []
         for key in ("eevee", "cycles"):
@@ -579,8 +584,8 @@ def markdown(all_rows, infos, comps, header=""):
         for key in ("eevee", "cycles"):
             cells.append(ratio_text(c.get(f"{key}_time"), c.get(f"{key}_time_kind"), c["seconds"], "time")
                          if f"{key}_time_kind" in c else "–")
-        L.append(f"| {c['scene']} | {c['samples']} | {c['seconds']:.3f} | {fmt(c['rmse'])} | "
-                 + " | ".join(cells) + " |")
+        L.append(f"| {c['scene']} | {'rays' if c.get('engine') == 'ours_rays' else 'maps'} | {c['samples']} | "
+                 f"{c['seconds']:.3f} | {fmt(c['rmse'])} | " + " | ".join(cells) + " |")
     L.append("")
     unocc = [i for i in infos if "unoccluded" in i]
     if unocc:
@@ -601,17 +606,19 @@ def markdown(all_rows, infos, comps, header=""):
                          f"{r['samples']} | {r['seconds']:.3f} | {fmt(r['rmse_unocc'])} | "
                          f"{fmt(r['relmse_unocc'])} | {r['mean_ratio_unocc']:.3f} |")
         L.append("")
-    splits = [r for r in all_rows if r["engine"] == "ours" and r.get("breakdown")]
+    splits = [r for r in all_rows if r["engine"] in OURS and r.get("breakdown")]
     if splits:
         L.append("Where our time goes (the engine's own split, ms, at the most samples):")
         L.append("")
-        L.append("| scene | samples | split |")
-        L.append("| --- | ---: | --- |")
+        L.append("| scene | shadows | samples | split |")
+        L.append("| --- | --- | ---: | --- |")
         for i in infos:
-            rs = [r for r in splits if r["scene"] == i["scene"]]
-            if rs:
-                r = max(rs, key=lambda r: r["samples"])
-                L.append(f"| {i['scene']} | {r['samples']} | {r['breakdown']} |")
+            for key in OURS:
+                rs = [r for r in splits if r["scene"] == i["scene"] and r["engine"] == key]
+                if rs:
+                    r = max(rs, key=lambda r: r["samples"])
+                    L.append(f"| {i['scene']} | {'rays' if key == 'ours_rays' else 'maps'} | {r['samples']} | "
+                             f"{r['breakdown']} |")
         L.append("")
     return "\n".join(L)
 

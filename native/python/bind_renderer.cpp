@@ -221,6 +221,10 @@ void declare_renderer(py::module_& m) {
             d["tile_light_pairs"] = self.last.tile_light_pairs;
             d["shadowed_lights"] = self.last.shadowed_lights;
             d["shadow_lights_dropped"] = self.last.shadow_lights_dropped;
+            d["shadow_rays"] = self.last.shadow_rays;
+            d["ray_build_ms"] = self.last.ray_build_ms;
+            d["ray_scene_bytes"] = self.last.ray_scene_bytes;
+            d["ray_triangles"] = self.last.ray_triangles;
             d["shadow_map_bytes"] = self.last.shadow_map_bytes;
             d["shadow_resolutions"] = self.last.shadow_resolutions;
             d["passes_ms"] = self.last.passes_ms;
@@ -508,7 +512,7 @@ void declare_renderer(py::module_& m) {
              [](PyRenderer& self, const Camera& camera, int width, int height, const std::vector<std::string>& passes,
                 bool film_transparent, float mist_start, float mist_depth, const std::string& mist_falloff,
                 int samples, float filter_width, bool light_culling, float light_threshold, bool shadows,
-                int shadow_resolution, float shadow_quality, float alpha_threshold,
+                int shadow_resolution, float shadow_quality, bool shadow_rays, float alpha_threshold,
                 const std::vector<std::string>& cryptomatte, int cryptomatte_levels,
                 const std::vector<std::pair<std::string, std::string>>& aovs, int light_groups,
                 int preview_interval_ms, const std::string& preview_pass) {
@@ -540,6 +544,7 @@ void declare_renderer(py::module_& m) {
                  s.shadows = shadows;
                  s.shadow_resolution = shadow_resolution;
                  s.shadow_quality = shadow_quality;
+                 s.shadow_rays = shadow_rays;
                  s.alpha_threshold = alpha_threshold;
                  for (const std::string& name : cryptomatte) {
                      bool known = false;
@@ -611,7 +616,7 @@ void declare_renderer(py::module_& m) {
              py::arg("mist_start") = 5.0f, py::arg("mist_depth") = 25.0f, py::arg("mist_falloff") = "QUADRATIC",
              py::arg("samples") = 1, py::arg("filter_width") = 1.5f, py::arg("light_culling") = true,
              py::arg("light_threshold") = 1e-3f, py::arg("shadows") = true, py::arg("shadow_resolution") = 1024,
-             py::arg("shadow_quality") = 1.0f, py::arg("alpha_threshold") = 0.5f,
+             py::arg("shadow_quality") = 1.0f, py::arg("shadow_rays") = false, py::arg("alpha_threshold") = 0.5f,
              py::arg("cryptomatte") = std::vector<std::string>{}, py::arg("cryptomatte_levels") = 6,
              py::arg("aovs") = std::vector<std::pair<std::string, std::string>>{}, py::arg("light_groups") = 0,
              py::arg("preview_interval_ms") = -1, py::arg("preview_pass") = "Combined")

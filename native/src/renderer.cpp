@@ -19,6 +19,7 @@
 #include "render_thread.h"
 #include "scene_store.h"
 #include "shader_library.h"
+#include "ray_scene.h"
 #include "shadow_module.h"
 #include "world_module.h"
 
@@ -45,6 +46,9 @@ constexpr std::uint32_t kLightShapePoints = 16;
 // (quadrature + light points); llvmpipe ends all loops of an invocation after
 // 65535 iterations in total, so 512 lights per dispatch stay well inside.
 constexpr std::uint32_t kLightBatch = 512;
+// ... with shadow rays, whose traversal loops count too (a ray visits tens
+// of nodes, at most RAY_MAX_STEPS; a mesh light traces up to 10 per pixel).
+constexpr std::uint32_t kRayLightBatch = 8;
 // GpuMaterial.base_diffuse.w of a Holdout material (the closure model codes
 // of gbuffer_lib.glsl end at 3); geometry_frag.glsl turns it into a hole.
 constexpr float kClosureHoldout = 4.0f;
@@ -103,6 +107,7 @@ struct Renderer::Impl {
     LightModule lights;
     LightCulling culling;
     ShadowModule shadows;
+    RayScene ray_scene;
     WorldModule world_module;
     EmitterModule emitters;
     ForwardModule forward;
@@ -129,6 +134,7 @@ struct Renderer::Impl {
             lights = LightModule();
             culling = LightCulling();
             shadows = ShadowModule();
+            ray_scene.release();
             world_module.release();
             emitters.release();
             forward.release();
@@ -361,7 +367,21 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
             for (const Material& m : scene.materials()) crypto_materials.push_back(m.crypto);
         cryptomatte.begin(settings, crypto_instances, crypto_materials);
     }
-    shadows.begin_frame(cam, settings.shadow_resolution, settings.shadow_quality, memory_budget_bytes() / 4);
+    // Shadow rays, unless a node material drives alpha (a ray cannot
+    // evaluate its graph): then maps, warned.
+    bool shadow_rays = settings.shadows && settings.shadow_rays;
+    if (shadow_rays)
+        for (const Material& m : scene.materials())
+            if (m.graph >= 0 && this->materials.alpha(std::uint32_t(m.graph))) {
+                const std::string& name = this->materials.name(std::uint32_t(m.graph));
+                result.warnings.push_back("Shadow rays cannot evaluate the alpha of node material '" +
+                                          (name.empty() ? std::string("?") : name) +
+                                          "': this render uses shadow maps");
+                shadow_rays = false;
+                break;
+            }
+    shadows.begin_frame(cam, settings.shadow_resolution, settings.shadow_quality, memory_budget_bytes() / 4,
+                        shadow_rays);
     // A world node tree: baked into its environment map (with the sampling
     // distribution) before anything asks whether the world lights the scene.
     // The bake reads the camera (Camera and Window texture coordinates) from the frame block.
@@ -446,6 +466,48 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     lights.sync(scene.lights(), cam.position, settings.light_threshold, settings.shadows ? &shadows : nullptr,
                 &emitters);
     const bool culled = settings.light_culling && lights.count() >= kCullingMinLights;
+    // The ray scene: every shadow-casting instance, with its slots' alphas
+    // (constant materials; a mix chain averaged, as material_alpha_lib.glsl).
+    shadow_rays = shadow_rays && !shadows.empty();
+    if (shadow_rays) {
+        StageTimer ray_timer;
+        auto chain_alpha = [&](std::uint32_t id) {
+            float alpha = 0.0f, weight = 1.0f;
+            const gpu::GpuMaterial* m = &gpu_materials[id];
+            for (int k = 0; k < 16; ++k) {
+                const float p = m->mix.x >= 0.0f ? m->mix.y : 0.0f;
+                alpha += weight * (1.0f - p) * m->mix.w;
+                weight *= p;
+                if (m->mix.x < 0.0f) break;
+                m = &gpu_materials[std::size_t(m->mix.x)];
+            }
+            return alpha + weight * m->mix.w;
+        };
+        std::vector<RayScene::Instance> casters;
+        for (const InstanceBatch& b : scene.batches()) {
+            if (!b.cast_shadow) continue;
+            const GpuMesh& mesh = scene.meshes()[b.mesh_id];
+            if (mesh.triangle_count == 0) continue;
+            std::vector<float> slot_alpha;
+            for (std::uint32_t id : b.material_slots) slot_alpha.push_back(chain_alpha(id));
+            const std::shared_ptr<const MeshBvh> bvh = mesh_bvh(mesh);
+            for (std::size_t i = 0; i < b.object_indices.size(); ++i) {
+                Mat4d m;
+                std::copy(b.matrices.begin() + long(i * 16), b.matrices.begin() + long(i * 16 + 16), m.begin());
+                glm::dmat4 model = to_glm(m);
+                model[3] = glm::dvec4(glm::dvec3(model[3]) - cam.position, 1.0);
+                casters.push_back({bvh, model, slot_alpha});
+            }
+        }
+        ray_scene.build(casters);
+        ray_scene.upload();
+        result.timings.ray_build_ms = ray_timer.lap_ms();
+        result.timings.ray_scene_bytes = ray_scene.bytes();
+        result.timings.ray_triangles = ray_scene.triangles();
+    } else {
+        ray_scene.release();
+    }
+    result.timings.shadow_rays = shadow_rays;
 
     gpu::FrameConstants fc{};
     fc.view = to_gpu(cam.view);
@@ -523,6 +585,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     if (light_split) lighting_variant.defines.push_back("OUT_LIGHT_SPLIT");
     if (culled) lighting_variant.defines.push_back("LIGHT_CULLING");
     if (!shadows.empty()) lighting_variant.defines.push_back("HAS_SHADOWS");
+    if (shadow_rays) lighting_variant.defines.push_back("SHADOW_RAYS");
     if (shadows.world_index() >= 0) lighting_variant.defines.push_back("HAS_WORLD_OCCLUSION");
     world_module.add_defines(lighting_variant);
     if (ao_pass) lighting_variant.defines.push_back("OUT_AO");
@@ -644,6 +707,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     ShaderVariant forward_variant;
     lights.add_defines(forward_variant);
     if (!shadows.empty()) forward_variant.defines.push_back("HAS_SHADOWS");
+    if (shadow_rays) forward_variant.defines.push_back("SHADOW_RAYS");
     if (shadows.world_index() >= 0) forward_variant.defines.push_back("HAS_WORLD_OCCLUSION");
     world_module.add_defines(forward_variant);
     forward_variant.defines.push_back("FORWARD_PASS");
@@ -1041,7 +1105,9 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         // Shadow maps from this sample's point on each shadowed light, sized
         // at sample 0 from what the visible surfaces need.
         if (!shadows.empty()) {
-            if (sample == 0) {
+            if (sample == 0 && shadow_rays) {
+                shadows.fit({});  // no maps to size
+            } else if (sample == 0) {
                 std::pair<double, double> visible_depths;
                 const auto receivers = visible_receivers(cam, settings.width, settings.height, visible_depths);
                 if (forward_pass || scene_alpha || alpha_graphs) {
@@ -1082,6 +1148,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         }
 
         shadows.bind();
+        ray_scene.bind();
         world_module.bind();
         emitters.bind();
         // Forward pass: Blend-mode surfaces in front of this sample's opaque
@@ -1113,9 +1180,10 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
             glBindImageTexture(IMG_DIFF_LIGHT, diffuse_light.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
             glBindImageTexture(IMG_GLOSS_LIGHT, glossy_light.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
         }
-        for (std::uint32_t begin = 0; begin == 0 || begin < lights.count(); begin += kLightBatch) {
+        const std::uint32_t batch = shadow_rays ? kRayLightBatch : kLightBatch;
+        for (std::uint32_t begin = 0; begin == 0 || begin < lights.count(); begin += batch) {
             if (begin > 0) check_cancel();
-            glUniform2ui(0, begin, begin + kLightBatch);
+            glUniform2ui(0, begin, begin + batch);
             glDispatchCompute(groups_x, groups_y, 1);
             glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
         }

@@ -9,12 +9,15 @@
 #include <deferred/scene.h>
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <utility>
 #include <unordered_map>
 #include <vector>
 
 namespace deferred {
+
+struct MeshBvh;
 
 // Where a named per-corner attribute lives in GpuMesh::attributes.
 struct MeshAttributeLayout {
@@ -39,6 +42,8 @@ struct GpuMesh {
     // out of shadow maps.
     double bound_center[3] = {0.0, 0.0, 0.0};
     double bound_radius = 0.0;
+    // Its ray hierarchy (ray_scene.h), built on first use by shadow rays.
+    mutable std::shared_ptr<const MeshBvh> bvh;
 };
 
 // Input contract of the scene API (README, "Hard cases and bad input").

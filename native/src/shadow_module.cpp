@@ -125,8 +125,9 @@ ShadowModule::CasterTest ortho_casters(const glm::dvec3& axis, const glm::dvec3&
 }  // namespace
 
 void ShadowModule::begin_frame(const CameraMatrices& camera, int max_resolution, float quality,
-                              std::size_t memory_budget) {
+                              std::size_t memory_budget, bool rays) {
     camera_ = camera;
+    rays_ = rays;
     split_near_ = camera.clip_start;
     split_far_ = camera.clip_end;
     resolution_ = std::clamp(max_resolution, 32, 8192);
@@ -211,13 +212,18 @@ std::vector<int> ShadowModule::allocate(std::size_t light_count) {
     auto layers_of = [](const Entry& e) { return e.world ? 0 : e.sun ? SHADOW_CASCADE_COUNT : 6; };
     std::size_t kept = 0;
     layers_ = 0;
-    for (const Entry& e : entries_) {
-        if (layers_ + layers_of(e) > max_layers) break;
-        layers_ += layers_of(e);
-        ++kept;
+    if (rays_) {
+        kept = entries_.size();  // no maps: nothing to fit
+    } else {
+        for (const Entry& e : entries_) {
+            if (layers_ + layers_of(e) > max_layers) break;
+            layers_ += layers_of(e);
+            ++kept;
+        }
+        while (resolution_ > 256 && std::size_t(layers_) * resolution_ * resolution_ * 4 > budget_) resolution_ /= 2;
+        while (kept > 0 && std::size_t(layers_) * resolution_ * resolution_ * 4 > budget_)
+            layers_ -= layers_of(entries_[--kept]);
     }
-    while (resolution_ > 256 && std::size_t(layers_) * resolution_ * resolution_ * 4 > budget_) resolution_ /= 2;
-    while (kept > 0 && std::size_t(layers_) * resolution_ * resolution_ * 4 > budget_) layers_ -= layers_of(entries_[--kept]);
     dropped_ = entries_.size() - kept;
     entries_.resize(kept);
     int layer = 0;
@@ -327,6 +333,7 @@ void ShadowModule::fit(const std::vector<Receiver>& receivers, std::pair<double,
         }
         e.resolution = std::clamp(int(std::ceil(std::min(r, 1e6) / 32.0)) * 32, 32, resolution_);
         e.rendered = false;
+        if (rays_) continue;  // no maps
         if (e.world) {
             if (e.resolution != world_allocated_ || world_count_ != world_layers_) {
                 GLuint id = 0;
@@ -348,6 +355,11 @@ void ShadowModule::fit(const std::vector<Receiver>& receivers, std::pair<double,
         array_resolution = std::max(array_resolution, e.resolution);
     }
     resolution_ = array_resolution;
+    if (rays_) {
+        bytes_ = 0;
+        shadow_buffer_ = make_storage_buffer(nullptr, entries_.size() * sizeof(gpu::GpuShadow), "shadows");
+        return;
+    }
     bytes_ = (layers_ > 0 ? (std::size_t(layers_) + 1) * resolution_ * resolution_ * 4 : 0) +
               std::size_t(world_allocated_) * world_allocated_ * 8 * std::size_t(world_layers_);
     if (layers_ > 0 && (layers_ != allocated_layers_ || resolution_ != allocated_resolution_)) {
@@ -395,17 +407,20 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
     ShaderVariant variant;
     variant.defines = caster_defines;
     variant.defines.push_back("SHADOW_PASS");
-    const GLuint program = shaders.graphics_program("geometry_vert.glsl", "shadow_frag.glsl", variant);
-    glUseProgram(program);
-    glBindFramebuffer(GL_FRAMEBUFFER, fbo_.get());
-    glEnable(GL_DEPTH_TEST);
-    glDepthFunc(GL_GREATER);
-    glDepthMask(GL_TRUE);
-    glDisable(GL_CULL_FACE);
+    if (!rays_) {
+        const GLuint program = shaders.graphics_program("geometry_vert.glsl", "shadow_frag.glsl", variant);
+        glUseProgram(program);
+        glBindFramebuffer(GL_FRAMEBUFFER, fbo_.get());
+        glEnable(GL_DEPTH_TEST);
+        glDepthFunc(GL_GREATER);
+        glDepthMask(GL_TRUE);
+        glDisable(GL_CULL_FACE);
+    }
 
     std::vector<gpu::GpuShadow> shadows(entries_.size());
     auto draw_layer = [&](int layer, const glm::dmat4& view_projection, const glm::dvec3& origin, int kind,
                           const glm::dvec3& axis, const CasterTest& casts) {
+        if (rays_) return;
         glNamedFramebufferTextureLayer(fbo_.get(), GL_COLOR_ATTACHMENT0, maps_.get(), 0, layer);
         const GLenum draw = GL_COLOR_ATTACHMENT0;
         glNamedFramebufferDrawBuffers(fbo_.get(), 1, &draw);
@@ -421,7 +436,7 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
         ++layers_rendered_;
     };
 
-    glEnable(GL_SCISSOR_TEST);
+    if (!rays_) glEnable(GL_SCISSOR_TEST);
     const Cascades cs = cascades();
     std::vector<glm::dvec3> world_axes(std::size_t(world_count_), glm::dvec3(0.0));
     std::vector<glm::dmat4> world_matrices(std::size_t(world_count_), glm::dmat4(0.0));
@@ -433,8 +448,10 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
         // transparent casters are drawn stochastically): keep them.
         const bool draw = !(e.fixed_point && e.rendered && !casters_vary);
         e.rendered = true;
-        glViewport(0, 0, e.resolution, e.resolution);
-        glScissor(0, 0, e.resolution, e.resolution);  // clears too: only the corner in use
+        if (!rays_) {
+            glViewport(0, 0, e.resolution, e.resolution);
+            glScissor(0, 0, e.resolution, e.resolution);  // clears too: only the corner in use
+        }
         const float uv_scale = float(e.resolution) / float(resolution_);
         if (e.world) {
             // This sample's k-th direction of the world (the map also
@@ -515,6 +532,10 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
         }
     }
     glNamedBufferSubData(shadow_buffer_.get(), 0, GLsizeiptr(shadows.size() * sizeof(gpu::GpuShadow)), shadows.data());
+    if (rays_) {
+        check_gl("shadow entries");
+        return;
+    }
     glDisable(GL_SCISSOR_TEST);
     if (world_index_ >= 0) {
         // Nearest and farthest geometry along the axis in one pass: MAX
@@ -555,6 +576,7 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
 void ShadowModule::bind() const {
     if (entries_.empty()) return;
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_SHADOWS, shadow_buffer_.get());
+    if (rays_) return;
     glBindTextureUnit(TEX_SHADOW_MAPS, maps_.get());
     if (world_index_ >= 0) glBindTextureUnit(TEX_WORLD_MAP, world_map_.get());
 }

@@ -50,7 +50,13 @@ public:
     // Per frame: forget last frame's selection.
     // `max_resolution`: texels per face/cascade side at most; `quality`:
     // texels per pixel of the receivers' footprint.
-    void begin_frame(const CameraMatrices& camera, int max_resolution, float quality, std::size_t memory_budget);
+    // `rays`: shadow rays (ray_scene.h) answer visibility instead of maps:
+    // every offered light is kept (no layers, no budget), and the module only
+    // packs each sample's light points and world directions (GpuShadow),
+    // allocating and drawing no map.
+    void begin_frame(const CameraMatrices& camera, int max_resolution, float quality, std::size_t memory_budget,
+                     bool rays = false);
+    bool rays() const { return rays_; }
     // Offers a light; returns false if it cannot shadow anything visible.
     bool offer(std::size_t light_index, const Light& light, const gpu::GpuLight& packed);
     // Offers an emissive mesh's light (LIGHT_MESH, emitting `power` W): a
@@ -135,6 +141,7 @@ private:
     };
     Cascades cascades() const;
     float quality_ = 1.0f;
+    bool rays_ = false;
     int world_index_ = -1;
     int world_count_ = 0;
     glm::dvec3 receivers_center_{0.0};  // bounding sphere of the visible receivers

@@ -1,6 +1,7 @@
-// Shadow maps: no acne on lit planes at grazing angles, a penumbra as wide
-// as geometry predicts, no light leaking under a resting cube, finite
-// output with lights touching or inside geometry.
+// Shadow maps (and shadow rays where named): no acne on lit planes at
+// grazing angles, a penumbra as wide as geometry predicts, no light leaking
+// under a resting cube, finite output with lights touching or inside
+// geometry.
 #include "test_helpers.h"
 
 #include <gtest/gtest.h>
@@ -30,8 +31,10 @@ void add_cube_on_floor(Renderer& r) {
 }
 
 // Combined with and without shadows for the same scene.
-std::pair<FrameResult, FrameResult> render_both(Renderer& r, const Camera& cam, int w, int h, int samples) {
+std::pair<FrameResult, FrameResult> render_both(Renderer& r, const Camera& cam, int w, int h, int samples,
+                                                bool rays = false) {
     RenderSettings s;
+    s.shadow_rays = rays;
     s.width = w;
     s.height = h;
     s.samples = samples;
@@ -96,6 +99,7 @@ void build_edge_scene(Renderer& r, double h, double H, double R) {
 }  // namespace
 
 TEST(Shadows, NoAcneOnLitPlanesAtGrazingAngles) {
+    for (bool rays : {false, true})
     for (LightType type : {LightType::Point, LightType::Spot, LightType::Sun, LightType::Area}) {
         for (double angle : {0.0, 60.0, 80.0, 88.0}) {
             Renderer r;
@@ -110,10 +114,12 @@ TEST(Shadows, NoAcneOnLitPlanesAtGrazingAngles) {
             Camera cam;
             const double eye[3] = {0, -5, 3}, target[3] = {0, 0, 0};
             cam.matrix = tools::look_at(eye, target);
-            auto [with, without] = render_both(r, cam, 96, 64, 4);
+            auto [with, without] = render_both(r, cam, 96, 64, 4, rays);
+            EXPECT_EQ(with.timings.shadow_rays, rays);
             const double frac = acne_fraction(with, without);
-            std::printf("light type %d at %4.0f deg: %.4f %% of lit pixels darkened\n", int(type), angle, 100 * frac);
-            EXPECT_LT(frac, 1e-3) << "type " << int(type) << " angle " << angle;
+            std::printf("%s, light type %d at %4.0f deg: %.4f %% of lit pixels darkened\n", rays ? "rays" : "maps",
+                        int(type), angle, 100 * frac);
+            EXPECT_LT(frac, 1e-3) << (rays ? "rays" : "maps") << " type " << int(type) << " angle " << angle;
         }
     }
 }
@@ -225,6 +231,7 @@ TEST(Shadows, CubeRestingOnThePlaneCastsAnAttachedShadow) {
     // sun; a 1920x1080 view of the cube. On the floor behind the cube
     // (x just beyond its +X face, |y| < 0.4) the shadow must start at the
     // face: the lit gap is measured in pixels along each image row.
+    for (bool rays : {false, true})
     for (LightType type : {LightType::Spot, LightType::Sun}) {
         Renderer r;
         add_cube_on_floor(r);
@@ -248,6 +255,7 @@ TEST(Shadows, CubeRestingOnThePlaneCastsAnAttachedShadow) {
         s.height = 1080;
         s.filter_width = 0.01f;
         s.passes = {Pass::Position};
+        s.shadow_rays = rays;
         FrameResult f = r.render(cam, s);
         const PassImage& c = *f.find(Pass::Combined);
         const PassImage& pos = *f.find(Pass::Position);
@@ -263,9 +271,10 @@ TEST(Shadows, CubeRestingOnThePlaneCastsAnAttachedShadow) {
             }
             worst_gap = std::max(worst_gap, gap);
         }
-        std::printf("cube on plane, light type %d: lit pixels in the attached shadow, worst row %d\n", int(type),
-                    worst_gap);
-        EXPECT_LE(worst_gap, 1) << "light type " << int(type);
+        std::printf("cube on plane (%s), light type %d: lit pixels in the attached shadow, worst row %d\n",
+                    rays ? "rays" : "maps", int(type), worst_gap);
+        // Rays: the exact geometry, no pixel lit.
+        EXPECT_LE(worst_gap, rays ? 0 : 1) << "light type " << int(type);
     }
 }
 

@@ -78,8 +78,10 @@ def _light_settings(scene):
     exposure = float(getattr(scene.view_settings, "exposure", 0.0))
     shadow_resolution = int(getattr(settings, "shadow_resolution", 1024)) if settings is not None else 1024
     shadow_quality = float(getattr(settings, "shadow_quality", 1.0)) if settings is not None else 1.0
+    shadow_rays = settings is not None and getattr(settings, "shadow_method", "MAPS") == "RAYS"
     return {"light_culling": culling, "light_threshold": threshold / (2.0 ** exposure),
-            "shadow_resolution": shadow_resolution, "shadow_quality": shadow_quality}
+            "shadow_resolution": shadow_resolution, "shadow_quality": shadow_quality,
+            "shadow_rays": shadow_rays}
 
 
 def _alpha_threshold(view_layer):

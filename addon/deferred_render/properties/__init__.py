@@ -81,6 +81,19 @@ class DeferredRenderSettings(bpy.types.PropertyGroup):
         max=16.0,
         soft_max=4.0,
     )
+    shadow_method: EnumProperty(
+        name="Shadows",
+        description="How each sample's visibility of a light and of the world is found",
+        items=(
+            ("MAPS", "Shadow Maps",
+             "Rasterised depth maps from each sample's light point (fast; converges to the map's "
+             "resolution, Shadow Quality)"),
+            ("RAYS", "Shadow Rays",
+             "Rays traced against the scene's triangles from each pixel (converges to Cycles' shadows; "
+             "a node material that drives alpha makes the render fall back to maps, with a warning)"),
+        ),
+        default="MAPS",
+    )
     device_index: IntProperty(
         name="Device",
         description=(

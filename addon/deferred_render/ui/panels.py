@@ -55,8 +55,11 @@ class DEFERRED_RENDER_PT_lights(_EnginePanel, bpy.types.Panel):
         row = layout.row()
         row.active = settings.light_culling
         row.prop(settings, "light_threshold")
-        layout.prop(settings, "shadow_quality")
-        layout.prop(settings, "shadow_resolution")
+        layout.prop(settings, "shadow_method")
+        col = layout.column()
+        col.active = settings.shadow_method == "MAPS"
+        col.prop(settings, "shadow_quality")
+        col.prop(settings, "shadow_resolution")
 
 
 class DEFERRED_RENDER_PT_film(_EnginePanel, bpy.types.Panel):

@@ -94,6 +94,12 @@ struct RenderSettings {
     bool shadows = true;
     int shadow_resolution = 1024;
     float shadow_quality = 1.0f;
+    // Shadow rays instead of maps: each sample's visibility of the same light
+    // points and world directions traced against the scene's triangles
+    // (ray_scene.h), so shadows converge to Cycles' without a map's
+    // resolution. A scene with a node material that drives alpha falls back
+    // to maps, warned (a ray cannot evaluate the graph).
+    bool shadow_rays = false;
     // The view layer's Alpha Threshold: Depth, Position, Normal, UV and the
     // indices come from the first surface whose alpha reaches it (Cycles'
     // film_write_data_passes; 0: the first surface whatever its alpha).
@@ -172,6 +178,10 @@ struct FrameTimings {
     std::uint64_t shadow_instances_drawn = 0;  // instances drawn into them (after culling per map)
     std::uint64_t camera_instances_drawn = 0;  // instances in the view frustum, over all samples
     std::size_t shadow_lights_dropped = 0;  // would cast shadows, over the layer/memory limits
+    bool shadow_rays = false;              // visibility came from shadow rays (settings.shadow_rays)
+    double ray_build_ms = 0;               // building the ray hierarchies (meshes new to them, instances)
+    std::size_t ray_scene_bytes = 0;       // the ray scene's buffer
+    std::size_t ray_triangles = 0;         // triangles the rays are traced against (over instances)
     std::size_t gbuffer_bytes = 0;  // G-buffer + pass targets allocated for the frame
     std::size_t programs_compiled = 0;  // GL programs compiled by this render (0: all cached)
     double compile_ms = 0;              // time spent compiling them

@@ -3,6 +3,9 @@
 // Scene: a floor with 16 boxes, a black world (the world's occlusion map is
 // its own row: a grey world and no light); one sample; each light's map
 // size follows its footprint (shadow_quality 1, at most 1024).
+// Shadow rays (settings.shadow_rays) beside the maps, per light type, and
+// the ray hierarchy's build for a mesh of ~1M triangles (first render: the
+// mesh's own hierarchy; second: the instances' only).
 // Usage: deferred_bench_shadows [width height]
 #include "builtin_scenes.h"
 
@@ -40,11 +43,12 @@ Light make(LightType type, double x, double y) {
     return l;
 }
 
-FrameTimings frame(Renderer& r, const Camera& cam, int w, int h, bool shadows) {
+FrameTimings frame(Renderer& r, const Camera& cam, int w, int h, bool shadows, bool rays = false) {
     RenderSettings s;
     s.width = w;
     s.height = h;
     s.shadows = shadows;
+    s.shadow_rays = rays;
     r.render(cam, s);  // warm-up
     return r.render(cam, s).timings;
 }
@@ -61,18 +65,19 @@ int main(int argc, char** argv) {
         cam.lens = 30.0f;
         std::printf("GL: %s, %dx%d, 1 sample (ms, one frame after a warm-up)\n\n", r.gl_info().renderer.c_str(), w,
                     h);
-        std::printf("| light | frame without shadows | frame with shadows | shadow maps | share of frame | texels | map MiB |\n");
-        std::printf("|---|---:|---:|---:|---:|---:|---:|\n");
+        std::printf("| light | frame without shadows | frame with shadows | shadow maps | share of frame | texels | map MiB | frame with shadow rays | rays / maps |\n");
+        std::printf("|---|---:|---:|---:|---:|---:|---:|---:|---:|\n");
         const char* names[] = {"point", "spot", "sun", "area"};
         for (LightType type : {LightType::Point, LightType::Spot, LightType::Sun, LightType::Area}) {
             r.clear_scene();
             build_geometry(r);
             r.add_light(make(type, 2.0, -3.0));
             const FrameTimings off = frame(r, cam, w, h, false), on = frame(r, cam, w, h, true);
-            std::printf("| %s | %.0f | %.0f | %.0f | %.0f %% | %d | %.0f |\n", names[int(type)], off.total_ms,
-                        on.total_ms, on.shadow_ms, 100.0 * on.shadow_ms / on.total_ms,
+            const FrameTimings rays = frame(r, cam, w, h, true, true);
+            std::printf("| %s | %.0f | %.0f | %.0f | %.0f %% | %d | %.0f | %.0f | %.2f |\n", names[int(type)],
+                        off.total_ms, on.total_ms, on.shadow_ms, 100.0 * on.shadow_ms / on.total_ms,
                         on.shadow_resolutions.empty() ? 0 : on.shadow_resolutions[0],
-                        double(on.shadow_map_bytes) / (1 << 20));
+                        double(on.shadow_map_bytes) / (1 << 20), rays.total_ms, rays.total_ms / on.total_ms);
         }
         {
             // The world's occlusion map alone: a grey world, no light.
@@ -82,8 +87,10 @@ int main(int argc, char** argv) {
             grey.color = {0.5f, 0.5f, 0.5f};
             r.set_world(grey);
             const FrameTimings off = frame(r, cam, w, h, false), on = frame(r, cam, w, h, true);
-            std::printf("| world (occlusion map) | %.0f | %.0f | %.0f | %.0f %% | - | %.0f |\n", off.total_ms, on.total_ms,
-                        on.shadow_ms, 100.0 * on.shadow_ms / on.total_ms, double(on.shadow_map_bytes) / (1 << 20));
+            const FrameTimings rays = frame(r, cam, w, h, true, true);
+            std::printf("| world (occlusion map) | %.0f | %.0f | %.0f | %.0f %% | - | %.0f | %.0f | %.2f |\n",
+                        off.total_ms, on.total_ms, on.shadow_ms, 100.0 * on.shadow_ms / on.total_ms,
+                        double(on.shadow_map_bytes) / (1 << 20), rays.total_ms, rays.total_ms / on.total_ms);
         }
         std::printf("\n| shadowed point lights | frame | shadow maps | per light |\n|---:|---:|---:|---:|\n");
         for (int n : {1, 2, 4, 8}) {
@@ -92,6 +99,35 @@ int main(int argc, char** argv) {
             for (int i = 0; i < n; ++i) r.add_light(make(LightType::Point, -6.0 + 12.0 * i / 8, 3.0));
             const FrameTimings on = frame(r, cam, w, h, true);
             std::printf("| %d | %.0f | %.0f | %.0f |\n", n, on.total_ms, on.shadow_ms, on.shadow_ms / n);
+        }
+        {
+            // The ray hierarchy of ~1M triangles (a 708 x 708 grid, 1 002 528
+            // triangles, 4 instances): the first render builds the mesh's
+            // hierarchy, the next ones only the instances'.
+            r.clear_scene();
+            build_geometry(r);
+            tools::MeshArrays grid = tools::make_plane(4.0f, 708);
+            Material m;
+            const std::uint32_t mat = r.add_material(m), gm = r.add_mesh(grid.view());
+            for (int i = 0; i < 4; ++i) {
+                Mat4d t = tools::translation(-4.0 + 8.0 * (i % 2), -4.0 + 8.0 * (i / 2), 2.0);
+                r.add_instances(gm, t.data(), 1, nullptr, {mat});
+            }
+            r.add_light(make(LightType::Sun, 2.0, -3.0));
+            RenderSettings s;
+            s.width = w;
+            s.height = h;
+            s.shadow_rays = true;
+            const FrameTimings first = r.render(cam, s).timings, second = r.render(cam, s).timings;
+            s.shadow_rays = false;
+            r.render(cam, s);
+            const FrameTimings maps = r.render(cam, s).timings;
+            std::printf("\n| ray hierarchy, %zu triangles over the instances | first render: build ms | next render: build ms | "
+                        "buffer MiB | frame with rays | frame with maps |\n|---|---:|---:|---:|---:|---:|\n",
+                        first.ray_triangles);
+            std::printf("| 4 x 1 002 528-triangle grid + 17 boxes | %.0f | %.1f | %.0f | %.0f | %.0f |\n",
+                        first.ray_build_ms, second.ray_build_ms, double(second.ray_scene_bytes) / (1 << 20),
+                        second.total_ms, maps.total_ms);
         }
     } catch (const std::exception& e) {
         std::fprintf(stderr, "error: %s\n", e.what());

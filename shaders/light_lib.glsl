@@ -735,28 +735,25 @@ vec2 light_ray_sequence(uint salt) {
     return vec2(x >> 8u) * (1.0 / 16777216.0);
 }
 
-/* The light a disk or area light's shadows take away this sample, for
- * shade_planar_light's arguments (c, a, b: centre and half axes relative to
- * P): the blocked light as a control variate, the way the world's occlusion
- * is estimated (lighting_lib.glsl): each strategy of the unshadowed term
- * draws one more sample, and its light times 1 - V (its ray's transmittance)
- * is subtracted:
- *  - a point uniform on the light (density 1 / area): f cos Le cos_l A / t^2
- *    with the specular lobe's power-heuristic weight where the lobe is also
- *    sampled by direction;
+/* One more sample of each strategy of a disk or area light's unshadowed
+ * term (shade_planar_light's arguments: c, a, b the centre and half axes
+ * relative to P), unoccluded (F) and traced (D: times each ray's
+ * transmittance):
+ *  - a point uniform on the light (density 1 / area): f cos Le cos_l A / t^2,
+ *    the specular lobe weighted by the power heuristic where that lobe is
+ *    also sampled by direction;
  *  - that lobe's own GGX direction, where it meets the light, with its weight;
  *  - a mirror lobe's reflected ray.
- * Each has the expectation of its strategy's blocked light, so unshadowed
- * minus this converges to the shadowed integral Cycles computes (an
- * unbiased estimate, exact where nothing occludes), where the product with
- * one point's visibility would weigh the light's near and far parts alike
- * (a bias under large lights). */
-LightContribution planar_light_blocked(vec3 c, vec3 a, vec3 b, bool ellipse, vec3 emit_dir, vec3 radiance,
-                                       GpuLight light, bool spot, uint salt, SurfaceParams s, PrincipledWeights w,
-                                       vec3 P, vec3 N, vec3 V) {
-    LightContribution r;
-    r.diffuse = vec3(0.0);
-    r.glossy = vec3(0.0);
+ * Each has the expectation of its strategy's part of the unshadowed term. */
+struct PlanarSamples {
+    LightContribution unoccluded, direct;
+};
+
+PlanarSamples planar_light_samples(vec3 c, vec3 a, vec3 b, bool ellipse, vec3 emit_dir, vec3 radiance,
+                                   GpuLight light, bool spot, uint salt, SurfaceParams s, PrincipledWeights w,
+                                   vec3 P, vec3 N, vec3 V) {
+    PlanarSamples r;
+    r.unoccluded.diffuse = r.unoccluded.glossy = r.direct.diffuse = r.direct.glossy = vec3(0.0);
     float area = ellipse ? M_PI_F * length(a) * length(b) : 4.0 * length(a) * length(b);
     const bool bsdf_sampling = w.specular != 0.0 && w.alpha2 > 1e-7 && w.alpha2 < 0.0625;
     vec2 u = light_ray_sequence(salt);
@@ -771,18 +768,20 @@ LightContribution planar_light_blocked(vec3 c, vec3 a, vec3 b, bool ellipse, vec
             float geom = cos_l / t2 * area;
             float att = spot ? spot_attenuation(light, -L) : 1.0;
             float side = smooth_side(s, L);
-            vec3 diff = principled_eval_diffuse(s, w, N, V, L) * att;
+            vec3 diff = principled_eval_diffuse(s, w, N, V, L) * (att * geom);
             vec3 spec = principled_specular(w, N, V, L) * side;
             float cc = principled_clearcoat(w, N, V, L) * side;
             if (bsdf_sampling) {
                 float ratio = min(principled_specular_pdf(w, N, V, L) * cos_l * area / t2, 1e18);
                 spec *= 1.0 / (1.0 + ratio * ratio);
             }
-            vec3 gl = (spec + vec3(cc)) * att;
+            vec3 gl = (spec + vec3(cc)) * (att * geom);
             if (any(greaterThan(diff + gl, vec3(0.0)))) {
-                float blocked = 1.0 - shadow_ray(s, P, L, t);
-                r.diffuse += diff * (geom * blocked);
-                r.glossy += gl * (geom * blocked);
+                float T = shadow_ray(s, P, L, t);
+                r.unoccluded.diffuse += diff;
+                r.unoccluded.glossy += gl;
+                r.direct.diffuse += diff * T;
+                r.direct.glossy += gl * T;
             }
         }
     }
@@ -795,7 +794,10 @@ LightContribution planar_light_blocked(vec3 c, vec3 a, vec3 b, bool ellipse, vec
                 float ratio = min(tb * tb / (cos_b * area * pb), 1e18);
                 float attb = spot ? spot_attenuation(light, -Lb) : 1.0;
                 vec3 value = principled_specular(w, N, V, Lb) * (attb / pb / (1.0 + ratio * ratio));
-                if (any(greaterThan(value, vec3(0.0)))) r.glossy += value * (1.0 - shadow_ray(s, P, Lb, tb));
+                if (any(greaterThan(value, vec3(0.0)))) {
+                    r.unoccluded.glossy += value;
+                    r.direct.glossy += value * shadow_ray(s, P, Lb, tb);
+                }
             }
         }
     }
@@ -803,41 +805,78 @@ LightContribution planar_light_blocked(vec3 c, vec3 a, vec3 b, bool ellipse, vec
     if (mirror != vec3(0.0)) {
         vec3 R = reflect(-V, N);
         float tr, cos_r;
-        if (emitter_hit(c, a, b, ellipse, emit_dir, R, tr, cos_r))
-            r.glossy += mirror * ((spot ? spot_attenuation(light, -R) : 1.0) * (1.0 - shadow_ray(s, P, R, tr)));
+        if (emitter_hit(c, a, b, ellipse, emit_dir, R, tr, cos_r)) {
+            vec3 value = mirror * (spot ? spot_attenuation(light, -R) : 1.0);
+            r.unoccluded.glossy += value;
+            r.direct.glossy += value * shadow_ray(s, P, R, tr);
+        }
     }
-    r.diffuse *= radiance;
-    r.glossy *= radiance;
+    r.unoccluded.diffuse *= radiance;
+    r.unoccluded.glossy *= radiance;
+    r.direct.diffuse *= radiance;
+    r.direct.glossy *= radiance;
     return r;
 }
 
-/* The blocked light of a sized light (planar_light_blocked with the
- * unshadowed term's shapes: a sphere light's disk facing P, an area light);
- * false for a light seen as one point (sun, delta lights). */
-bool light_blocked(GpuLight light, uint salt, SurfaceParams s, PrincipledWeights w, vec3 P, vec3 N, vec3 V,
-                   out LightContribution blocked) {
+/* The transmittance towards one more point of the light, uniform over its
+ * part above the receiver's horizon (rejection: the first of up to 4
+ * candidates above it; none: 1, the light is about below the horizon). */
+float planar_light_probe(vec3 c, vec3 a, vec3 b, bool ellipse, uint salt, SurfaceParams s, vec3 P) {
+    for (uint k = 0u; k < 4u; ++k) {
+        vec2 u = light_ray_sequence(salt + 2u + k);
+        vec2 xy = ellipse ? concentric_disk(u) : 2.0 * u - 1.0;
+        vec3 v = c + a * xy.x + b * xy.y;
+        float t = length(v);
+        if (!(t > 0.0) || dot(s.N, v) <= 0.0) continue;
+        return shadow_ray(s, P, v / t, t);
+    }
+    return 1.0;
+}
+
+/* A sized light's shadowed light this sample (a sphere light's disk facing
+ * P, an area light), given its unshadowed term U: with F and D the
+ * unoccluded and traced samples (planar_light_samples) and p the
+ * transmittance towards an independent point of the light
+ * (planar_light_probe),
+ *     D + p (U - F).
+ * U - F has expectation 0 and p is independent of it, so this is unbiased
+ * for any p; p picks, per pixel and sample, between the direct estimate D
+ * (exactly 0 where the light is wholly blocked: no light leaks into a
+ * closed room) and the control variate U - (F - D) (exactly U where nothing
+ * blocks it: the noise-free unshadowed term), mixing them in penumbrae.
+ * The maps' product of U and one point's visibility instead weighs the
+ * light's near and far parts alike (a bias under large lights). False for
+ * a light seen as one point (sun, delta lights). */
+bool sized_light_shadowed(GpuLight light, uint salt, SurfaceParams s, PrincipledWeights w, vec3 P, vec3 N,
+                          vec3 V, inout LightContribution r) {
     const int type = int(light.position_type.w);
+    vec3 c, a, b, emit_dir, radiance;
+    bool ellipse = true, spot = false;
     if (type == LIGHT_AREA) {
-        vec3 c = light.position_type.xyz - P;
-        float A = light.params.x;
-        blocked = planar_light_blocked(c, light.axis_x.xyz, light.axis_y.xyz, int(light.axis_y.w) == AREA_ELLIPSE,
-                                       light.direction.xyz, light.strength.rgb / (4.0 * A), light, false, salt, s,
-                                       w, P, N, V);
-        return true;
-    }
-    if ((type == LIGHT_POINT || type == LIGHT_SPOT) && light.strength.w > 0.0) {
-        vec3 to_light = light.position_type.xyz - P;
-        float d2 = dot(to_light, to_light);
+        c = light.position_type.xyz - P;
+        a = light.axis_x.xyz;
+        b = light.axis_y.xyz;
+        ellipse = int(light.axis_y.w) == AREA_ELLIPSE;
+        emit_dir = light.direction.xyz;
+        radiance = light.strength.rgb / (4.0 * light.params.x);
+    } else if ((type == LIGHT_POINT || type == LIGHT_SPOT) && light.strength.w > 0.0) {
+        c = light.position_type.xyz - P;
         float R = light.strength.w;
-        vec3 L = to_light * inversesqrt(d2);
-        vec3 a, b;
+        vec3 L = c * inversesqrt(dot(c, c));
         make_basis(L, a, b);
-        blocked = planar_light_blocked(to_light, a * R, b * R, true, -L,
-                                       light.strength.rgb / (4.0 * M_PI_F * M_PI_F * R * R), light,
-                                       type == LIGHT_SPOT, salt, s, w, P, N, V);
-        return true;
+        a *= R;
+        b *= R;
+        emit_dir = -L;
+        radiance = light.strength.rgb / (4.0 * M_PI_F * M_PI_F * R * R);
+        spot = type == LIGHT_SPOT;
+    } else {
+        return false;
     }
-    return false;
+    PlanarSamples x = planar_light_samples(c, a, b, ellipse, emit_dir, radiance, light, spot, salt, s, w, P, N, V);
+    float p = planar_light_probe(c, a, b, ellipse, salt, s, P);
+    r.diffuse = x.direct.diffuse + (r.diffuse - x.unoccluded.diffuse) * p;
+    r.glossy = x.direct.glossy + (r.glossy - x.unoccluded.glossy) * p;
+    return true;
 }
 #endif
 
@@ -875,13 +914,8 @@ LightContribution shade_light(GpuLight light, SurfaceParams s, PrincipledWeights
     int shadow = int(light.params.w);
 #ifdef SHADOW_RAYS
     if (shadow >= 0 && (r.diffuse != vec3(0.0) || r.glossy != vec3(0.0))) {
-        LightContribution blocked;
-        if (light_blocked(light, uint(shadow) * 2u, s, w, P, N, V, blocked)) {
-            r.diffuse -= blocked.diffuse;
-            r.glossy -= blocked.glossy;
-        } else {
+        if (!sized_light_shadowed(light, uint(shadow) * 8u, s, w, P, N, V, r))
             visible = light_ray_visibility(light, P, s);
-        }
     }
 #else
     if (shadow >= 0 && (r.diffuse != vec3(0.0) || r.glossy != vec3(0.0))) visible = shadow_visibility(shadow, P, s);

@@ -53,20 +53,31 @@ layout(std430, binding = SSBO_SHADOWS) readonly buffer Shadows { GpuShadow shado
  * methods estimate the same integral, the rays without a map's resolution. */
 #include "ray_lib.glsl"
 
-/* The light passing from surface point P (surface s) along unit L over
- * distance `dist` (< 0: unbounded): the ray starts at Cycles' shadow
- * terminator origin, lifted off its own surface by a distance relative to
- * its camera-relative coordinates (the float precision of the depth buffer's
- * position and of the triangles), and stops that far short of its end (a
- * light point on a surface, an emitter's own triangle). */
+/* Float precision around a camera-relative point: the depth buffer's
+ * positions and the triangles' are good to about 1e-6 of their coordinates. */
+float shadow_ray_epsilon(vec3 X) {
+    return 2e-5 * max(max(abs(X.x), abs(X.y)), max(abs(X.z), 1e-2));
+}
+
+/* The light passing from surface point P (surface s) along unit L to the
+ * point at distance `dist` (< 0: unbounded, a direction): the ray starts at
+ * Cycles' shadow terminator origin, lifted off its own surface by
+ * shadow_ray_epsilon, and (bounded) aims from there at the end point and
+ * stops shadow_ray_epsilon short of it, as Cycles re-aims a shadow ray from
+ * its offset origin (keeping the direction would cross a plane containing
+ * the end point, such as an emitter's own triangle, up to eps / cos before
+ * its end). */
 float shadow_ray(SurfaceParams s, vec3 P, vec3 L, float dist) {
     vec3 O = shadow_ray_origin(s, P, L);
     vec3 Ng = dot(s.Ng, L) < 0.0 ? -s.Ng : s.Ng;
-    float eps = 2e-5 * max(max(abs(O.x), abs(O.y)), max(abs(O.z), 1e-2));
-    O += Ng * eps;
-    float tmax = dist < 0.0 ? 1e30 : dist - 2.0 * eps;
+    O += Ng * shadow_ray_epsilon(O);
+    if (dist < 0.0) return ray_transmittance(O, L, 1e30);
+    vec3 X = P + L * dist;
+    vec3 D = X - O;
+    float len = length(D);
+    float tmax = len - shadow_ray_epsilon(X);
     if (!(tmax > 0.0)) return 1.0;
-    return ray_transmittance(O, L, tmax);
+    return ray_transmittance(O, D / len, tmax);
 }
 
 #ifdef HAS_WORLD_OCCLUSION

@@ -37,6 +37,7 @@ PANEL_LIMIT = 0.02    # measured 0.3 %
 SHAPE_LIMIT = 0.03    # closed emitters emit from their outside only (their inside lights
                       # nothing): measured torus +1.0 %, icosphere +1.2 % at 64 samples
 RELMSE_LIMIT = 2e-3   # panel scene, measured 1.1e-4
+RAYS_LIMIT = 0.01     # panel scene with shadow rays, per object (measured +0.06 % floor, -0.21 % cube)
 TEXTURED_LIMIT = 0.04  # per channel at 256 samples; measured within 2 % (the bake: 128 texels per edge)
 
 
@@ -172,6 +173,24 @@ def against_cycles(checks, shape, limit, samples=64, **build_args):
     return rel
 
 
+def rays_against_cycles(checks):
+    """Shadow rays (Shadows: Shadow Rays): the panel scene's floor and cube,
+    which the cube's shadow of the panel's light covers in part, as Cycles
+    lights them; with maps their shadows come from one shared point of the
+    panel per sample (a control variate that misses some occlusion)."""
+    scene = build("panel")
+    scene.deferred_render.shadow_method = "RAYS"
+    ours, index = render(scene, U.ENGINE, 64, "panel_rays")
+    scene.deferred_render.shadow_method = "MAPS"
+    maps, _ = render(scene, U.ENGINE, 64, "panel_maps")
+    cyc, _ = render(scene, "CYCLES", 256, "panel_rays_cycles")
+    for part, k in (("floor", 1), ("cube", 2)):
+        inside = U.interior_mask(index, 2) & (index == k)
+        a, m, b = ours[inside].mean(), maps[inside].mean(), cyc[inside].mean()
+        checks.check(abs(a / b - 1.0) < RAYS_LIMIT, f"panel, shadow rays: the {part} as Cycles lights it (within "
+                     f"{RAYS_LIMIT:.0%})", f"rays {a / b - 1.0:+.2%}, maps {m / b - 1.0:+.2%}")
+
+
 def main():
     checks = U.Checks("test_emissive")
     if not U.require_engine(checks):
@@ -180,6 +199,7 @@ def main():
     checks.check(rel < RELMSE_LIMIT, f"panel: image relMSE < {RELMSE_LIMIT:g}", f"{rel:.2e}")
     for shape in ("torus", "icosphere"):
         checks.run(shape, against_cycles, checks, shape, SHAPE_LIMIT)
+    checks.run("shadow rays", rays_against_cycles, checks)
 
     # A node material whose emission is a constant lights as the constant one.
     scene = build("panel")

@@ -11,6 +11,7 @@
 #include <cstring>
 #include <limits>
 #include <numeric>
+#include <unordered_map>
 
 namespace deferred {
 
@@ -253,7 +254,7 @@ void RayScene::build(const std::vector<Instance>& instances) {
     struct Block {
         std::uint32_t nodes, triangles;
     };
-    std::vector<std::pair<const MeshBvh*, Block>> blocks;
+    std::unordered_map<const MeshBvh*, Block> blocks;
     std::vector<std::size_t> used;  // instances kept
     std::vector<Item> items;
     for (std::size_t i = 0; i < instances.size(); ++i) {
@@ -278,13 +279,12 @@ void RayScene::build(const std::vector<Instance>& instances) {
         it.centroid = (it.lo + it.hi) * 0.5f;
         items.push_back(it);
         used.push_back(i);
-        auto found = std::find_if(blocks.begin(), blocks.end(), [&](const auto& b) { return b.first == inst.bvh.get(); });
-        if (found == blocks.end()) {
+        if (!blocks.count(inst.bvh.get())) {
             Block b{std::uint32_t(data_.size()), 0};
             data_.insert(data_.end(), inst.bvh->nodes.begin(), inst.bvh->nodes.end());
             b.triangles = std::uint32_t(data_.size());
             data_.insert(data_.end(), inst.bvh->triangles.begin(), inst.bvh->triangles.end());
-            blocks.emplace_back(inst.bvh.get(), b);
+            blocks.emplace(inst.bvh.get(), b);
         }
     }
     if (used.empty()) {
@@ -304,7 +304,7 @@ void RayScene::build(const std::vector<Instance>& instances) {
         for (int row = 0; row < 3; ++row)
             r[row] = glm::uvec4(bits(float(inv[0][row])), bits(float(inv[1][row])), bits(float(inv[2][row])),
                                 bits(float(inv[3][row])));
-        const auto found = std::find_if(blocks.begin(), blocks.end(), [&](const auto& b) { return b.first == inst.bvh.get(); });
+        const Block block = blocks.at(inst.bvh.get());
         std::uint32_t alpha_base = 0;
         const bool transparent = std::any_of(inst.slot_alpha.begin(), inst.slot_alpha.end(), [](float a) { return a < 1.0f; });
         if (transparent) {
@@ -317,7 +317,7 @@ void RayScene::build(const std::vector<Instance>& instances) {
             }
             r = &data_[instance_base + k * 4];  // the vector may have moved
         }
-        r[3] = glm::uvec4(found->second.nodes, found->second.triangles, alpha_base, 0u);
+        r[3] = glm::uvec4(block.nodes, block.triangles, alpha_base, 0u);
         triangle_count_ += inst.bvh->triangles.size() / 3;
     }
     const std::uint32_t tlas_base = std::uint32_t(data_.size());

@@ -370,13 +370,13 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     // Shadow rays, unless a node material drives alpha (a ray cannot
     // evaluate its graph): then maps, warned.
     bool shadow_rays = settings.shadows && settings.shadow_rays;
+    std::string rays_fallback;  // the warning, given once something casts shadows
     if (shadow_rays)
         for (const Material& m : scene.materials())
             if (m.graph >= 0 && this->materials.alpha(std::uint32_t(m.graph))) {
                 const std::string& name = this->materials.name(std::uint32_t(m.graph));
-                result.warnings.push_back("Shadow rays cannot evaluate the alpha of node material '" +
-                                          (name.empty() ? std::string("?") : name) +
-                                          "': this render uses shadow maps");
+                rays_fallback = "Shadow rays cannot evaluate the alpha of node material '" +
+                                (name.empty() ? std::string("?") : name) + "': this render uses shadow maps";
                 shadow_rays = false;
                 break;
             }
@@ -466,6 +466,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     lights.sync(scene.lights(), cam.position, settings.light_threshold, settings.shadows ? &shadows : nullptr,
                 &emitters);
     const bool culled = settings.light_culling && lights.count() >= kCullingMinLights;
+    if (!rays_fallback.empty() && !shadows.empty()) result.warnings.push_back(rays_fallback);
     // The ray scene: every shadow-casting instance, with its slots' alphas
     // (constant materials; a mix chain averaged, as material_alpha_lib.glsl).
     shadow_rays = shadow_rays && !shadows.empty();

@@ -887,6 +887,12 @@ bool sized_light_shadowed(GpuLight light, uint salt, SurfaceParams s, Principled
  * the sample's shared point, where its cube map looks from (a control
  * variate, as the world's occlusion: L(x_s) f G (1 - V(x_s)) / p(x_s) has
  * the expectation of the blocked light). */
+/* The unshadowed light of the last shade_light call (a light's own light
+ * before its shadow; an emissive mesh's as returned): the Shadow pass's
+ * denominator, where shade_light returns light already shadowed (shadow
+ * rays on a sized light). */
+LightContribution last_unshadowed;
+
 LightContribution shade_light(GpuLight light, SurfaceParams s, PrincipledWeights w, vec3 P, vec3 N, vec3 V,
                               out float visible) {
 #ifdef HAS_MESH_LIGHTS
@@ -905,10 +911,12 @@ LightContribution shade_light(GpuLight light, SurfaceParams s, PrincipledWeights
             }
         }
 #endif
+        last_unshadowed = r;
         return r;
     }
 #endif
     LightContribution r = shade_light_unshadowed(light, s, w, P, N, V);
+    last_unshadowed = r;
     visible = 1.0;
 #ifdef HAS_SHADOWS
     int shadow = int(light.params.w);

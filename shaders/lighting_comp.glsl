@@ -192,9 +192,8 @@ void main() {
         add_to_group(light_groups[i], (c.diffuse + c.glossy) * visible);
 #endif
 #ifdef OUT_SHADOW
-        float lum = dot(c.diffuse + c.glossy, luminance);
-        lum_unshadowed += lum;
-        lum_shadowed += lum * visible;
+        lum_unshadowed += dot(last_unshadowed.diffuse + last_unshadowed.glossy, luminance);
+        lum_shadowed += dot(c.diffuse + c.glossy, luminance) * visible;
 #endif
     }
 

@@ -56,6 +56,11 @@ float ray_transmittance(vec3 origin, vec3 dir, float tmax) {
                 vec3 o = vec3(dot(m0.xyz, origin) + m0.w, dot(m1.xyz, origin) + m1.w, dot(m2.xyz, origin) + m2.w);
                 vec3 d = vec3(dot(m0.xyz, dir), dot(m1.xyz, dir), dot(m2.xyz, dir));
                 vec3 dinv = ray_safe_inverse(d);
+                /* Hits nearer than the float precision of the object-space
+                 * origin (1e-6 of its largest coordinate) are the ray's own
+                 * surface: a mesh far from its object's origin has coarser
+                 * floats there than the camera-relative lift allows for. */
+                float tmin = 1e-6 * max(max(abs(o.x), abs(o.y)), abs(o.z)) * inversesqrt(dot(d, d));
                 int isp = 0;
                 uint n = 0u;
                 for (;;) {
@@ -84,7 +89,7 @@ float ray_transmittance(vec3 origin, vec3 dir, float tmax) {
                             float v = dot(d, q) * inv_det;
                             if (v < 0.0 || u + v > 1.0) continue;
                             float th = dot(e2, q) * inv_det;
-                            if (!(th > 0.0 && th < tmax)) continue;
+                            if (!(th > tmin && th < tmax)) continue;
                             if (info.z == 0u) return 0.0;
                             T *= 1.0 - uintBitsToFloat(ray_scene[info.z + t0.w / 4u][t0.w % 4u]);
                             if (T <= 0.0) return 0.0;

@@ -276,6 +276,10 @@ void RayScene::build(const std::vector<Instance>& instances) {
         Item it;
         it.lo = glm::vec3(lo - (hi - lo) * 1e-6 - 1e-7);
         it.hi = glm::vec3(hi + (hi - lo) * 1e-6 + 1e-7);
+        for (int k = 0; k < 3; ++k) {  // and at least one float step (a small object far from the camera)
+            it.lo[k] = std::nextafter(it.lo[k], -std::numeric_limits<float>::infinity());
+            it.hi[k] = std::nextafter(it.hi[k], std::numeric_limits<float>::infinity());
+        }
         it.centroid = (it.lo + it.hi) * 0.5f;
         items.push_back(it);
         used.push_back(i);
@@ -365,6 +369,8 @@ float trace_transmittance(const std::vector<glm::uvec4>& scene, const glm::vec3&
                               glm::dot(glm::vec3(m2), origin) + m2.w);
             const glm::vec3 d(glm::dot(glm::vec3(m0), dir), glm::dot(glm::vec3(m1), dir), glm::dot(glm::vec3(m2), dir));
             const glm::vec3 dinv = safe_inverse(d);
+            // As ray_lib.glsl: hits within the float precision of the object-space origin are its own surface.
+            const float tmin = 1e-6f * std::max({std::abs(o.x), std::abs(o.y), std::abs(o.z)}) / glm::length(d);
             const std::uint32_t nodes = r[3].x, tris = r[3].y, alpha = r[3].z;
             std::vector<std::uint32_t> inner{0u};
             while (!inner.empty()) {
@@ -392,7 +398,7 @@ float trace_transmittance(const std::vector<glm::uvec4>& scene, const glm::vec3&
                     const float v = glm::dot(d, q) * inv_det;
                     if (v < 0.0f || u + v > 1.0f) continue;
                     const float th = glm::dot(e2, q) * inv_det;
-                    if (!(th > 0.0f && th < tmax)) continue;
+                    if (!(th > tmin && th < tmax)) continue;
                     if (alpha == 0u) return 0.0f;
                     const std::uint32_t slot = tr[0].w;
                     T *= 1.0f - from_bits(scene[alpha + slot / 4][int(slot % 4)]);

@@ -367,19 +367,75 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
             for (const Material& m : scene.materials()) crypto_materials.push_back(m.crypto);
         cryptomatte.begin(settings, crypto_instances, crypto_materials);
     }
-    // Shadow rays, unless a node material drives alpha (a ray cannot
-    // evaluate its graph): then maps, warned.
+    // Shadow rays, unless a shadow-casting node material drives alpha (a ray
+    // cannot evaluate its graph) or the ray scene outgrows a storage block:
+    // then maps, warned (once something casts shadows).
     bool shadow_rays = settings.shadows && settings.shadow_rays;
-    std::string rays_fallback;  // the warning, given once something casts shadows
-    if (shadow_rays)
-        for (const Material& m : scene.materials())
-            if (m.graph >= 0 && this->materials.alpha(std::uint32_t(m.graph))) {
-                const std::string& name = this->materials.name(std::uint32_t(m.graph));
-                rays_fallback = "Shadow rays cannot evaluate the alpha of node material '" +
-                                (name.empty() ? std::string("?") : name) + "': this render uses shadow maps";
-                shadow_rays = false;
-                break;
+    std::string rays_fallback;
+    if (shadow_rays) {
+        for (const InstanceBatch& b : scene.batches()) {
+            if (!b.cast_shadow || !rays_fallback.empty()) continue;
+            for (std::uint32_t id : b.material_slots) {
+                // The slot's material and its mix chain.
+                for (std::int64_t k = id, n = 0; k >= 0 && n < 16; ++n) {
+                    const Material& m = scene.materials()[std::size_t(k)];
+                    if (m.graph >= 0 && this->materials.alpha(std::uint32_t(m.graph))) {
+                        const std::string& name = this->materials.name(std::uint32_t(m.graph));
+                        rays_fallback = "Shadow rays cannot evaluate the alpha of node material '" +
+                                        (name.empty() ? std::string("?") : name) + "': this render uses shadow maps";
+                    }
+                    k = m.mix_with;
+                }
             }
+        }
+        shadow_rays = rays_fallback.empty();
+    }
+    // The ray scene: every shadow-casting instance, with its slots' alphas
+    // (constant materials; a mix chain averaged, as material_alpha_lib.glsl).
+    if (shadow_rays) {
+        StageTimer ray_timer;
+        auto chain_alpha = [&](std::uint32_t id) {
+            float alpha = 0.0f, weight = 1.0f;
+            const gpu::GpuMaterial* m = &gpu_materials[id];
+            for (int k = 0; k < 16; ++k) {
+                const float p = m->mix.x >= 0.0f ? m->mix.y : 0.0f;
+                alpha += weight * (1.0f - p) * m->mix.w;
+                weight *= p;
+                if (m->mix.x < 0.0f) break;
+                m = &gpu_materials[std::size_t(m->mix.x)];
+            }
+            return alpha + weight * m->mix.w;
+        };
+        std::vector<RayScene::Instance> casters;
+        for (const InstanceBatch& b : scene.batches()) {
+            if (!b.cast_shadow) continue;
+            const GpuMesh& mesh = scene.meshes()[b.mesh_id];
+            if (mesh.triangle_count == 0) continue;
+            std::vector<float> slot_alpha;
+            for (std::uint32_t id : b.material_slots) slot_alpha.push_back(chain_alpha(id));
+            const std::shared_ptr<const MeshBvh> bvh = mesh_bvh(mesh);
+            for (std::size_t i = 0; i < b.object_indices.size(); ++i) {
+                Mat4d m;
+                std::copy(b.matrices.begin() + long(i * 16), b.matrices.begin() + long(i * 16 + 16), m.begin());
+                glm::dmat4 model = to_glm(m);
+                model[3] = glm::dvec4(glm::dvec3(model[3]) - cam.position, 1.0);
+                casters.push_back({bvh, model, slot_alpha});
+            }
+        }
+        ray_scene.build(casters);
+        GLint64 max_block = 0;
+        glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &max_block);
+        if (max_block > 0 && ray_scene.bytes() > std::size_t(max_block)) {
+            rays_fallback = "Shadow rays: the scene's " + std::to_string(ray_scene.triangles()) + " triangles need " +
+                            std::to_string(ray_scene.bytes() >> 20) + " MiB, over this GPU's " +
+                            std::to_string(max_block >> 20) + " MiB storage block: this render uses shadow maps";
+            ray_scene.release();
+            shadow_rays = false;
+        } else {
+            ray_scene.upload();
+        }
+        result.timings.ray_build_ms = ray_timer.lap_ms();
+    }
     shadows.begin_frame(cam, settings.shadow_resolution, settings.shadow_quality, memory_budget_bytes() / 4,
                         shadow_rays);
     // A world node tree: baked into its environment map (with the sampling
@@ -467,42 +523,9 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
                 &emitters);
     const bool culled = settings.light_culling && lights.count() >= kCullingMinLights;
     if (!rays_fallback.empty() && !shadows.empty()) result.warnings.push_back(rays_fallback);
-    // The ray scene: every shadow-casting instance, with its slots' alphas
-    // (constant materials; a mix chain averaged, as material_alpha_lib.glsl).
+    // Nothing casts a shadow: no rays either.
     shadow_rays = shadow_rays && !shadows.empty();
     if (shadow_rays) {
-        StageTimer ray_timer;
-        auto chain_alpha = [&](std::uint32_t id) {
-            float alpha = 0.0f, weight = 1.0f;
-            const gpu::GpuMaterial* m = &gpu_materials[id];
-            for (int k = 0; k < 16; ++k) {
-                const float p = m->mix.x >= 0.0f ? m->mix.y : 0.0f;
-                alpha += weight * (1.0f - p) * m->mix.w;
-                weight *= p;
-                if (m->mix.x < 0.0f) break;
-                m = &gpu_materials[std::size_t(m->mix.x)];
-            }
-            return alpha + weight * m->mix.w;
-        };
-        std::vector<RayScene::Instance> casters;
-        for (const InstanceBatch& b : scene.batches()) {
-            if (!b.cast_shadow) continue;
-            const GpuMesh& mesh = scene.meshes()[b.mesh_id];
-            if (mesh.triangle_count == 0) continue;
-            std::vector<float> slot_alpha;
-            for (std::uint32_t id : b.material_slots) slot_alpha.push_back(chain_alpha(id));
-            const std::shared_ptr<const MeshBvh> bvh = mesh_bvh(mesh);
-            for (std::size_t i = 0; i < b.object_indices.size(); ++i) {
-                Mat4d m;
-                std::copy(b.matrices.begin() + long(i * 16), b.matrices.begin() + long(i * 16 + 16), m.begin());
-                glm::dmat4 model = to_glm(m);
-                model[3] = glm::dvec4(glm::dvec3(model[3]) - cam.position, 1.0);
-                casters.push_back({bvh, model, slot_alpha});
-            }
-        }
-        ray_scene.build(casters);
-        ray_scene.upload();
-        result.timings.ray_build_ms = ray_timer.lap_ms();
         result.timings.ray_scene_bytes = ray_scene.bytes();
         result.timings.ray_triangles = ray_scene.triangles();
     } else {

@@ -291,6 +291,18 @@ TEST(Shadows, ShadowPassIsShadowedOverUnshadowedLight) {
     const PassImage& sh = *f.find(Pass::Shadow);
     EXPECT_NEAR(pixel3(sh, 4, 4).x, 0.0, 1e-6);   // under the blocker (x ~ -0.7)
     EXPECT_NEAR(pixel3(sh, 60, 4).x, 1.0, 1e-6);  // in the open (x ~ +0.7)
+    // Shadow rays with a sized light (radius 0.1: penumbra +-0.033 m around
+    // the edge), whose shadowed light comes back from the lighting already
+    // shadowed: the pass still divides by the unshadowed light.
+    Renderer rr;
+    build_edge_scene(rr, 0.5, 2.0, 0.1);
+    s.shadow_rays = true;
+    s.samples = 4;
+    FrameResult fr = rr.render(deferred::testing::top_down_ortho(0.3, 1.6f), s);
+    EXPECT_TRUE(fr.timings.shadow_rays);
+    const PassImage& shr = *fr.find(Pass::Shadow);
+    EXPECT_NEAR(pixel3(shr, 4, 4).x, 0.0, 1e-6);
+    EXPECT_NEAR(pixel3(shr, 60, 4).x, 1.0, 1e-5);
 }
 
 namespace {

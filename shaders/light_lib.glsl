@@ -276,6 +276,21 @@ void make_basis(vec3 n, out vec3 t, out vec3 bt) {
     bt = cross(n, t);
 }
 
+/* This sample's direction towards the sun: one point of its disk
+ * (angular radius atan(axis_x.w)), uniform over the tangent disk as Cycles'
+ * distant_light_sample; sample 0 looks at the centre. */
+vec3 sun_sample_direction(GpuLight light) {
+    vec3 L = -light.direction.xyz;
+    float tan_r = light.axis_x.w;
+    if (tan_r > 0.0) {
+        vec3 t, bt;
+        make_basis(L, t, bt);
+        vec2 d = concentric_disk(frame.sample_shift.xy) * tan_r;
+        L = normalize(L + t * d.x + bt * d.y);
+    }
+    return L;
+}
+
 LightContribution shade_light_unshadowed(GpuLight light, SurfaceParams s, PrincipledWeights w, vec3 P, vec3 N,
                                          vec3 V) {
     LightContribution r;
@@ -313,14 +328,8 @@ LightContribution shade_light_unshadowed(GpuLight light, SurfaceParams s, Princi
         /* One point of the sun's disk per sample (angular radius in
          * strength.w), uniform over the tangent disk as Cycles'
          * distant_light_sample; sample 0 looks at the centre. */
-        vec3 L = -light.direction.xyz;
         float tan_r = light.axis_x.w;
-        if (tan_r > 0.0) {
-            vec3 t, bt;
-            make_basis(L, t, bt);
-            vec2 d = concentric_disk(frame.sample_shift.xy) * tan_r;
-            L = normalize(L + t * d.x + bt * d.y);
-        }
+        vec3 L = sun_sample_direction(light);
         LobeEval e = principled_eval(s, w, N, V, L);
         r.diffuse = e.diffuse * S;
         /* A sharp specular lobe also samples its own direction, combined with
@@ -707,15 +716,7 @@ LightContribution mesh_light_unoccluded(GpuLight light, SurfaceParams s, Princip
  * point's shadowed light. */
 float light_ray_visibility(GpuLight light, vec3 P, SurfaceParams s) {
     if (int(light.position_type.w) == LIGHT_SUN) {
-        vec3 L = -light.direction.xyz;
-        float tan_r = light.axis_x.w;
-        if (tan_r > 0.0) {
-            vec3 t, bt;
-            make_basis(L, t, bt);
-            vec2 d = concentric_disk(frame.sample_shift.xy) * tan_r;
-            L = normalize(L + t * d.x + bt * d.y);
-        }
-        return shadow_ray(s, P, L, -1.0);
+        return shadow_ray(s, P, sun_sample_direction(light), -1.0);
     }
     vec3 v = light.position_type.xyz - P;
     float dist = length(v);

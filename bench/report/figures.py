@@ -137,7 +137,7 @@ def _interior(labels, radius=1):
     return ok
 
 
-def per_object(path, name, rows, images, info, ref, engines=("ours", "eevee", "cycles"),
+def per_object(path, name, rows, images, info, ref, engines=("ours", "ours_rays", "eevee", "cycles"),
                min_pixels=40, label="reference"):
     """Mean Combined per object (Cycles' IndexOB of the reference, interior
     pixels only, so edges do not count) of each engine at its most samples,

@@ -523,8 +523,8 @@ def objects_markdown(objects):
     L = ["", "Per object (IndexOB of the reference, interior pixels): mean Combined of each engine at its "
          "most samples over the reference's (sum of RGB; per channel in objects/<scene>.csv). "
          "`ours/unocc`: ours with shadows off against the unoccluded reference.", "",
-         "| scene | pass index | objects | pixels | ours/ref | EEVEE/ref | Cycles/ref | ours/unocc |",
-         "| --- | ---: | --- | ---: | ---: | ---: | ---: | ---: |"]
+         "| scene | pass index | objects | pixels | ours/ref | ours rays/ref | EEVEE/ref | Cycles/ref | ours/unocc |",
+         "| --- | ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: |"]
     unocc = {(o["scene"], o["pass_index"]): o for o in objects if o["against"] == "unoccluded"}
     for o in objects:
         if o["against"] == "unoccluded":
@@ -532,7 +532,7 @@ def objects_markdown(objects):
         u = unocc.get((o["scene"], o["pass_index"]), {})
         u = {"ours_ratio": u.get(f"{UNOCC_KEY}_ratio", u.get("ours_ratio"))} if u else {}
         L.append(f"| {o['scene']} | {o['pass_index']} | {o['objects'][:48]} | {o['pixels']} | "
-                 + " | ".join(f"{o[k]:.3f}" if k in o else "–" for k in ("ours_ratio", "eevee_ratio", "cycles_ratio"))
+                 + " | ".join(f"{o[k]:.3f}" if k in o else "–" for k in ("ours_ratio", "ours_rays_ratio", "eevee_ratio", "cycles_ratio"))
                  + (f" | {u['ours_ratio']:.3f} |" if u.get("ours_ratio") is not None else " | – |"))
     L.append("")
     return "\n".join(L)

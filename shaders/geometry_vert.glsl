@@ -23,6 +23,15 @@ layout(std430, binding = SSBO_INSTANCE_REMAP) readonly buffer Remap { uint insta
 /* Shadow maps (shadow_frag.glsl): camera-relative world -> the face's clip space. */
 layout(location = 2) uniform mat4 shadow_view_projection;
 #endif
+#ifdef MOTION_PASS
+/* The Vector pass (motion_module.h): each instance's previous and next model
+ * matrix (camera-relative to this frame's camera), and a deforming mesh's
+ * previous then next vertex positions (mesh_flags 8; object space). */
+layout(std430, binding = SSBO_INSTANCE_MOTION) readonly buffer InstanceMotion { mat4 instance_motion[]; };
+layout(std430, binding = SSBO_MOTION_POSITIONS) readonly buffer MotionPositions { float motion_positions[]; };
+out vec3 v_position_previous;  /* camera-relative world, this frame's camera */
+out vec3 v_position_next;
+#endif
 #ifdef EMISSION_BAKE
 /* Textured emission (emitter_module.h): each emitting triangle is drawn into
  * its own T x T tile of the bake target, corners 0, 1, 2 at the tile's
@@ -87,6 +96,19 @@ void main() {
     vec3 p = vec3(positions[3u * vi], positions[3u * vi + 1u], positions[3u * vi + 2u]);
     vec4 world = inst.model * vec4(p, 1.0);
     v_position = world.xyz;
+#ifdef MOTION_PASS
+    {
+        vec3 p_previous = p, p_next = p;
+        if ((mesh_flags & 8u) != 0u) {
+            const uint next = uint(motion_positions.length()) / 2u;  /* 3 x vertex count */
+            p_previous = vec3(motion_positions[3u * vi], motion_positions[3u * vi + 1u], motion_positions[3u * vi + 2u]);
+            p_next = vec3(motion_positions[next + 3u * vi], motion_positions[next + 3u * vi + 1u],
+                          motion_positions[next + 3u * vi + 2u]);
+        }
+        v_position_previous = (instance_motion[2u * instance] * vec4(p_previous, 1.0)).xyz;
+        v_position_next = (instance_motion[2u * instance + 1u] * vec4(p_next, 1.0)).xyz;
+    }
+#endif
 #ifdef SHADOW_PASS
     gl_Position = shadow_view_projection * world;
 #elif defined(EMISSION_BAKE)

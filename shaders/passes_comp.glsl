@@ -10,8 +10,9 @@
  * Cycles). DiffDir/GlossDir accumulate their colour during the samples and
  * RESOLVE_LIGHT divides the accumulated light by it at the end, as Cycles
  * divides the accumulated passes; RESOLVE_SHADOW turns the accumulated
- * shadowed/unshadowed luminance into the Shadow pass. Compiled only for the
- * passes requested. */
+ * shadowed/unshadowed luminance into the Shadow pass, RESOLVE_MOTION divides
+ * the Vector pass's summed motion by its count (motion_module.h). Compiled
+ * only for the passes requested. */
 #include "frame_lib.glsl"
 #include "gbuffer_lib.glsl"
 #include "bsdf_lib.glsl"
@@ -42,6 +43,9 @@ layout(binding = TEX_GLOSS_LIGHT) uniform sampler2D glossy_light;
 #ifdef RESOLVE_SHADOW
 layout(binding = TEX_SHADOW_LIGHT) uniform sampler2D shadow_light;
 #endif
+#ifdef RESOLVE_MOTION
+layout(binding = TEX_MOTION_WEIGHT) uniform sampler2D motion_count;
+#endif
 
 layout(binding = IMG_PASS_OUT, rgba32f) uniform image2D pass_out;
 
@@ -62,7 +66,12 @@ void main() {
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(pixel, ivec2(frame.viewport.xy)))) return;
 
-#if defined(RESOLVE_SHADOW)
+#if defined(RESOLVE_MOTION)
+    /* Vector: the motion summed over the samples that saw a surface, divided
+     * by their count (Cycles' pass_motion_weight); 0 where none did. */
+    float n = texelFetch(motion_count, pixel, 0).r;
+    imageStore(pass_out, pixel, n > 0.0 ? imageLoad(pass_out, pixel) / n : vec4(0.0));
+#elif defined(RESOLVE_SHADOW)
     /* Shadow: shadowed over unshadowed direct-light luminance, 1 where no light arrives. */
     vec2 l = texelFetch(shadow_light, pixel, 0).xy;
     imageStore(pass_out, pixel, vec4(vec3(l.y > 0.0 ? l.x / l.y : 1.0), 0.0));
@@ -123,6 +132,8 @@ void main() {
     value = vec4(1.0); /* written by the RESOLVE_SHADOW variant */
 #elif PASS_ID == PASS_AO
     value = vec4(1.0); /* accumulated by the lighting pass */
+#elif PASS_ID == PASS_VECTOR
+    value = vec4(0.0); /* drawn by the motion module, divided by RESOLVE_MOTION */
 #else
 #error "passes_comp.glsl: unknown PASS_ID"
 #endif

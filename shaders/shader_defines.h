@@ -32,6 +32,8 @@
 #define SSBO_INSTANCE_GROUPS 22  /* ... each instance's group, for its emission */
 #define SSBO_EMISSION_TEXELS 23   /* textured emitters' baked radiance (emitter_module.h) */
 #define SSBO_RAY_SCENE 24         /* shadow rays' hierarchies and triangles (ray_scene.h, ray_lib.glsl) */
+#define SSBO_INSTANCE_MOTION 25   /* Vector pass: each instance's previous and next model matrix (motion_module.h) */
+#define SSBO_MOTION_POSITIONS 26  /* ... a deforming mesh's previous, then next vertex positions */
 
 /* Textures sampled by compute passes (G-buffer inputs) */
 #define TEX_DEPTH 0
@@ -54,6 +56,9 @@
  * pass; the unit is TEX_SHADOW_LIGHT's, which only the Shadow resolve reads,
  * after the sample loop (units from 16 on are the materials' images). */
 #define TEX_FORWARD_LAYER 11
+/* The Vector pass's sample count per pixel, read by its resolve after the
+ * sample loop: TEX_SHADOW_LIGHT's unit again, in a dispatch of its own. */
+#define TEX_MOTION_WEIGHT 11
 /* Node materials: image slot k of the drawn material at unit TEX_MATERIAL_IMAGE0 + k */
 #define TEX_MATERIAL_IMAGE0 16
 
@@ -121,6 +126,7 @@
 #define PASS_ENV 13
 #define PASS_SHADOW 14
 #define PASS_AO 15
+#define PASS_VECTOR 16
 
 /* Compute workgroup size (8x8 pixels) */
 #define LIGHTING_GROUP_SIZE 8

@@ -260,7 +260,7 @@ void declare_renderer(py::module_& m) {
              [](PyRenderer& self, const py::object& positions, const py::object& indices,
                 const py::object& corner_normals, const py::object& corner_uvs,
                 const py::object& material_indices, const py::object& attributes, const py::object& texspace_location,
-                const py::object& texspace_size, const std::string& key) {
+                const py::object& texspace_size, const std::string& key, const py::object& motion_positions) {
                  MeshData mesh;
                  py::ssize_t nv = 0, nt = 0, n = 0;
                  mesh.positions = borrow<float>(positions, "positions", {-1, 3}, &nv);
@@ -305,13 +305,18 @@ void declare_renderer(py::module_& m) {
                  }
                  if (!texspace_location.is_none()) mesh.texspace_location = vec3_from(texspace_location, "texspace_location");
                  if (!texspace_size.is_none()) mesh.texspace_size = vec3_from(texspace_size, "texspace_size");
+                 if (!motion_positions.is_none())
+                     mesh.motion_positions = borrow<float>(motion_positions, "motion_positions", {2, nv, 3});
                  py::gil_scoped_release release;
                  return self.get().add_mesh(mesh, key);
              },
              py::arg("positions"), py::arg("indices"), py::kw_only(), py::arg("corner_normals") = py::none(),
              py::arg("corner_uvs") = py::none(), py::arg("material_indices") = py::none(),
              py::arg("attributes") = py::none(), py::arg("texspace_location") = py::none(),
-             py::arg("texspace_size") = py::none(), py::arg("key") = std::string())
+             py::arg("texspace_size") = py::none(), py::arg("key") = std::string(),
+             py::arg("motion_positions") = py::none(),
+             "motion_positions: float32 (2, V, 3), a deforming mesh's vertices at the previous and the next "
+             "frame (the Vector pass), object space, in the order of positions.")
         .def("find_mesh",
              [](PyRenderer& self, const std::string& key) -> py::object {
                  std::int64_t id;
@@ -415,7 +420,8 @@ void declare_renderer(py::module_& m) {
              [](PyRenderer& self, const py::object& mesh_id_obj, const py::object& matrices,
                 const py::object& object_indices, const py::object& material_slots, bool cast_shadow,
                 const py::object& colors_obj, const py::object& randoms_obj, const py::object& crypto_obj,
-                bool holdout, std::uint32_t light_group, const py::object& terminator_obj) {
+                bool holdout, std::uint32_t light_group, const py::object& terminator_obj,
+                const py::object& motion_obj) {
                  const std::uint32_t mesh_id = index_from(mesh_id_obj, "add_instances: mesh_id");
                  py::ssize_t n = 0, k = 0;
                  const double* rows = borrow<double>(matrices, "matrices", {-1, 4, 4}, &n);
@@ -447,18 +453,30 @@ void declare_renderer(py::module_& m) {
                  const float* terminator = nullptr;
                  if (!terminator_obj.is_none())
                      terminator = borrow<float>(terminator_obj, "terminator_offsets", {n});
+                 std::vector<double> motion;
+                 if (!motion_obj.is_none()) {
+                     const double* m = borrow<double>(motion_obj, "motion", {n, 2, 4, 4});
+                     motion.resize(std::size_t(n) * 32);
+                     for (py::ssize_t i = 0; i < 2 * n; ++i)
+                         for (int r = 0; r < 4; ++r)
+                             for (int c = 0; c < 4; ++c)
+                                 motion[std::size_t(i * 16 + c * 4 + r)] = m[i * 16 + r * 4 + c];
+                 }
                  py::gil_scoped_release release;
                  self.get().add_instances(mesh_id, cols.data(), std::size_t(n), ids, slots, cast_shadow, colors, randoms,
-                                          crypto, holdout, light_group, terminator);
+                                          crypto, holdout, light_group, terminator,
+                                          motion.empty() ? nullptr : motion.data());
              },
              py::arg("mesh_id"), py::arg("matrices"), py::kw_only(), py::arg("object_indices") = py::none(),
              py::arg("material_slots") = py::none(), py::arg("cast_shadow") = true, py::arg("colors") = py::none(),
              py::arg("randoms") = py::none(), py::arg("crypto") = py::none(), py::arg("holdout") = false,
              py::arg("light_group") = 0u, py::arg("terminator_offsets") = py::none(),
+             py::arg("motion") = py::none(),
              "crypto: uint32 (n, 2), each instance's Cryptomatte object and asset hashes (MurmurHash3_32 of "
              "the names). holdout: the instances are holes in the image (Object > Visibility > Holdout). "
              "terminator_offsets: float32 (n,), each instance's Shadow Terminator Geometry Offset (Cycles' "
-             "object setting; 0, the default here, moves no shadow ray).")
+             "object setting; 0, the default here, moves no shadow ray). motion: float64 (n, 2, 4, 4), each "
+             "instance's world matrices at the previous and the next frame (the Vector pass).")
         .def("add_light",
              [](PyRenderer& self, const std::string& type, const py::object& matrix, const py::object& color,
                 float energy, float radius, float spot_size, float spot_blend, float angle, const std::string& shape,

@@ -67,7 +67,8 @@ void declare_scene(py::module_& m) {
         .def(py::init([](const std::string& type, const py::object& matrix, float lens, float sensor_width,
                          float sensor_height, const std::string& sensor_fit, float shift_x, float shift_y,
                          float clip_start, float clip_end, float ortho_scale, float pixel_aspect_x,
-                         float pixel_aspect_y, const py::object& fov, const py::object& viewplane) {
+                         float pixel_aspect_y, const py::object& fov, const py::object& viewplane,
+                         const py::object& motion) {
                  Camera c;
                  c.type = enum_from_name<CameraType>(
                      type, {{"PERSP", CameraType::Perspective}, {"ORTHO", CameraType::Orthographic}}, "Camera.type");
@@ -102,6 +103,14 @@ void declare_scene(py::module_& m) {
                          throw py::value_error("Camera.viewplane: needs left < right and bottom < top");
                      std::copy(v.begin(), v.end(), c.viewplane.begin());
                  }
+                 if (!motion.is_none()) {
+                     // (previous, next) world matrices, as `matrix`.
+                     const py::tuple t = motion.cast<py::tuple>();
+                     if (t.size() != 2) throw py::value_error("Camera.motion: expected (previous, next) matrices");
+                     c.matrix_previous = matrix_from_python(t[0], "Camera.motion[0]");
+                     c.matrix_next = matrix_from_python(t[1], "Camera.motion[1]");
+                     c.has_motion = true;
+                 }
                  return c;
              }),
              py::kw_only(), py::arg("type") = "PERSP", py::arg("matrix") = py::none(), py::arg("lens") = 50.0f,
@@ -109,7 +118,7 @@ void declare_scene(py::module_& m) {
              py::arg("shift_x") = 0.0f, py::arg("shift_y") = 0.0f, py::arg("clip_start") = 0.1f,
              py::arg("clip_end") = 100.0f, py::arg("ortho_scale") = 6.0f, py::arg("pixel_aspect_x") = 1.0f,
              py::arg("pixel_aspect_y") = 1.0f, py::arg("fov") = py::none(),
-             py::arg("viewplane") = py::none())
+             py::arg("viewplane") = py::none(), py::arg("motion") = py::none())
         .def_readwrite("lens", &Camera::lens)
         .def_readwrite("clip_start", &Camera::clip_start)
         .def_readwrite("clip_end", &Camera::clip_end);

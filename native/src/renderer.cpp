@@ -4,6 +4,7 @@
 #include <deferred/renderer.h>
 
 #include "aov_module.h"
+#include "motion_module.h"
 #include "camera.h"
 #include "cryptomatte_module.h"
 #include "egl_context.h"
@@ -113,6 +114,7 @@ struct Renderer::Impl {
     ForwardModule forward;
     CryptomatteModule cryptomatte;
     AovModule aovs;
+    MotionModule motion;
     ProgressivePreview preview;
     std::int32_t world_graph = -1;  // the world's node graph in `materials`, -1: a constant colour
     VertexArray empty_vao;
@@ -140,6 +142,7 @@ struct Renderer::Impl {
             forward.release();
             cryptomatte.release();
             aovs.release();
+            motion.release();
             scene.release_all();
             materials.release_all();
             shaders.reset();
@@ -285,7 +288,8 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         throw InvalidInput("light_groups must be in 0.." + std::to_string(kMaxLightGroups) + ", got " +
                            std::to_string(settings.light_groups));
     per_pixel += 16 * std::size_t(settings.light_groups) + (settings.light_groups > 0 ? 16 : 0);
-    check_settings(settings, pixels * per_pixel + 2 * CryptomatteModule::bytes(settings) + AovModule::bytes(settings));
+    check_settings(settings, pixels * per_pixel + 2 * CryptomatteModule::bytes(settings) + AovModule::bytes(settings) +
+                                 (wanted.contains(Pass::Vector) ? MotionModule::bytes(settings) : 0));
 
     FrameResult result;
     StageTimer timer;
@@ -463,6 +467,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         bind(SSBO_NORMALS, mesh.normals);
         bind(SSBO_UVS, mesh.uvs);
         bind(SSBO_MATERIAL_INDICES, mesh.material_indices);
+        bind(SSBO_MOTION_POSITIONS, mesh.motion_positions);
     };
     {
         Buffer bake_buffer = make_bake_frame();
@@ -797,6 +802,15 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         }
         aovs.begin(settings.aovs, settings.width, settings.height, gbuffer.depth_texture());
     }
+    // The Vector pass: every instance's and the camera's motion (motion_module.h).
+    GLuint motion_program = 0;
+    for (auto& [p, image] : pass_images) {
+        if (p != Pass::Vector) continue;
+        motion.begin(scene, camera_in, cam, settings.width, settings.height, image.get(), gbuffer.depth_texture());
+        ShaderVariant motion_variant;
+        motion_variant.defines.push_back("MOTION_PASS");
+        motion_program = shaders->graphics_program("geometry_vert.glsl", "motion_frag.glsl", motion_variant);
+    }
     // Draws the slot ranges of the visible instances that use node material `id`.
     auto draw_graph_material = [&](std::uint32_t id, GLuint program) {
         const Material& material = scene.materials()[id];
@@ -890,13 +904,22 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         return inside(v.x, left, right) && inside(v.y, bottom, top);
     };
     auto draw_scene = [&]() { camera_instances_drawn += draw_geometry(in_view); };
+    // The Vector pass's share of this sample: the visible instances again,
+    // against the depth of the G-buffer just drawn.
+    auto draw_motion = [&]() {
+        if (!motion.active()) return;
+        motion.bind(motion_program);
+        gbuffer.bind_textures();
+        draw_culled(in_view, false);
+        motion.end_draws();
+    };
     // Data passes (Depth, Position, Normal, UV, indices) follow the Alpha
     // Threshold, not the stochastic coverage: with transparency in the scene
     // they come from a G-buffer of their own each sample, where a surface
     // stays when its alpha reaches the threshold.
     auto is_data_pass = [](Pass p) {
         return p == Pass::Depth || p == Pass::Position || p == Pass::Normal || p == Pass::UV ||
-               p == Pass::IndexOB || p == Pass::IndexMA;
+               p == Pass::IndexOB || p == Pass::IndexMA || p == Pass::Vector;
     };
     bool data_gbuffer = false, data_every_sample = false;
     if (scene_alpha || alpha_graphs)
@@ -918,8 +941,9 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         // Filtered passes every sample, the rest at sample 0.
         for (auto& [p, image] : pass_images) {
             const bool first_only = pass_from_first_sample(p);
-            // Shadow: resolved below; AO: accumulated by the lighting pass.
-            if ((first_only && sample > 0) || p == Pass::Shadow || p == Pass::AO) continue;
+            // Shadow: resolved below; AO: accumulated by the lighting pass;
+            // Vector: drawn by the motion module.
+            if ((first_only && sample > 0) || p == Pass::Shadow || p == Pass::AO || p == Pass::Vector) continue;
             if (data_gbuffer && is_data_pass(p) != data) continue;
             glUseProgram(pass_program(p, first_only ? nullptr : "ACCUMULATE"));
             gbuffer.bind_textures();
@@ -1036,7 +1060,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     GLuint preview_image = film.get();
     if (settings.preview_pass != Pass::Combined) {
         const Pass p = settings.preview_pass;
-        if (p == Pass::DiffDir || p == Pass::GlossDir || p == Pass::Shadow)
+        if (p == Pass::DiffDir || p == Pass::GlossDir || p == Pass::Shadow || p == Pass::Vector)
             throw InvalidInput(std::string("preview_pass: ") + pass_info(p).name +
                                " is resolved after the last sample and cannot be previewed");
         preview_image = 0;
@@ -1087,6 +1111,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
             glDisable(GL_BLEND);
             draw_scene();
             glBindFramebuffer(GL_FRAMEBUFFER, 0);
+            draw_motion();
             glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
             geometry_ms += timer.lap_ms();
             run_passes(sample, true);
@@ -1119,6 +1144,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
             }
             aovs.end_draws();
         }
+        if (!data_gbuffer) draw_motion();
         check_gl("geometry pass");
         geometry_ms += timer.lap_ms();
 
@@ -1229,6 +1255,13 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     // DiffDir/GlossDir: accumulated light over accumulated colour; Shadow:
     // shadowed over unshadowed light.
     for (auto& [p, image] : pass_images) {
+        if (p == Pass::Vector) {
+            glUseProgram(pass_program(p, "RESOLVE_MOTION"));
+            motion.bind_resolve();
+            glBindImageTexture(IMG_PASS_OUT, image.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
+            glDispatchCompute(groups_x, groups_y, 1);
+            continue;
+        }
         if (p != Pass::DiffDir && p != Pass::GlossDir && p != Pass::Shadow) continue;
         glUseProgram(pass_program(p, p == Pass::Shadow ? "RESOLVE_SHADOW" : "RESOLVE_LIGHT"));
         glBindTextureUnit(TEX_DIFF_LIGHT, diffuse_light.get());
@@ -1259,6 +1292,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     for (auto& [p, image] : pass_images) read(image.get(), p);
     result.cryptomatte = cryptomatte.finish();
     result.aovs = aovs.finish();
+    motion.release();
     if (group_light) {
         std::vector<float> all(pixels * 4 * std::size_t(settings.light_groups));
         glGetTextureImage(group_light.get(), 0, GL_RGBA, GL_FLOAT, GLsizei(all.size() * 4), all.data());
@@ -1375,10 +1409,10 @@ void Renderer::add_instances(std::uint32_t mesh_id, const double* matrices, std:
                              const std::uint32_t* object_indices, const std::vector<std::uint32_t>& material_slots,
                              bool cast_shadow, const float* colors, const float* randoms,
                              const std::uint32_t* crypto, bool holdout, std::uint32_t light_group,
-                             const float* terminator_offsets) {
+                             const float* terminator_offsets, const double* motion) {
     impl_->thread.run([&] {
         impl_->scene.add_instances(mesh_id, matrices, count, object_indices, material_slots, cast_shadow, colors,
-                                   randoms, crypto, holdout, light_group, terminator_offsets);
+                                   randoms, crypto, holdout, light_group, terminator_offsets, motion);
     });
 }
 

@@ -74,6 +74,8 @@ std::int32_t validate_mesh(const MeshData& m) {
     if (m.vertex_count > std::numeric_limits<std::uint32_t>::max() / 3)
         invalid("mesh: too many vertices");
     require_bounded(m.positions, m.vertex_count * 3, InputLimits::kMaxCoordinate, "positions", " m");
+    if (m.motion_positions)
+        require_bounded(m.motion_positions, m.vertex_count * 6, InputLimits::kMaxCoordinate, "motion_positions", " m");
     for (std::size_t i = 0; i < m.triangle_count * 3; ++i)
         if (m.indices[i] >= m.vertex_count)
             invalid("indices: element " + std::to_string(i) + " = " + std::to_string(m.indices[i]) +
@@ -279,6 +281,11 @@ std::uint32_t SceneStore::add_mesh(const MeshData& m, const std::string& key) {
     };
     g.positions = make_storage_buffer(m.positions, m.vertex_count * 3 * sizeof(float), "positions");
     g.indices = upload(m.indices, 3, "indices");
+    if (m.motion_positions && m.vertex_count > 0) {
+        g.motion_positions =
+            make_storage_buffer(m.motion_positions, m.vertex_count * 6 * sizeof(float), "motion_positions");
+        g.flags |= 8u;
+    }
     if (m.corner_normals) {
         g.normals = upload(m.corner_normals, 9, "corner_normals");
         g.flags |= 1u;
@@ -377,11 +384,13 @@ void SceneStore::add_instances(std::uint32_t mesh_id, const double* matrices, st
                                const std::uint32_t* object_indices, const std::vector<std::uint32_t>& slots,
                                bool cast_shadow, const float* colors, const float* randoms,
                                const std::uint32_t* crypto, bool holdout, std::uint32_t light_group,
-                               const float* terminator_offsets) {
+                               const float* terminator_offsets, const double* motion) {
     if (mesh_id >= meshes_.size() || !mesh_slots_[mesh_id].alive)
         invalid("add_instances: mesh id " + std::to_string(mesh_id) + " does not exist (" +
                 std::to_string(meshes_.size()) + " meshes)");
     validate_instances(matrices, count);
+    // The previous and next matrices obey the same contract as this frame's.
+    if (motion) require_bounded(motion, count * 32, InputLimits::kMaxCoordinate, "motion", "");
     if (colors) require_finite(colors, count * 4, "colors");
     if (randoms) require_finite(randoms, count, "randoms");
     if (terminator_offsets) {
@@ -415,6 +424,7 @@ void SceneStore::add_instances(std::uint32_t mesh_id, const double* matrices, st
                                               : std::vector<float>(count, 0.0f);
     b.randoms = randoms ? std::vector<float>(randoms, randoms + count) : std::vector<float>(count, 0.0f);
     b.crypto = crypto ? std::vector<std::uint32_t>(crypto, crypto + count * 2) : std::vector<std::uint32_t>(count * 2, 0u);
+    if (motion) b.motion.assign(motion, motion + count * 32);
     if (slots.empty()) {
         if (materials_.empty()) invalid("add_instances: no materials exist; add one first");
         for (std::uint32_t i = 0; i < materials_.size(); ++i) b.material_slots.push_back(i);

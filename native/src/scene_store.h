@@ -29,6 +29,7 @@ struct MeshAttributeLayout {
 struct GpuMesh {
     Buffer positions, indices, normals, uvs, material_indices;
     Buffer attributes;                                  // every CornerAttribute, one after the other
+    Buffer motion_positions;                            // a deforming mesh's previous and next vertices (flag 8)
     std::vector<MeshAttributeLayout> attribute_layout;
     float texspace_location[3] = {0.0f, 0.0f, 0.0f};
     float texspace_size[3] = {1.0f, 1.0f, 1.0f};
@@ -36,7 +37,7 @@ struct GpuMesh {
     // [slot_ranges[s].first, + .second), so one slot draws as one range.
     std::vector<std::pair<std::uint32_t, std::uint32_t>> slot_ranges;
     std::uint32_t triangle_count = 0;
-    std::uint32_t flags = 0;          // 1 normals, 2 uvs, 4 material indices (geometry_vert.glsl)
+    std::uint32_t flags = 0;          // 1 normals, 2 uvs, 4 material indices, 8 vertex motion (geometry_vert.glsl)
     std::int32_t max_material_index = 0;
     // Bounding sphere of the vertices (object space), for culling instances
     // out of shadow maps.
@@ -90,6 +91,7 @@ struct InstanceBatch {
     std::vector<float> randoms;                // one per instance (Object Info Random)
     std::vector<float> terminator_offsets;     // one per instance: Shadow Terminator Geometry Offset
     std::vector<std::uint32_t> crypto;         // two per instance: Cryptomatte object and asset hashes
+    std::vector<double> motion;                // 32 per instance (previous, next matrix) or empty: static
 };
 
 class SceneStore {
@@ -113,7 +115,8 @@ public:
                        const std::uint32_t* object_indices, const std::vector<std::uint32_t>& slots,
                        bool cast_shadow = true, const float* colors = nullptr, const float* randoms = nullptr,
                        const std::uint32_t* crypto = nullptr, bool holdout = false,
-                       std::uint32_t light_group = 0, const float* terminator_offsets = nullptr);
+                       std::uint32_t light_group = 0, const float* terminator_offsets = nullptr,
+                       const double* motion = nullptr);
     void add_light(const Light& light);
     void set_world(const World& world);
 

@@ -28,6 +28,10 @@ enum class Pass : std::uint32_t {
                    // EEVEE's Shadow pass (Cycles 3.x has none); 1 on background and unlit pixels
     AO,            // RGB: ambient occlusion, the cosine-weighted visible fraction of the
                    // hemisphere (occluders at any distance), background 0
+    Vector,        // XYZW: screen-space motion in pixels, Cycles' convention (primitive_motion_vector):
+                   // xy = raster(previous frame) - raster(now), zw = raster(now) - raster(next frame),
+                   // averaged over the samples that hit a surface; background 0. Needs the motion
+                   // the caller gives (instances, camera, deforming meshes); none: 0
     Count
 };
 

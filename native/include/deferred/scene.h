@@ -34,6 +34,10 @@ struct MeshData {
     const float* corner_normals = nullptr;   // [triangle_count*3][3], optional (flat if null)
     const float* corner_uvs = nullptr;       // [triangle_count*3][2], optional
     const std::int32_t* material_indices = nullptr;  // [triangle_count], optional (slot 0)
+    // A deforming mesh's vertices at the previous and the next frame (the
+    // Vector pass), object space, in the order of `positions`: [2][vertex_count][3],
+    // optional (null: the vertices do not move within the object).
+    const float* motion_positions = nullptr;
     // Named per-corner attributes node materials read (UV maps, tangents,
     // colour attributes); only those some material uses are exported.
     std::vector<CornerAttribute> attributes;
@@ -144,6 +148,12 @@ struct Camera {
     // (region_data.window_matrix), whose zoom and offset in camera view a
     // physical camera cannot express. Off (all zero): the camera's own.
     std::array<float, 4> viewplane{0.0f, 0.0f, 0.0f, 0.0f};
+    // The camera's world matrices at the previous and the next frame (the
+    // Vector pass; with this frame's lens, as Cycles 3.4's motion pass).
+    // Off: the camera does not move.
+    bool has_motion = false;
+    Mat4d matrix_previous = identity_matrix();
+    Mat4d matrix_next = identity_matrix();
 };
 
 struct World {

@@ -1,0 +1,172 @@
+// The Vector pass (motion_module.h): Cycles' primitive_motion_vector, xy =
+// raster(previous) - raster(now), zw = raster(now) - raster(next), in
+// pixels with y up, averaged over the samples that see a surface.
+#include "camera.h"
+#include "test_helpers.h"
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cmath>
+
+using namespace deferred;
+
+namespace {
+constexpr int kSize = 32;  // pixels; the orthographic cameras cover 4 m: 8 px per metre
+
+std::array<double, 32> motion_of(const Mat4d& previous, const Mat4d& next) {
+    std::array<double, 32> m{};
+    std::copy(previous.begin(), previous.end(), m.begin());
+    std::copy(next.begin(), next.end(), m.begin() + 16);
+    return m;
+}
+
+glm::dvec4 vector_at(const PassImage& v, int x, int y) {
+    const float* p = &v.pixels[(std::size_t(y) * v.width + x) * 4];
+    return {p[0], p[1], p[2], p[3]};
+}
+
+RenderSettings vector_settings(int samples) {
+    RenderSettings s;
+    s.width = kSize;
+    s.height = kSize;
+    s.samples = samples;
+    s.shadows = false;
+    s.passes = {Pass::Vector, Pass::Position};
+    return s;
+}
+
+// A box moved by its instance's motion: previous at (-0.25, 0.25), next at
+// (0.5, -0.125) around the origin.
+struct MovingBox {
+    Renderer r;
+    Camera cam = deferred::testing::top_down_ortho(5.0, 4.0f);
+    MovingBox(bool holdout = false) {
+        tools::MeshArrays box = tools::make_box(0.5f, 0.5f, 0.5f);
+        const std::uint32_t mesh = r.add_mesh(box.view());
+        const std::uint32_t mat = r.add_material(Material{});
+        const Mat4d now = tools::translation(0, 0, 0);
+        const std::array<double, 32> motion =
+            motion_of(tools::translation(-0.25, 0.25, 0), tools::translation(0.5, -0.125, 0));
+        r.add_instances(mesh, now.data(), 1, nullptr, {mat}, true, nullptr, nullptr, nullptr, holdout, 0, nullptr,
+                        motion.data());
+        deferred::testing::set_world_color(r, 0.1f, 0.1f, 0.1f);
+    }
+};
+}  // namespace
+
+TEST(VectorPass, TranslatedObjectMovesByItsOffsetInPixelsWithYUp) {
+    MovingBox s;
+    // 16 samples: every pixel a surface covers, edges too, carries the box's
+    // motion exactly (divided by the samples that saw it, not by all).
+    const FrameResult f = s.r.render(s.cam, vector_settings(16));
+    const PassImage& v = *f.find(Pass::Vector);
+    ASSERT_EQ(v.channels, 4);
+    const glm::dvec4 expected(-0.25 * 8, 0.25 * 8, -0.5 * 8, 0.125 * 8);
+    int covered = 0, background = 0;
+    for (int y = 0; y < kSize; ++y)
+        for (int x = 0; x < kSize; ++x) {
+            const glm::dvec4 m = vector_at(v, x, y);
+            if (m == glm::dvec4(0.0)) {
+                ++background;
+                continue;
+            }
+            ++covered;
+            for (int c = 0; c < 4; ++c) ASSERT_NEAR(m[c], expected[c], 1e-4) << x << ", " << y << " channel " << c;
+        }
+    EXPECT_GE(covered, 8 * 8);        // the box's 1 m top face is 8 x 8 pixels
+    EXPECT_LE(covered, 10 * 10);      // and its edges reach at most a pixel further
+    EXPECT_GT(background, 32 * 32 - 100);
+    // The background stays exactly 0 (Cycles writes no motion there).
+    EXPECT_EQ(vector_at(v, 1, 1), glm::dvec4(0.0));
+}
+
+TEST(VectorPass, NoMotionGivenIsZero) {
+    Renderer r;
+    tools::MeshArrays box = tools::make_box(0.5f, 0.5f, 0.5f);
+    const std::uint32_t mesh = r.add_mesh(box.view());
+    const std::uint32_t mat = r.add_material(Material{});
+    const Mat4d now = tools::translation(0, 0, 0);
+    r.add_instances(mesh, now.data(), 1, nullptr, {mat});
+    const FrameResult f = r.render(deferred::testing::top_down_ortho(5.0, 4.0f), vector_settings(4));
+    for (float value : f.find(Pass::Vector)->pixels) ASSERT_EQ(value, 0.0f);
+}
+
+TEST(VectorPass, HoldoutsWriteNoMotion) {
+    MovingBox s(true);
+    const FrameResult f = s.r.render(s.cam, vector_settings(4));
+    for (float value : f.find(Pass::Vector)->pixels) ASSERT_EQ(value, 0.0f);
+}
+
+TEST(VectorPass, DeformingMeshMovesByItsVertices) {
+    // A plane whose vertices were 0.5 m further along -x at the previous
+    // frame and will be 0.25 m along +y at the next (object space, the
+    // instance itself scaled by 2: the motion is scaled with it).
+    Renderer r;
+    tools::MeshArrays plane = tools::make_plane(0.5f);
+    std::vector<float> motion_positions;
+    for (int step = 0; step < 2; ++step)
+        for (std::size_t v = 0; v < plane.positions.size() / 3; ++v) {
+            motion_positions.push_back(plane.positions[3 * v] + (step == 0 ? -0.5f : 0.0f));
+            motion_positions.push_back(plane.positions[3 * v + 1] + (step == 1 ? 0.25f : 0.0f));
+            motion_positions.push_back(plane.positions[3 * v + 2]);
+        }
+    MeshData data = plane.view();
+    data.motion_positions = motion_positions.data();
+    const std::uint32_t mesh = r.add_mesh(data);
+    const std::uint32_t mat = r.add_material(Material{});
+    const Mat4d now = tools::scale_translation(2.0, 0, 0, 0);
+    r.add_instances(mesh, now.data(), 1, nullptr, {mat});
+    const FrameResult f = r.render(deferred::testing::top_down_ortho(5.0, 4.0f), vector_settings(1));
+    const glm::dvec4 m = vector_at(*f.find(Pass::Vector), 16, 16);
+    EXPECT_NEAR(m.x, -0.5 * 2 * 8, 1e-4);
+    EXPECT_NEAR(m.y, 0.0, 1e-4);
+    EXPECT_NEAR(m.z, 0.0, 1e-4);
+    EXPECT_NEAR(m.w, -0.25 * 2 * 8, 1e-4);
+}
+
+TEST(VectorPass, MovingPerspectiveCameraMatchesTheProjectedPositions) {
+    // A static floor seen by a perspective camera that turns and moves: each
+    // pixel's motion is its Position-pass point projected through the
+    // previous and next cameras (this frame's lens), minus / from its
+    // projection now, computed here in double.
+    Renderer r;
+    deferred::testing::add_plane(r, Material{}, 20.0f, 4);
+    Camera cam;
+    const double eye[3] = {0.0, -6.0, 4.0}, target[3] = {0.0, 0.0, 0.0};
+    const double eye_prev[3] = {-0.3, -6.2, 4.1}, target_prev[3] = {0.2, 0.1, 0.0};
+    const double eye_next[3] = {0.4, -5.7, 3.9}, target_next[3] = {-0.1, 0.3, 0.0};
+    cam.matrix = tools::look_at(eye, target);
+    cam.has_motion = true;
+    cam.matrix_previous = tools::look_at(eye_prev, target_prev);
+    cam.matrix_next = tools::look_at(eye_next, target_next);
+    const FrameResult f = r.render(cam, vector_settings(1));
+    const PassImage& v = *f.find(Pass::Vector);
+    const PassImage& position = *f.find(Pass::Position);
+    auto raster = [&](const Mat4d& matrix, const glm::dvec3& p) {
+        Camera c = cam;
+        c.matrix = matrix;
+        const CameraMatrices m = build_camera(c, kSize, kSize);
+        const glm::dvec4 clip = m.projection * m.view * glm::dvec4(p - m.position, 1.0);
+        return (glm::dvec2(clip) / clip.w * 0.5 + 0.5) * double(kSize);
+    };
+    int checked = 0;
+    double largest = 0.0;
+    for (int y = 0; y < kSize; y += 3)
+        for (int x = 0; x < kSize; x += 3) {
+            const glm::dvec3 p = deferred::testing::pixel3(position, x, y);
+            if (p == glm::dvec3(0.0)) continue;  // background
+            const glm::dvec2 now = raster(cam.matrix, p);
+            const glm::dvec2 pre = raster(cam.matrix_previous, p) - now;
+            const glm::dvec2 post = now - raster(cam.matrix_next, p);
+            const glm::dvec4 m = vector_at(v, x, y);
+            for (int c = 0; c < 2; ++c) {
+                EXPECT_NEAR(m[c], pre[c], 2e-3) << x << ", " << y;
+                EXPECT_NEAR(m[c + 2], post[c], 2e-3) << x << ", " << y;
+            }
+            largest = std::max({largest, std::abs(pre.x), std::abs(post.y)});
+            ++checked;
+        }
+    EXPECT_GT(checked, 40);
+    EXPECT_GT(largest, 1.0);  // the camera's motion is pixels, not a rounding error
+}

@@ -136,7 +136,8 @@ def set_all_passes(view_layer, on=True):
     for flag in ("use_pass_z", "use_pass_mist", "use_pass_position", "use_pass_normal", "use_pass_uv",
                  "use_pass_object_index", "use_pass_material_index", "use_pass_diffuse_direct",
                  "use_pass_diffuse_color", "use_pass_glossy_direct", "use_pass_glossy_color",
-                 "use_pass_emit", "use_pass_environment", "use_pass_shadow", "use_pass_ambient_occlusion"):
+                 "use_pass_emit", "use_pass_environment", "use_pass_shadow", "use_pass_ambient_occlusion",
+                 "use_pass_vector"):
         setattr(view_layer, flag, on)
 
 

@@ -30,7 +30,7 @@ FLAGS = {
     "GlossCol": "use_pass_glossy_color", "Emit": "use_pass_emit", "Env": "use_pass_environment",
 }
 TYPES = {"Depth": "VALUE", "Mist": "VALUE", "IndexOB": "VALUE", "IndexMA": "VALUE",
-         "Position": "VECTOR", "Normal": "VECTOR", "UV": "VECTOR"}
+         "Position": "VECTOR", "Normal": "VECTOR", "UV": "VECTOR", "Vector": "VECTOR"}
 
 
 def render_layers_outputs(scene):
@@ -108,13 +108,15 @@ def test_passes(checks):
     U.set_all_passes(layer, False)
     layer.use_pass_z = True
     layer.use_pass_normal = True
-    layer.use_pass_vector = True       # not produced by the renderer: must not appear
+    layer.use_pass_vector = True       # produced (from the neighbouring frames): must appear
+    layer.use_pass_diffuse_indirect = True  # not produced by the renderer: must not appear
     layer.use_pass_shadow = True       # produced (EEVEE's convention): must appear
     layer.use_pass_ambient_occlusion = True  # produced (world occlusion): must appear
     outputs = render_layers_outputs(scene)
-    checks.check(outputs == ["Image", "Alpha", "Depth", "Normal", "Shadow", "AO"],
+    checks.check(outputs == ["Image", "Alpha", "Depth", "Normal", "Shadow", "AO", "Vector"],
                  "only enabled AND produced passes are registered", str(outputs))
     layer.use_pass_vector = layer.use_pass_shadow = layer.use_pass_ambient_occlusion = False
+    layer.use_pass_diffuse_indirect = False
 
     # The engine's own registration list: channel ids and types as Cycles.
     from deferred_render.engine import passes
@@ -122,7 +124,8 @@ def test_passes(checks):
     specs = {s.name: s for s in passes.enabled_passes(layer, mod.PASSES)}
     ok = all(specs[n].type == TYPES.get(n, "COLOR") for n in specs)
     checks.check(ok and specs["Depth"].chan_id == "Z" and specs["Normal"].chan_id == "XYZ"
-                 and specs["UV"].chan_id == "UVA" and specs["IndexOB"].chan_id == "X",
+                 and specs["UV"].chan_id == "UVA" and specs["IndexOB"].chan_id == "X"
+                 and specs["Vector"].chan_id == "XYZW",
                  "pass types and channel ids as Cycles registers them")
 
 

@@ -43,6 +43,7 @@ set(DEFERRED_BLENDER_TESTS
     holdout
     aovs
     light_groups
+    vector_pass
 )
 
 foreach(_name IN LISTS DEFERRED_BLENDER_TESTS)

@@ -25,6 +25,8 @@ import traceback
 from .. import native
 from . import session
 from ..export import camera as camera_export
+from ..export import mesh as mesh_export
+from ..export import motion as motion_export
 from ..export import cryptomatte as crypto_export
 from ..export import world as world_export
 from ..export import export_scene, light_group_indices, requested_aovs
@@ -256,6 +258,22 @@ class FinalRender:
         for message in cam_warnings:
             self.warn(message)
 
+        layer = result.layers[0]
+        pass_names = []
+        for render_pass in layer.passes:
+            if render_pass.name not in pass_names:
+                pass_names.append(render_pass.name)
+        # The Vector pass: the scene at the neighbouring frames (motion.py),
+        # before this frame's export, which sees the depsgraph as it is left.
+        motion = None
+        if "Vector" in pass_names:
+            self.status("evaluating the previous and next frames (Vector pass)", 0.01)
+            motion = motion_export.collect(engine, self.depsgraph, camera_object, mesh_export.MESHABLE_TYPES)
+            camera_motion = motion.camera(cam_params["matrix"])
+            if camera_motion is not None:
+                cam_params["motion"] = camera_motion
+            self.check_break()
+
         persistent = bool(getattr(scene.render, "use_persistent_data", False))
         self.status("starting GL" if not (persistent and session.kept()) else
                     "reusing the renderer kept by the last render (Persistent Data)", 0.02)
@@ -267,18 +285,13 @@ class FinalRender:
         self.status("exporting scene", 0.05)
         t_export = time.perf_counter()
         stats, cancelled = export_scene(self.depsgraph, renderer, warn=self.warn,
-                                        test_break=engine.test_break)
+                                        test_break=engine.test_break, motion=motion)
         if cancelled:
             raise RenderCancelled()
         t_export = time.perf_counter() - t_export
         self.status(f"exported {stats.summary()} in {t_export:.2f} s", 0.3)
         self.check_break()
 
-        layer = result.layers[0]
-        pass_names = []
-        for render_pass in layer.passes:
-            if render_pass.name not in pass_names:
-                pass_names.append(render_pass.name)
         produced = {entry[0] for entry in mod.PASSES}
         requested = [name for name in pass_names if name in produced]
         if "Combined" not in requested:

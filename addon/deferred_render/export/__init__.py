@@ -6,7 +6,7 @@ point the engine uses. The exporter talks to any object with the native
 ``Renderer`` scene API, which is how tests check it without a GPU.
 """
 
-from . import camera, light, material, mesh, world  # noqa: F401
+from . import camera, light, material, mesh, motion, world  # noqa: F401
 from . import cryptomatte as crypto_export
 from .instances import ExportStats, MeshKeeper, SceneExporter  # noqa: F401
 
@@ -25,13 +25,14 @@ def light_group_indices(view_layer):
     return {g.name: k + 1 for k, g in enumerate(getattr(view_layer, "lightgroups", ())) if g.name}
 
 
-def export_scene(depsgraph, renderer, warn=None, test_break=None, mesh_keeper=None):
+def export_scene(depsgraph, renderer, warn=None, test_break=None, mesh_keeper=None, motion=None):
     """Clear ``renderer`` and sync the evaluated scene into it.
 
     Returns (stats, cancelled). ``warn(message)`` receives every warning
     once; ``test_break()`` is polled during the walk. ``mesh_keeper``
     (instances.MeshKeeper): meshes the renderer kept from the last sync are
-    found again instead of exported (the viewport).
+    found again instead of exported (the viewport). ``motion``
+    (motion.Motion): the neighbouring frames, for the Vector pass.
     """
     renderer.clear_scene()
     layers, _ = crypto_export.enabled_layers(getattr(depsgraph, "view_layer", None))
@@ -40,7 +41,7 @@ def export_scene(depsgraph, renderer, warn=None, test_break=None, mesh_keeper=No
                              cryptomatte=crypto_export.Manifests(layers),
                              aovs_requested=bool(requested_aovs(view_layer)),
                              light_groups=light_group_indices(view_layer),
-                             mesh_keeper=mesh_keeper)
+                             mesh_keeper=mesh_keeper, motion=motion)
     completed = exporter.sync(depsgraph)
     if completed:
         scene_world = depsgraph.scene.world

@@ -36,6 +36,7 @@ from . import cryptomatte as crypto_export
 from . import light as light_export
 from . import material as material_export
 from . import mesh as mesh_export
+from . import motion as motion_export
 from ..materials import builder as graph_builder
 
 UNSUPPORTED_GEOMETRY = {"CURVES", "POINTCLOUD", "VOLUME", "GPENCIL"}
@@ -141,7 +142,7 @@ def terminator_offset(ob):
 
 class _Group:
     __slots__ = ("mesh_id", "material_ids", "cast_shadow", "holdout", "light_group", "matrices", "object_indices",
-                 "names", "colors", "randoms", "crypto", "terminator_offsets")
+                 "names", "colors", "randoms", "crypto", "terminator_offsets", "motion")
 
     def __init__(self, mesh_id, material_ids, cast_shadow, holdout=False):
         self.mesh_id = mesh_id
@@ -156,6 +157,7 @@ class _Group:
         self.randoms = []
         self.crypto = []    # (object hash, asset hash) per instance, when Cryptomatte is asked for
         self.terminator_offsets = []  # Object > Shading > Shadow Terminator > Geometry Offset
+        self.motion = []    # (2, 4, 4) previous and next world matrices, when the Vector pass is asked for
 
 
 class MeshKeeper:
@@ -216,11 +218,13 @@ class SceneExporter:
     or a recorder in the tests."""
 
     def __init__(self, renderer, warn=None, test_break=None, cryptomatte=None, aovs_requested=False,
-                 light_groups=None, mesh_keeper=None):
+                 light_groups=None, mesh_keeper=None, motion=None):
         self.renderer = renderer
         # Meshes the renderer keeps between syncs (the viewport; None: each
         # sync uploads every mesh, as a final render does).
         self.mesh_keeper = mesh_keeper if hasattr(renderer, "find_mesh") else None
+        # The neighbouring frames (motion.Motion) for the Vector pass; None: no motion.
+        self.motion = motion
         # The view layer's light groups, name -> index from 1 (none: {}).
         self.light_groups = light_groups or {}
         # The view layer asks for shader AOVs: materials with AOV Output
@@ -359,7 +363,7 @@ class SceneExporter:
             return None
         return self.mesh_keeper.key(ob, attribute_keys)
 
-    def _mesh_id(self, ob, attribute_keys=frozenset(), kept_key=None):
+    def _mesh_id(self, ob, attribute_keys=frozenset(), kept_key=None, motion_key=None):
         # Objects sharing a mesh but reading other attributes get their own copy.
         key = (self._mesh_key(ob), attribute_keys)
         if key in self._mesh_ids:
@@ -391,6 +395,14 @@ class SceneExporter:
                 extras = self._mesh_extras(arrays)
                 if kept_key is not None:
                     extras["key"] = kept_key
+                if motion_key is not None:
+                    motion_positions = self.motion.vertex_positions(motion_key, arrays.vertex_count)
+                    if motion_positions is False:
+                        self._warn_once(("motion-topology", ob.name),
+                                        f"Object '{ob.name}': its vertex count changes between frames, so its "
+                                        "deformation is not in the Vector pass (as Cycles)")
+                    elif motion_positions is not None:
+                        extras["motion_positions"] = motion_positions
                 mesh_id = self.renderer.add_mesh(
                     arrays.positions, arrays.indices,
                     corner_normals=arrays.corner_normals,
@@ -455,7 +467,8 @@ class SceneExporter:
             return
         material_ids = self._slot_material_ids(ob)
         keys = frozenset(k for m in material_ids for k in self._material_attributes.get(m, ()))
-        entry = self._mesh_id(ob, keys, kept_key=self._kept_mesh_key(inst, ob, keys))
+        motion_key = motion_export.instance_key(inst, ob) if self.motion is not None else None
+        entry = self._mesh_id(ob, keys, kept_key=self._kept_mesh_key(inst, ob, keys), motion_key=motion_key)
         if entry is None:
             return
         mesh_id, triangles = entry
@@ -483,6 +496,8 @@ class SceneExporter:
         group.colors.append(tuple(ob.color))
         group.randoms.append(object_random(inst, ob))
         group.terminator_offsets.append(terminator_offset(ob))
+        if motion_key is not None:
+            group.motion.append(self.motion.matrices(motion_key, matrix))
         if self.cryptomatte.layers:
             group.crypto.append((self.cryptomatte.hash("CryptoObject", ob.name),
                                  self.cryptomatte.hash("CryptoAsset", crypto_export.asset_object(inst, ob).name)))
@@ -521,6 +536,8 @@ class SceneExporter:
                 extras["holdout"] = True
             if group.light_group:
                 extras["light_group"] = group.light_group
+            if group.motion:
+                extras["motion"] = np.ascontiguousarray(np.stack(group.motion), dtype=np.float64)
             if any(group.terminator_offsets):
                 extras["terminator_offsets"] = np.ascontiguousarray(group.terminator_offsets, dtype=np.float32)
             try:

@@ -263,6 +263,12 @@ class FinalRender:
         for render_pass in layer.passes:
             if render_pass.name not in pass_names:
                 pass_names.append(render_pass.name)
+        if getattr(scene.render, "use_motion_blur", False):
+            # Said, not silent. Cycles leaves the Vector pass empty with motion
+            # blur on; here it is written, so Vector Blur can add the blur.
+            self.warn("Motion Blur is not rendered (Render Properties > Motion Blur)"
+                      + ("; the Vector pass is written, for the compositor's Vector Blur"
+                         if "Vector" in pass_names else ""))
         # The Vector pass: the scene at the neighbouring frames (motion.py),
         # before this frame's export, which sees the depsgraph as it is left.
         motion = None

@@ -392,7 +392,7 @@ void main() {
 #ifndef MATERIAL_GRAPH
     const bool holdout_material = m.base_diffuse.a > 3.5; /* kClosureHoldout */
 #else
-    const bool holdout_material = false;
+    const bool holdout_material = c.holdout != 0.0;  /* node_holdout, whole or drawn from a mix */
 #endif
     if ((v_mirrored & 2u) != 0u || holdout_material) {
         /* A holdout (Cycles' holdout closure or the object's Holdout flag): a

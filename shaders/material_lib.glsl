@@ -19,6 +19,7 @@ struct Closure {
     vec3 emission; /* radiance (colour x strength) */
     vec3 N;        /* world shading normal */
     float reflects; /* 0 for a closure that reflects nothing (Emission, none) */
+    float holdout;  /* 1: Cycles' holdout closure, a hole in the image (geometry_frag.glsl) */
 };
 
 /* The shading point (Cycles' ShaderData) as the geometry pass sees it. World
@@ -76,7 +77,7 @@ vec3 mat_const3(int i) { return vec3(mat_const(i), mat_const(i + 1), mat_const(i
 float node_color_to_float(vec3 c) { return dot(c, vec3(0.2126729950, 0.7151526453, 0.0721754596)); }
 float node_vector_to_float(vec3 v) { return (v.x + v.y + v.z) * (1.0 / 3.0); }
 
-/* No closure (an unlinked shader socket, a Holdout we do not model): black. */
+/* No closure (an unlinked shader socket): black. */
 Closure closure_none() {
     Closure c;
     c.base_color = vec3(0.0);
@@ -94,6 +95,7 @@ Closure closure_none() {
     c.emission = vec3(0.0);
     c.N = g_sd.N;
     c.reflects = 0.0;
+    c.holdout = 0.0;
     return c;
 }
 

@@ -69,6 +69,16 @@ void node_bsdf_glossy(int model, vec3 color, float roughness, vec3 normal, out C
 /* An unlinked shader socket: no closure (black). */
 void node_closure_none(out Closure c) { c = closure_none(); }
 
+/* Holdout (Cycles' holdout closure): where it is the surface, a hole in the
+ * image, black with alpha 0, no light and no data pass. Mixed with other
+ * closures (node_mix_shader) it is drawn with its weight's probability, so
+ * the accumulated image has Cycles' partial holdout: alpha 1 - weight and
+ * the other closures at their weights. */
+void node_holdout(out Closure c) {
+    c = closure_none();
+    c.holdout = 1.0;
+}
+
 /* Emission: radiance colour x strength (svm_node_emission_weight; the
  * closure weight is not clamped, so a negative colour or strength emits
  * negative radiance in Cycles, and here). */
@@ -121,6 +131,22 @@ void node_mix_shader(float fac, Closure a, Closure b, out Closure c) {
     float wa = (1.0 - fac) * a.alpha, wb = fac * b.alpha;
     float coverage = wa + wb;
     float inv = coverage > 0.0 ? 1.0 / coverage : 0.0;
+    if (a.holdout != b.holdout) {
+        /* One side a holdout: a side is drawn whole (its own lobes and
+         * emission) with probability its share, so the image converges to
+         * Cycles' holdout weight wb (or wa) and the other side's closures
+         * at their weight. */
+        float pb = wb * inv;
+        if (g_mix_u < pb) {
+            c = b;
+            g_mix_u = g_mix_u / max(pb, 1e-30);
+        } else {
+            c = a;
+            g_mix_u = (g_mix_u - pb) / max(1.0 - pb, 1e-30);
+        }
+        c.alpha = coverage;
+        return;
+    }
     vec3 emission = (wa * a.emission + wb * b.emission) * inv;
     if (a.reflects == 0.0 || b.reflects == 0.0) {
         float w = (a.reflects != 0.0 ? wa : wb) * inv;
@@ -153,6 +179,12 @@ void node_mix_shader(float fac, Closure a, Closure b, out Closure c) {
  * (for two opaque sides: 1/2 and twice), exact for the diffuse and metallic
  * parts, which are linear in the base colour (the add-on warns). */
 void node_add_shader(Closure a, Closure b, out Closure c) {
+    if (a.holdout != 0.0 || b.holdout != 0.0) {
+        /* A holdout added at full weight: Cycles ends the path at a holdout
+         * weight of 1 (integrate_surface_holdout), whatever else is there. */
+        c = a.holdout != 0.0 ? a : b;
+        return;
+    }
     float wa = a.alpha, wb = b.alpha;
     float coverage = clamp01(wa + wb - 1.0);
     float inv = coverage > 0.0 ? 1.0 / coverage : 0.0;

@@ -122,6 +122,13 @@ def transparent(b):
     b.call("node_bsdf_transparent", [b.input("Color", "color")], [("BSDF", "closure")])
 
 
+@register("ShaderNodeHoldout")
+def holdout(b):
+    # Cycles' holdout closure (node_holdout): mixed with other shaders, a
+    # partial hole.
+    b.call("node_holdout", [], [("Holdout", "closure")])
+
+
 @register("ShaderNodeMixShader")
 def mix_shader(b):
     b.call("node_mix_shader",

@@ -5,7 +5,8 @@ The analytic scene at 160x90, 16 samples, with the view layer's AOVs
 get AOV Output nodes (a Checker of the Generated coordinates into
 "pattern", the Z of the Position into "height"; the floor writes only
 "height"), the other objects write nothing. Cycles and this engine render
-the AOV passes; checks:
+the AOV passes. SphereC writes "height" through an AOV Output inside a node
+group, fed by the group's input (Cycles flattens groups). Checks:
   * both AOVs are passes of the EXR, RGBA and single channel as in Cycles;
   * per pixel they equal Cycles' away from object edges (the interior of
     each object by Cycles' IndexOB), within what two 16-sample estimates of
@@ -60,6 +61,23 @@ def add_aov_outputs(material, pattern):
         links.new(checker.outputs["Color"], out.inputs["Color"])
 
 
+def add_grouped_aov_output(material):
+    """Position.Z -> a group whose AOV Output "height" reads the group's input."""
+    group = bpy.data.node_groups.new("AOVGroup", "ShaderNodeTree")
+    group.inputs.new("NodeSocketFloat", "Height")
+    group_in = group.nodes.new("NodeGroupInput")
+    out = group.nodes.new("ShaderNodeOutputAOV")
+    out.name = "height"
+    group.links.new(group_in.outputs["Height"], out.inputs["Value"])
+    nodes, links = material.node_tree.nodes, material.node_tree.links
+    geometry = nodes.new("ShaderNodeNewGeometry")
+    xyz = nodes.new("ShaderNodeSeparateXYZ")
+    links.new(geometry.outputs["Position"], xyz.inputs[0])
+    node = nodes.new("ShaderNodeGroup")
+    node.node_tree = group
+    links.new(xyz.outputs["Z"], node.inputs["Height"])
+
+
 def setup(scene):
     layer = U.comparison_setup(scene)
     layer.use_pass_object_index = True
@@ -68,6 +86,7 @@ def setup(scene):
         aov.name, aov.type = name, kind
     add_aov_outputs(bpy.data.materials["MatSphereB"], pattern=True)
     add_aov_outputs(bpy.data.materials["MatFloor"], pattern=False)
+    add_grouped_aov_output(bpy.data.materials["MatSphereC"])
 
 
 def render(scene, engine, name):
@@ -88,12 +107,15 @@ def main():
     checks.check(names == mine and len(names) == 5, "the AOV passes and channels are Cycles'", f"{mine}")
     index = cycles["ViewLayer.IndexOB.X"].astype(np.int64)
     inner = U.interior_mask(index, radius=1)
-    sphere_b, floor = inner & (index == 4), inner & (index == 1)
-    others = inner & ~np.isin(index, (1, 4))
+    sphere_b, floor, sphere_c = inner & (index == 4), inner & (index == 1), inner & (index == 5)
+    others = inner & ~np.isin(index, (1, 4, 5))
 
     c_h, o_h = cycles["ViewLayer.height.X"].astype(np.float64), ours["ViewLayer.height.X"].astype(np.float64)
-    writes = sphere_b | floor
+    writes = sphere_b | floor | sphere_c
     close = float((np.abs(o_h - c_h) <= allowed(c_h))[writes].mean())
+    grouped = float((np.abs(o_h - c_h) <= allowed(c_h))[sphere_c].mean())
+    checks.check(sphere_c.sum() > 300 and grouped >= 0.99 and float(np.abs(c_h[sphere_c]).min()) > 0.1,
+                 "height written inside a node group is Cycles'", f"{grouped:.4f}")
     print(f"  height: {int(writes.sum())} interior px, {close:.4f} within the filter's spread")
     checks.check(writes.sum() > 3000 and close >= 0.99, "height (Value AOV) is Cycles' on the writing objects",
                  f"{close:.4f}")
@@ -107,7 +129,7 @@ def main():
     checks.check(float(np.abs(o_p[sphere_b, 3] - c_p[sphere_b, 3]).max()) < 1e-3,
                  "the Color AOV's alpha is Cycles'", f"{o_p[sphere_b, 3].mean():.4f} vs {c_p[sphere_b, 3].mean():.4f}")
     background = cycles["ViewLayer.IndexOB.X"] == 0
-    zero = float(np.abs(o_p[others | floor]).max()) + float(np.abs(o_h[others]).max()) + \
+    zero = float(np.abs(o_p[others | floor | sphere_c]).max()) + float(np.abs(o_h[others]).max()) + \
         float(np.abs(o_h[background & inner]).max())
     checks.check(zero == 0.0, "0 where nothing writes the AOV", f"{zero:g}")
     for label, c, o in (("height", c_h, o_h), ("pattern", c_p[..., :3], o_p[..., :3])):

@@ -461,30 +461,41 @@ def apply_alpha_clip(graph, threshold):
 MAX_AOVS = 8  # kMaxGraphAovs
 
 
+def _aov_outputs_in(tree, ctx=()):
+    """(node, group context) of the AOV Output nodes that write an AOV
+    (named, not muted) in ``tree`` and, as Cycles flattens node groups, in
+    every group it uses (each group node a context of its own)."""
+    found = [(n, ctx) for n in tree.nodes if n.bl_idname == "ShaderNodeOutputAOV" and n.name and not n.mute]
+    for group in tree.nodes:
+        if group.bl_idname != "ShaderNodeGroup" or group.node_tree is None or group.mute:
+            continue
+        if len(ctx) >= graph_walk.MAX_GROUP_DEPTH or any(g.node_tree == group.node_tree for g in ctx) \
+                or group.node_tree == tree:
+            continue  # a cycle or runaway nesting: the surface's walk reports it
+        found.extend(_aov_outputs_in(group.node_tree, ctx + (group,)))
+    return found
+
+
 def aov_output_nodes(tree):
-    """The tree's AOV Output nodes that write an AOV (named, not muted)."""
-    return [n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputAOV" and n.name and not n.mute]
+    """The AOV Output nodes that write an AOV, in the tree and its groups."""
+    return [n for n, _ in _aov_outputs_in(tree)]
 
 
 def _emit_aov_outputs(g, tree):
-    """node_aov_output calls for the tree's AOV Output nodes (Cycles'
-    svm_node_aov_color/value: the Color and Value inputs at the shading
-    point); returns the AOV name of each slot. Nodes inside groups are not
-    read (noted)."""
+    """node_aov_output calls for the AOV Output nodes of the tree and of the
+    groups it uses (Cycles' svm_node_aov_color/value: the Color and Value
+    inputs at the shading point); returns the AOV name of each slot."""
     names = []
-    for node in aov_output_nodes(tree):
+    for node, ctx in _aov_outputs_in(tree):
         if node.name in names:
             continue  # Cycles writes one value per AOV and sample: the first
         if len(names) >= MAX_AOVS:
             g.note(f"more than {MAX_AOVS} AOV outputs (AOV '{node.name}' stays 0)")
             continue
-        b = NodeBuilder(g, node, ())
+        b = NodeBuilder(g, node, ctx)
         color, value = b.input("Color", "color"), b.input("Value", "float")
         g.append_node("node_aov_output", [("int", len(names)), color, value], [])
         names.append(node.name)
-    for group in (n for n in tree.nodes if n.bl_idname == "ShaderNodeGroup" and n.node_tree is not None):
-        if any(m.bl_idname == "ShaderNodeOutputAOV" for m in group.node_tree.nodes):
-            g.note(f"AOV Output nodes inside the group '{group.name}' are not rendered")
     return names
 
 

@@ -9,8 +9,11 @@ bool frame_is_ortho() { return frame.camera_position.w > 0.5; }
 /* Direction towards the viewer from a camera-relative position. */
 vec3 frame_view_vector(vec3 P) {
     if (frame_is_ortho()) return normalize(frame.inv_view[2].xyz);
-    return normalize(-P);
+    return normalize(frame.motion.xyz - P);
 }
+
+/* Distance from this sample's camera (at the origin but under motion blur). */
+float frame_eye_distance(vec3 P) { return length(P - frame.motion.xyz); }
 
 /* Camera-relative world position of a pixel from its reversed-Z depth. */
 vec3 frame_position_from_depth(ivec2 pixel, float depth) {

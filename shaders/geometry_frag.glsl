@@ -211,7 +211,7 @@ void shading_point_init(vec3 N, vec3 Ng, vec3 V, bool back) {
     g_sd.view_depth = -view.z;
     /* The camera ray's length: from the camera, or for an orthographic one from
      * its origin on the near plane (Cycles' camera_sample_orthographic). */
-    g_sd.view_distance = frame.camera_position.w > 0.5 ? -view.z - frame.jitter.z : length(v_position);
+    g_sd.view_distance = frame.camera_position.w > 0.5 ? -view.z - frame.jitter.z : frame_eye_distance(v_position);
 #ifdef EMISSION_BAKE
     /* A light sample's Window: Cycles' camera_world_to_ndc of P (the bake's
      * frame block holds the unjittered camera; its pixels are the tiles'). */
@@ -235,8 +235,8 @@ void shading_point_init(vec3 N, vec3 Ng, vec3 V, bool back) {
         g_sd.bump_dP = 0.5 * (2.0 / (abs(frame.projection[0][0]) * frame.viewport.x) +
                               2.0 / (abs(frame.projection[1][1]) * frame.viewport.y));
     } else {
-        vec3 D = normalize(v_position);
-        g_sd.bump_dP = length(v_position) * 0.5 * (length(dFdxFine(D)) + length(dFdyFine(D)));
+        vec3 D = normalize(v_position - frame.motion.xyz);
+        g_sd.bump_dP = frame_eye_distance(v_position) * 0.5 * (length(dFdxFine(D)) + length(dFdyFine(D)));
     }
     g_sd.dgenerated_dx = dFdxFine(g_sd.generated);
     g_sd.dgenerated_dy = dFdyFine(g_sd.generated);

@@ -23,12 +23,18 @@ layout(std430, binding = SSBO_INSTANCE_REMAP) readonly buffer Remap { uint insta
 /* Shadow maps (shadow_frag.glsl): camera-relative world -> the face's clip space. */
 layout(location = 2) uniform mat4 shadow_view_projection;
 #endif
+/* A deforming mesh's previous then next vertex positions (mesh_flags 8;
+ * object space): the Vector pass reads them, motion blur interpolates them
+ * at the sample's shutter time (frame.motion.w). */
+layout(std430, binding = SSBO_MOTION_POSITIONS) readonly buffer MotionPositions { float motion_positions[]; };
+vec3 motion_position(uint vi, uint step) {  /* step 0 previous, 1 next */
+    const uint base = step * (uint(motion_positions.length()) / 2u) + 3u * vi;
+    return vec3(motion_positions[base], motion_positions[base + 1u], motion_positions[base + 2u]);
+}
 #ifdef MOTION_PASS
 /* The Vector pass (motion_module.h): each instance's previous and next model
- * matrix (camera-relative to this frame's camera), and a deforming mesh's
- * previous then next vertex positions (mesh_flags 8; object space). */
+ * matrix (camera-relative to this frame's camera). */
 layout(std430, binding = SSBO_INSTANCE_MOTION) readonly buffer InstanceMotion { mat4 instance_motion[]; };
-layout(std430, binding = SSBO_MOTION_POSITIONS) readonly buffer MotionPositions { float motion_positions[]; };
 out vec3 v_position_previous;  /* camera-relative world, this frame's camera */
 out vec3 v_position_next;
 #endif
@@ -94,16 +100,22 @@ void main() {
 
     const uint vi = indices[corner];
     vec3 p = vec3(positions[3u * vi], positions[3u * vi + 1u], positions[3u * vi + 2u]);
+#ifndef MOTION_PASS
+    /* Motion blur: the vertices at this sample's shutter time, linear between
+     * the steps (Cycles' motion_triangle_verts_for_step). */
+    if ((mesh_flags & 8u) != 0u && frame.motion.w != 0.0) {
+        const float r = frame.motion.w;
+        p = mix(p, motion_position(vi, r < 0.0 ? 0u : 1u), abs(r));
+    }
+#endif
     vec4 world = inst.model * vec4(p, 1.0);
     v_position = world.xyz;
 #ifdef MOTION_PASS
     {
         vec3 p_previous = p, p_next = p;
         if ((mesh_flags & 8u) != 0u) {
-            const uint next = uint(motion_positions.length()) / 2u;  /* 3 x vertex count */
-            p_previous = vec3(motion_positions[3u * vi], motion_positions[3u * vi + 1u], motion_positions[3u * vi + 2u]);
-            p_next = vec3(motion_positions[next + 3u * vi], motion_positions[next + 3u * vi + 1u],
-                          motion_positions[next + 3u * vi + 2u]);
+            p_previous = motion_position(vi, 0u);
+            p_next = motion_position(vi, 1u);
         }
         v_position_previous = (instance_motion[2u * instance] * vec4(p_previous, 1.0)).xyz;
         v_position_next = (instance_motion[2u * instance + 1u] * vec4(p_next, 1.0)).xyz;

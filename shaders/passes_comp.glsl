@@ -98,7 +98,7 @@ void main() {
 #elif PASS_ID == PASS_MIST
     /* Cycles: distance along the ray (planar for orthographic cameras),
      * mapped by start/depth and the falloff exponent; background 1. */
-    float dist = frame_is_ortho() ? frame_view_depth(P) : length(P);
+    float dist = frame_is_ortho() ? frame_view_depth(P) : frame_eye_distance(P);
     float mist = clamp((dist - frame.mist.x) * frame.mist.y, 0.0, 1.0);
     int falloff = int(frame.mist.z);
     if (falloff == 0) mist = mist * mist;

@@ -131,7 +131,11 @@ SHARED_ASSERT_SIZE(GpuInstance, 176);
  *                     without one; y the number of maps (consecutive indices); zw the world
  *                     map's width and height (world_lib.glsl; 0 for a constant world)
  *   jitter          : xy this sample's pixel-filter offset in NDC (added by projection), z the
- *                     camera's clip start, w unused */
+ *                     camera's clip start, w unused
+ *   motion          : motion blur (motion_module.h): xyz this sample's camera position relative
+ *                     to the frame's (camera-relative positions keep the frame's origin; view
+ *                     includes the translation), w the sample's relative shutter time in
+ *                     [-1, 1] (deforming meshes); all 0 without motion blur */
 SHARED_STRUCT(FrameConstants) {
     mat4 view;
     mat4 projection;
@@ -146,8 +150,9 @@ SHARED_STRUCT(FrameConstants) {
     uvec4 tiles;
     vec4 world_occlusion;
     vec4 jitter;
+    vec4 motion;
 };
-SHARED_ASSERT_SIZE(FrameConstants, 400);
+SHARED_ASSERT_SIZE(FrameConstants, 416);
 
 /* One shadow-casting light's maps for the current film sample.
  *   point         : xyz the sample's point on the light (camera-relative), w first layer in the

@@ -2,10 +2,81 @@
 
 #include "../../shaders/shader_defines.h"
 
+#include <glm/gtc/quaternion.hpp>
+
+#include <algorithm>
+#include <cmath>
 #include <string>
 #include <vector>
 
 namespace deferred {
+
+DecomposedTransform decompose_transform(const glm::dmat4& m) {
+    DecomposedTransform d;
+    d.translation = glm::dvec3(m[3]);
+    const glm::dmat3 M(m);
+    glm::dmat3 R = M;
+    if (std::abs(glm::determinant(R)) > 1e-300) {
+        for (int iteration = 0; iteration < 100; ++iteration) {
+            const glm::dmat3 next = 0.5 * (R + glm::transpose(glm::inverse(R)));
+            double norm = 0.0;
+            for (int row = 0; row < 3; ++row)
+                norm = std::max(norm, std::abs(R[0][row] - next[0][row]) + std::abs(R[1][row] - next[1][row]) +
+                                          std::abs(R[2][row] - next[2][row]));
+            R = next;
+            if (norm <= 1e-12) break;
+        }
+    } else {
+        R = glm::dmat3(1.0);  // a degenerate matrix: no rotation to extract
+    }
+    if (glm::determinant(R) < 0.0) R = -R;
+    const glm::dquat q = glm::quat_cast(R);
+    d.rotation = glm::dvec4(q.x, q.y, q.z, q.w);
+    d.stretch = glm::transpose(R) * M;
+    return d;
+}
+
+glm::dmat4 compose_transform(const DecomposedTransform& d) {
+    const glm::dquat q(d.rotation.w, d.rotation.x, d.rotation.y, d.rotation.z);
+    glm::dmat4 m(glm::mat3_cast(glm::normalize(q)) * d.stretch);
+    m[3] = glm::dvec4(d.translation, 1.0);
+    return m;
+}
+
+namespace {
+// Cycles' quat_interpolate (util/transform.h).
+glm::dvec4 quat_interpolate(const glm::dvec4& a, const glm::dvec4& b, double t) {
+    const double cos_theta = glm::dot(a, b);
+    if (cos_theta > 0.9995) return glm::normalize((1.0 - t) * a + t * b);
+    const double theta = std::acos(std::clamp(cos_theta, -1.0, 1.0));
+    const glm::dvec4 perp = glm::normalize(b - a * cos_theta);
+    return a * std::cos(theta * t) + perp * std::sin(theta * t);
+}
+}  // namespace
+
+glm::dmat4 interpolate_motion(const glm::dmat4& previous, const glm::dmat4& now, const glm::dmat4& next, double r) {
+    DecomposedTransform steps[3] = {decompose_transform(previous), decompose_transform(now),
+                                    decompose_transform(next)};
+    for (int i = 1; i < 3; ++i)  // the shortest way round (transform_motion_decompose)
+        if (glm::dot(steps[i - 1].rotation, steps[i].rotation) < 0.0) steps[i].rotation = -steps[i].rotation;
+    // transform_motion_array_interpolate over 3 steps at time (r + 1) / 2.
+    const double time = std::clamp(0.5 * (r + 1.0), 0.0, 1.0);
+    const int step = std::min(int(time * 2.0), 1);
+    const double t = time * 2.0 - step;
+    const DecomposedTransform& a = steps[step];
+    const DecomposedTransform& b = steps[step + 1];
+    DecomposedTransform d;
+    d.rotation = quat_interpolate(a.rotation, b.rotation, t);
+    d.translation = (1.0 - t) * a.translation + t * b.translation;
+    d.stretch = (1.0 - t) * a.stretch + t * b.stretch;
+    return compose_transform(d);
+}
+
+double shutter_time(int sample) {
+    double inverse = 0.0, scale = 1.0 / 3.0;
+    for (unsigned n = unsigned(sample); n > 0; n /= 3u, scale /= 3.0) inverse += double(n % 3u) * scale;
+    return std::fmod(0.5 + inverse, 1.0);
+}
 
 namespace {
 void store(float out[16], const glm::dmat4& m) {

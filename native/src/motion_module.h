@@ -26,6 +26,33 @@
 
 namespace deferred {
 
+// Motion blur: each film sample renders the scene at one time of the shutter
+// (Cycles samples a time per path; one per film sample converges to the same
+// average). The caller's previous / now / next matrices are Cycles' three
+// motion steps at relative times -1, 0, 1 of the shutter; between them a
+// transform is interpolated as Cycles does (util/transform.cpp
+// transform_motion_decompose, kernel/geom/object.h
+// transform_motion_array_interpolate): translation and the stretch matrix
+// linearly, the rotation by slerp of its quaternion (linear above cos 0.9995),
+// consecutive quaternions in one hemisphere.
+struct DecomposedTransform {
+    glm::dvec3 translation{0.0};
+    glm::dvec4 rotation{0.0, 0.0, 0.0, 1.0};  // quaternion x, y, z, w
+    glm::dmat3 stretch{1.0};                   // rotation^-1 x the linear part (scale, shear)
+};
+// M = T R S, R from the polar decomposition of M's linear part (Cycles'
+// iteration R <- (R + R^-T) / 2, a negative determinant moved into S).
+DecomposedTransform decompose_transform(const glm::dmat4& m);
+glm::dmat4 compose_transform(const DecomposedTransform& d);
+// The transform at relative shutter time r in [-1, 1] of the steps
+// (previous, now, next).
+glm::dmat4 interpolate_motion(const glm::dmat4& previous, const glm::dmat4& now, const glm::dmat4& next, double r);
+// Film sample s's time on the shutter in [0, 1): 0.5 (the frame's own time)
+// for sample 0, then the base-3 radical inverse shifted by 1/2, stratified
+// for any number of samples and unrelated to the pixel filter's and the
+// light samples' sequences.
+double shutter_time(int sample);
+
 class MotionModule {
 public:
     // Packs every instance's previous and next model matrix, relative to

@@ -312,30 +312,54 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     // One per batch: its instances [first, first + count) and its slot map.
     struct Draw { std::uint32_t mesh, first, count; bool cast_shadow; std::uint32_t slot_offset, slot_count; };
     std::vector<Draw> draws;
+    // An instance's world matrix -> its camera-relative model, normal matrix,
+    // mirrored flag (ids.w bit 0) and bounding sphere.
+    auto place = [&](const glm::dmat4& world, const GpuMesh& mesh, gpu::GpuInstance& g, Bound& bound) {
+        glm::dmat4 model = world;
+        model[3] = glm::dvec4(glm::dvec3(model[3]) - cam.position, 1.0);
+        const glm::dmat3 linear(model);
+        const double det = glm::determinant(linear);
+        const double scale = std::max({glm::length(linear[0]), glm::length(linear[1]), glm::length(linear[2])});
+        bound = {glm::dvec3(model * glm::dvec4(mesh.bound_center[0], mesh.bound_center[1], mesh.bound_center[2], 1.0)),
+                 mesh.bound_radius * scale};
+        const glm::dmat3 nm = std::abs(det) > 1e-300 ? glm::transpose(glm::inverse(linear)) : glm::dmat3(1.0);
+        g.model = to_gpu(model);
+        g.normal_matrix = to_gpu(glm::dmat4(nm));
+        g.ids.w = (g.ids.w & ~1u) | (det < 0 ? 1u : 0u);
+    };
+    // Motion blur (motion_module.h): the instances that move over the
+    // shutter, with their three steps in world space; each sample places
+    // them at its time. Deforming meshes move in the vertex stage.
+    struct MovingInstance { std::size_t index; glm::dmat4 steps[3]; std::uint32_t mesh; };
+    std::vector<MovingInstance> moving;
+    bool deforming = false;
     for (const InstanceBatch& b : scene.batches()) {
         const std::uint32_t slot_offset = static_cast<std::uint32_t>(slots.size());
         slots.insert(slots.end(), b.material_slots.begin(), b.material_slots.end());
         const std::size_t n = b.object_indices.size();
         draws.push_back({b.mesh_id, static_cast<std::uint32_t>(instances.size()), static_cast<std::uint32_t>(n),
                          b.cast_shadow, slot_offset, static_cast<std::uint32_t>(b.material_slots.size())});
+        const GpuMesh& mesh = scene.meshes()[b.mesh_id];
+        if (settings.motion_blur && (mesh.flags & 8u) != 0u) deforming = true;
         for (std::size_t i = 0; i < n; ++i) {
             Mat4d m;
             std::copy(b.matrices.begin() + long(i * 16), b.matrices.begin() + long(i * 16 + 16), m.begin());
-            glm::dmat4 model = to_glm(m);
-            model[3] = glm::dvec4(glm::dvec3(model[3]) - cam.position, 1.0);
-            const glm::dmat3 linear(model);
-            const double det = glm::determinant(linear);
-            const GpuMesh& mesh = scene.meshes()[b.mesh_id];
-            const double scale = std::max({glm::length(linear[0]), glm::length(linear[1]), glm::length(linear[2])});
-            bounds.push_back({glm::dvec3(model * glm::dvec4(mesh.bound_center[0], mesh.bound_center[1],
-                                                              mesh.bound_center[2], 1.0)),
-                              mesh.bound_radius * scale});
-            glm::dmat3 nm = std::abs(det) > 1e-300 ? glm::transpose(glm::inverse(linear)) : glm::dmat3(1.0);
+            const glm::dmat4 world = to_glm(m);
             gpu::GpuInstance g{};
-            g.model = to_gpu(model);
-            g.normal_matrix = to_gpu(glm::dmat4(nm));
             g.ids = {b.object_indices[i], slot_offset, static_cast<std::uint32_t>(b.material_slots.size()),
-                     (det < 0 ? 1u : 0u) | (b.holdout ? 2u : 0u)};
+                     b.holdout ? 2u : 0u};
+            Bound bound;
+            place(world, mesh, g, bound);
+            bounds.push_back(bound);
+            if (settings.motion_blur && !b.motion.empty()) {
+                MovingInstance mi{instances.size(), {world, world, world}, b.mesh_id};
+                for (int step = 0; step < 2; ++step) {
+                    std::copy(b.motion.begin() + long(i * 32 + std::size_t(step) * 16),
+                              b.motion.begin() + long(i * 32 + std::size_t(step) * 16 + 16), m.begin());
+                    mi.steps[step == 0 ? 0 : 2] = to_glm(m);
+                }
+                if (mi.steps[0] != world || mi.steps[2] != world) moving.push_back(mi);
+            }
             g.color = {b.colors[i * 4], b.colors[i * 4 + 1], b.colors[i * 4 + 2], b.colors[i * 4 + 3]};
             g.info = {b.randoms[i], b.terminator_offsets[i], 0.0f, 0.0f};
             instances.push_back(g);
@@ -344,6 +368,10 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
             if (settings.light_groups > 0) instance_groups.push_back(b.light_group);
         }
     }
+    // Motion blur moves something: the shadow casters (instances, deforming
+    // meshes) or only the camera.
+    const bool casters_move = settings.motion_blur && (!moving.empty() || deforming);
+    const bool camera_moves = settings.motion_blur && camera_in.has_motion;
     std::vector<gpu::GpuMaterial> gpu_materials;
     for (const Material& m : scene.materials()) {
         gpu::GpuMaterial g{};
@@ -361,7 +389,12 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         if (m.holdout) g.base_diffuse.w = kClosureHoldout;
         gpu_materials.push_back(g);
     }
-    Buffer instance_buffer = make_storage_buffer(instances.data(), instances.size() * sizeof(gpu::GpuInstance), "instances");
+    // Updated every sample when instances move (storage without data is dynamic).
+    Buffer instance_buffer = make_storage_buffer(moving.empty() ? instances.data() : nullptr,
+                                                 instances.size() * sizeof(gpu::GpuInstance), "instances");
+    if (!moving.empty())
+        glNamedBufferSubData(instance_buffer.get(), 0, GLsizeiptr(instances.size() * sizeof(gpu::GpuInstance)),
+                             instances.data());
     Buffer slot_buffer = make_storage_buffer(slots.data(), slots.size() * sizeof(std::uint32_t), "material slots");
     Buffer material_buffer = make_storage_buffer(gpu_materials.data(), gpu_materials.size() * sizeof(gpu::GpuMaterial), "materials");
     this->materials.upload_constants();
@@ -392,6 +425,9 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
                 }
             }
         }
+        // The ray scene is built once per frame, at the middle of the shutter.
+        if (rays_fallback.empty() && casters_move)
+            rays_fallback = "Shadow rays do not follow motion blur yet: this render uses shadow maps";
         shadow_rays = rays_fallback.empty();
     }
     // The ray scene: every shadow-casting instance, with its slots' alphas
@@ -526,7 +562,8 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     result.timings.emitter_triangles = emitters.finish();
     lights.sync(scene.lights(), cam.position, settings.light_threshold, settings.shadows ? &shadows : nullptr,
                 &emitters);
-    const bool culled = settings.light_culling && lights.count() >= kCullingMinLights;
+    // (Not with a moving camera: the tiles' light lists come from sample 0's view.)
+    const bool culled = settings.light_culling && lights.count() >= kCullingMinLights && !camera_moves;
     if (!rays_fallback.empty() && !shadows.empty()) result.warnings.push_back(rays_fallback);
     // Nothing casts a shadow: no rays either.
     shadow_rays = shadow_rays && !shadows.empty();
@@ -805,7 +842,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     // The Vector pass: every instance's and the camera's motion (motion_module.h).
     GLuint motion_program = 0;
     for (auto& [p, image] : pass_images) {
-        if (p != Pass::Vector) continue;
+        if (p != Pass::Vector || settings.motion_blur) continue;  // with motion blur 0, as Cycles
         motion.begin(scene, camera_in, cam, settings.width, settings.height, image.get(), gbuffer.depth_texture());
         ShaderVariant motion_variant;
         motion_variant.defines.push_back("MOTION_PASS");
@@ -891,9 +928,12 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     const glm::dvec4 vp = cam.viewplane;
     const double px = (vp.y - vp.x) / settings.width * margin_px, py = (vp.w - vp.z) / settings.height * margin_px;
     const double left = vp.x - px, right = vp.y + px, bottom = vp.z - py, top = vp.w + py;
-    const glm::dmat3 to_view(cam.view);
+    // This sample's camera: rotation and position relative to the frame's
+    // (the frame's own but under camera motion blur).
+    glm::dmat3 to_view(cam.view);
+    glm::dvec3 eye(0.0);
     auto in_view = [&, left, right, bottom, top](const glm::dvec3& c, double r) {
-        const glm::dvec3 v = to_view * c;
+        const glm::dvec3 v = to_view * (c - eye);
         const double d = -v.z;
         if (d + r < cam.clip_start || d - r > cam.clip_end) return false;
         if (cam.orthographic)
@@ -1071,6 +1111,35 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     }
     const bool preview_averaged = !pass_from_first_sample(settings.preview_pass);
     const int preview_channels = pass_info(settings.preview_pass).channels;
+    // Motion blur: the camera and the moving instances at sample s's time of
+    // the shutter (motion_module.h). Positions stay relative to the frame's
+    // camera; this sample's camera is at `eye` from it (frame.motion.xyz).
+    std::array<glm::dmat4, 3> camera_steps;
+    if (camera_moves)
+        camera_steps = {to_glm(camera_in.matrix_previous), to_glm(camera_in.matrix), to_glm(camera_in.matrix_next)};
+    auto place_at_shutter_time = [&](int sample) {
+        const double r = 2.0 * shutter_time(sample) - 1.0;
+        if (camera_moves) {
+            Camera c = camera_in;
+            const glm::dmat4 m = interpolate_motion(camera_steps[0], camera_steps[1], camera_steps[2], r);
+            for (int col = 0; col < 4; ++col)
+                for (int row = 0; row < 4; ++row) c.matrix[std::size_t(col * 4 + row)] = m[col][row];
+            const CameraMatrices at = build_camera(c, settings.width, settings.height);
+            eye = at.position - cam.position;
+            to_view = glm::dmat3(at.view);
+            glm::dmat4 view = at.view;
+            view[3] = glm::dvec4(-(glm::dmat3(at.view) * eye), 1.0);  // view x translate(-eye)
+            fc.view = to_gpu(view);
+            fc.inv_view = to_gpu(glm::inverse(view));
+        }
+        fc.motion = {float(eye.x), float(eye.y), float(eye.z), float(r)};
+        if (moving.empty()) return;
+        for (const MovingInstance& mi : moving)
+            place(interpolate_motion(mi.steps[0], mi.steps[1], mi.steps[2], r), scene.meshes()[mi.mesh],
+                  instances[mi.index], bounds[mi.index]);
+        glNamedBufferSubData(instance_buffer.get(), 0, GLsizeiptr(instances.size() * sizeof(gpu::GpuInstance)),
+                             instances.data());
+    };
     preview.begin(settings.width, settings.height, settings.samples, settings.preview_interval_ms);
     for (int sample = 0; sample < settings.samples; ++sample) {
         check_cancel();
@@ -1084,6 +1153,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         fc.projection = to_gpu(projection);
         fc.jitter = {float(jitter[3][0]), float(jitter[3][1]), float(cam.clip_start), 0.0f};
         fc.inv_projection = to_gpu(glm::inverse(projection));
+        if (settings.motion_blur) place_at_shutter_time(sample);
         // Where in each light-shape cell (and on the sun's disk) this sample looks.
         fc.sample_shift = {u[2], u[3], float(std::fmod(0.5 + sample * 0.6180339887498949, 1.0)),
                            float(sample)};
@@ -1183,7 +1253,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
             const std::array<float, 2> grid = {float(std::fmod(0.5 + sample * 0.7548776662466927, 1.0)),
                                                float(std::fmod(0.5 + sample * 0.5698402909980532, 1.0))};
             shadows.render_sample(*shaders, {u[2], u[3]}, grid, world_dirs, draw_shadow_casters,
-                                  caster_defines, scene_alpha || alpha_graphs);
+                                  caster_defines, scene_alpha || alpha_graphs || casters_move);
             shadow_ms += timer.lap_ms();
         }
 

@@ -44,6 +44,7 @@ set(DEFERRED_BLENDER_TESTS
     aovs
     light_groups
     vector_pass
+    motion_blur
 )
 
 foreach(_name IN LISTS DEFERRED_BLENDER_TESTS)

@@ -170,3 +170,154 @@ TEST(VectorPass, MovingPerspectiveCameraMatchesTheProjectedPositions) {
     EXPECT_GT(checked, 40);
     EXPECT_GT(largest, 1.0);  // the camera's motion is pixels, not a rounding error
 }
+
+// --- Motion blur --------------------------------------------------------
+
+#include "motion_module.h"
+
+#include <glm/gtc/matrix_transform.hpp>
+
+TEST(MotionBlur, InterpolationIsCyclesDecompositionBetweenTheSteps) {
+    auto rot_z = [](double degrees, double scale, glm::dvec3 t) {
+        glm::dmat4 m = glm::translate(glm::dmat4(1.0), t);
+        m = glm::rotate(m, glm::radians(degrees), glm::dvec3(0, 0, 1));
+        return glm::scale(m, glm::dvec3(scale, scale, 1.0));
+    };
+    const glm::dmat4 a = rot_z(0, 1, {0, 0, 0}), b = rot_z(45, 2, {1, 0, 0}), c = rot_z(90, 3, {1, 2, 0});
+    for (auto [r, expected] : {std::pair{-1.0, a}, std::pair{0.0, b}, std::pair{1.0, c}}) {
+        const glm::dmat4 m = interpolate_motion(a, b, c, r);
+        for (int i = 0; i < 4; ++i)
+            for (int j = 0; j < 4; ++j) ASSERT_NEAR(m[i][j], expected[i][j], 1e-9) << "r " << r;
+    }
+    // Halfway between the middle and the last step: rotation 67.5 degrees
+    // (slerp), scale 2.5 and translation (1, 1, 0) (linear).
+    const glm::dmat4 half = interpolate_motion(a, b, c, 0.5);
+    const glm::dmat4 expected = rot_z(67.5, 2.5, {1, 1, 0});
+    for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j) EXPECT_NEAR(half[i][j], expected[i][j], 1e-9);
+    // A mirrored step keeps its mirroring in the stretch, not the rotation.
+    const glm::dmat4 mirrored = glm::scale(b, glm::dvec3(-1.0, 1.0, 1.0));
+    const glm::dmat4 back = compose_transform(decompose_transform(mirrored));
+    for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j) EXPECT_NEAR(back[i][j], mirrored[i][j], 1e-9);
+}
+
+TEST(MotionBlur, ShutterTimesAreStratifiedFromTheMiddle) {
+    EXPECT_EQ(shutter_time(0), 0.5);
+    std::vector<int> ninths(9, 0);
+    for (int s = 0; s < 9; ++s) {
+        const double t = shutter_time(s);
+        ASSERT_GE(t, 0.0);
+        ASSERT_LT(t, 1.0);
+        ++ninths[std::size_t(t * 9.0)];
+    }
+    for (int n : ninths) EXPECT_EQ(n, 1);
+}
+
+namespace {
+// A white emitter box of 1 m moving along x from -1 to +1 over the shutter
+// (or standing while the camera moves the other way), seen from above on a
+// black world: the fraction of the shutter a point x is covered is the
+// length of {c in [-1, 1] : |x - c| <= 0.5} over 2.
+double coverage(double x) {
+    const double lo = std::max(-1.0, x - 0.5), hi = std::min(1.0, x + 0.5);
+    return std::max(0.0, hi - lo) / 2.0;
+}
+
+const PassImage& blurred_box(Renderer& r, FrameResult& f, bool camera_moves, bool motion_blur = true) {
+    tools::MeshArrays box = tools::make_box(0.5f, 0.5f, 0.5f);
+    const std::uint32_t mesh = r.add_mesh(box.view());
+    Material m;
+    m.base_color = {0.0f, 0.0f, 0.0f};
+    m.specular = 0.0f;
+    m.emission = {1.0f, 1.0f, 1.0f};
+    const std::uint32_t mat = r.add_material(m);
+    const Mat4d now = tools::translation(0, 0, 0);
+    Camera cam = deferred::testing::top_down_ortho(5.0, 4.0f);
+    if (camera_moves) {
+        cam.has_motion = true;
+        cam.matrix_previous = tools::translation(1.0, 0, 5.0);
+        cam.matrix_next = tools::translation(-1.0, 0, 5.0);
+        r.add_instances(mesh, now.data(), 1, nullptr, {mat});
+    } else {
+        const std::array<double, 32> motion = motion_of(tools::translation(-1, 0, 0), tools::translation(1, 0, 0));
+        r.add_instances(mesh, now.data(), 1, nullptr, {mat}, true, nullptr, nullptr, nullptr, false, 0, nullptr,
+                        motion.data());
+    }
+    deferred::testing::set_world_color(r, 0.0f, 0.0f, 0.0f);
+    RenderSettings s;
+    s.width = 64;
+    s.height = 16;
+    s.samples = 81;
+    s.motion_blur = motion_blur;
+    s.passes = {Pass::Vector};
+    cam.ortho_scale = 4.0f;  // 16 px per metre across
+    f = r.render(cam, s);
+    return *f.find(Pass::Combined);
+}
+
+double red_at(const PassImage& img, double x) {
+    const int px = int(std::floor((x + 2.0) * 16.0));
+    return img.pixels[(std::size_t(img.height / 2) * img.width + std::size_t(px)) * 4];
+}
+}  // namespace
+
+TEST(MotionBlur, MovingObjectIsSmearedOverTheShutter) {
+    Renderer r;
+    FrameResult f;
+    const PassImage& img = blurred_box(r, f, false);
+    for (double x : {-1.47, -1.22, -0.97, -0.72, -0.47, 0.03, 0.53, 0.78, 1.03, 1.28, 1.53, 1.72})
+        EXPECT_NEAR(red_at(img, x), coverage(x), 0.03) << "x " << x;
+    // With motion blur Cycles writes no Vector pass: 0.
+    for (float v : f.find(Pass::Vector)->pixels) ASSERT_EQ(v, 0.0f);
+}
+
+TEST(MotionBlur, MovingCameraSmearsAsTheObjectMovingTheOtherWay) {
+    Renderer r;
+    FrameResult f;
+    const PassImage& img = blurred_box(r, f, true);
+    for (double x : {-1.47, -1.22, -0.97, -0.72, -0.47, 0.03, 0.53, 0.78, 1.03, 1.28, 1.53, 1.72})
+        EXPECT_NEAR(red_at(img, x), coverage(x), 0.03) << "x " << x;
+}
+
+TEST(MotionBlur, OffRendersTheMiddleOfTheShutter) {
+    Renderer r;
+    FrameResult f;
+    const PassImage& img = blurred_box(r, f, false, false);
+    EXPECT_NEAR(red_at(img, 0.03), 1.0, 1e-5);
+    EXPECT_NEAR(red_at(img, 0.78), 0.0, 1e-5);
+}
+
+TEST(MotionBlur, DeformingMeshIsSmearedOverTheShutter) {
+    // A 1 m plane whose vertices move from x - 1 to x + 1 over the shutter:
+    // the same profile as the moving box.
+    Renderer r;
+    tools::MeshArrays plane = tools::make_plane(0.5f);
+    std::vector<float> motion_positions;
+    for (int step = 0; step < 2; ++step)
+        for (std::size_t v = 0; v < plane.positions.size() / 3; ++v) {
+            motion_positions.push_back(plane.positions[3 * v] + (step == 0 ? -1.0f : 1.0f));
+            motion_positions.push_back(plane.positions[3 * v + 1]);
+            motion_positions.push_back(plane.positions[3 * v + 2]);
+        }
+    MeshData data = plane.view();
+    data.motion_positions = motion_positions.data();
+    const std::uint32_t mesh = r.add_mesh(data);
+    Material m;
+    m.base_color = {0.0f, 0.0f, 0.0f};
+    m.specular = 0.0f;
+    m.emission = {1.0f, 1.0f, 1.0f};
+    const std::uint32_t mat = r.add_material(m);
+    const Mat4d now = tools::translation(0, 0, 0);
+    r.add_instances(mesh, now.data(), 1, nullptr, {mat});
+    deferred::testing::set_world_color(r, 0.0f, 0.0f, 0.0f);
+    RenderSettings s;
+    s.width = 64;
+    s.height = 16;
+    s.samples = 81;
+    s.motion_blur = true;
+    const FrameResult f = r.render(deferred::testing::top_down_ortho(5.0, 4.0f), s);
+    const PassImage& img = *f.find(Pass::Combined);
+    for (double x : {-1.47, -1.22, -0.97, -0.47, 0.03, 0.53, 1.03, 1.28, 1.53})
+        EXPECT_NEAR(red_at(img, x), coverage(x), 0.03) << "x " << x;
+}

@@ -190,6 +190,12 @@ class FinalRender:
                 pass
             self.status(f"Error: {message}")
         finally:
+            if getattr(self, "_restore_frame", None) is not None:  # failed between motion and export
+                try:
+                    motion_export.restore(engine, *self._restore_frame)
+                except Exception:
+                    pass
+                self._restore_frame = None
             # Keep the native session for the next render (Persistent Data)
             # or release it (joins its GL thread, frees the GL context)
             # before handing the result back.
@@ -263,18 +269,30 @@ class FinalRender:
         for render_pass in layer.passes:
             if render_pass.name not in pass_names:
                 pass_names.append(render_pass.name)
-        if getattr(scene.render, "use_motion_blur", False):
-            # Said, not silent. Cycles leaves the Vector pass empty with motion
-            # blur on; here it is written, so Vector Blur can add the blur.
-            self.warn("Motion Blur is not rendered (Render Properties > Motion Blur)"
-                      + ("; the Vector pass is written, for the compositor's Vector Blur"
-                         if "Vector" in pass_names else ""))
-        # The Vector pass: the scene at the neighbouring frames (motion.py),
-        # before this frame's export, which sees the depsgraph as it is left.
+        # Motion Blur, or the Vector pass: the scene at other times
+        # (motion.py), collected before this frame's export, which reads the
+        # depsgraph at the middle step it is left at.
+        self._motion_blur = bool(getattr(scene.render, "use_motion_blur", False))
+        self._restore_frame = None
         motion = None
-        if "Vector" in pass_names:
+        if self._motion_blur:
+            shutter, middle_delta = motion_export.blur_settings(scene)
+            for message in motion_export.blur_warnings(self.depsgraph):
+                self.warn(message)
+            if "Vector" in pass_names:
+                self.warn("the Vector pass is empty with Motion Blur on, as in Cycles")
+            self.status("evaluating the shutter's open and close (Motion Blur)", 0.01)
+            if middle_delta != 0.0:
+                self._restore_frame = (scene.frame_current, scene.frame_subframe)
+            motion = motion_export.collect(engine, self.depsgraph, camera_object, mesh_export.MESHABLE_TYPES,
+                                           half_span=0.5 * shutter, middle_delta=middle_delta)
+            if middle_delta != 0.0:  # the camera at the middle of the shutter
+                camera_object = camera_object.original.evaluated_get(self.depsgraph)
+                cam_params, _ = camera_export.camera_params(scene, camera_object, engine)
+        elif "Vector" in pass_names:
             self.status("evaluating the previous and next frames (Vector pass)", 0.01)
             motion = motion_export.collect(engine, self.depsgraph, camera_object, mesh_export.MESHABLE_TYPES)
+        if motion is not None:
             camera_motion = motion.camera(cam_params["matrix"])
             if camera_motion is not None:
                 cam_params["motion"] = camera_motion
@@ -290,8 +308,13 @@ class FinalRender:
 
         self.status("exporting scene", 0.05)
         t_export = time.perf_counter()
-        stats, cancelled = export_scene(self.depsgraph, renderer, warn=self.warn,
-                                        test_break=engine.test_break, motion=motion)
+        try:
+            stats, cancelled = export_scene(self.depsgraph, renderer, warn=self.warn,
+                                            test_break=engine.test_break, motion=motion)
+        finally:
+            if self._restore_frame is not None:  # the middle of the shutter was not the frame
+                motion_export.restore(engine, *self._restore_frame)
+                self._restore_frame = None
         if cancelled:
             raise RenderCancelled()
         t_export = time.perf_counter() - t_export
@@ -313,7 +336,7 @@ class FinalRender:
         kwargs = dict(passes=requested, film_transparent=bool(scene.render.film_transparent),
                       cryptomatte=crypto_layers, cryptomatte_levels=crypto_levels or 6,
                       aovs=requested_aovs(self.view_layer),
-                      light_groups=len(light_groups),
+                      light_groups=len(light_groups), motion_blur=self._motion_blur,
                       samples=samples, filter_width=_filter_width(scene),
                       alpha_threshold=_alpha_threshold(self.view_layer),
                       **_light_settings(scene), **mist)

@@ -1,9 +1,14 @@
-"""The scene at the neighbouring frames, for the Vector pass.
+"""The scene at other times: the neighbouring frames for the Vector pass, the
+shutter's open and close for motion blur.
 
 Cycles fills its motion pass from the depsgraph evaluated at frame - 1 and
 frame + 1 (blender/sync.cpp ``sync_motion``; ``Scene::motion_shutter_time()``
 is 2 frames for the motion pass, so the relative times -1 and +1 land on the
-neighbouring frames), with the render's subframe. For each object instance it
+neighbouring frames), with the render's subframe. For motion blur the same
+three steps are the shutter's open, middle and close: the middle at the frame
+for Shutter Position Center, half a shutter later for Start and earlier for
+End (the frame is then the shutter's open or close), each step half a
+shutter (Render Properties > Motion Blur > Shutter, in frames) away. For each object instance it
 keeps the world matrix there; for a deforming mesh, the vertex positions,
 when their count is the same as at this frame (otherwise the deformation is
 left out: Cycles disables it and only logs "Topology differs"; here it is a
@@ -12,8 +17,13 @@ motion pass projects with this frame's ``cameratoraster``).
 
 Instances are matched across frames as Cycles' ``ObjectKey`` does: the
 object itself, or for an instance its instancer and ``persistent_id``. An
-instance missing at a neighbouring frame does not move.
+instance missing at a neighbouring frame does not move, and neither does an
+object (or camera) whose Object > Motion Blur is off (Cycles' per-object
+``use_motion_blur``); ``use_deform_motion`` off keeps its vertices still.
+Cycles' Motion Steps above 1 (more than three steps) are rendered with three.
 """
+
+import math
 
 import numpy as np
 
@@ -31,11 +41,31 @@ def instance_key(inst, ob):
     return ("object", name)
 
 
+def _cycles_setting(ob, name, default):
+    original = getattr(ob, "original", None) or ob
+    settings = getattr(original, "cycles", None)
+    return getattr(settings, name, default) if settings is not None else default
+
+
+def moves(ob):
+    """Object > Motion Blur (Cycles' per-object switch, on by default)."""
+    return bool(_cycles_setting(ob, "use_motion_blur", True))
+
+
+def motion_steps(ob):
+    """Cycles' Motion Steps of an object: 2^(steps - 1) + 1 transforms."""
+    try:
+        return int(_cycles_setting(ob, "motion_steps", 1))
+    except (TypeError, ValueError):
+        return 1
+
+
 def deforms(ob):
     """Whether a mesh object's vertices can move within it between frames:
     modifiers (armatures, simulations, geometry nodes, ...) or shape keys,
-    as Blender's ``BKE_object_is_deform_modified`` asks."""
-    if ob.type != "MESH":
+    as Blender's ``BKE_object_is_deform_modified`` asks, and its Deformation
+    motion (Cycles' ``use_deform_motion``) is on."""
+    if ob.type != "MESH" or not bool(_cycles_setting(ob, "use_deform_motion", True)):
         return False
     original = getattr(ob, "original", None) or ob
     data = getattr(original, "data", None)
@@ -64,7 +94,7 @@ def _snapshot(depsgraph, camera_object, engine, geometry_types):
     step = _Step()
     for inst in depsgraph.object_instances:
         ob = inst.object
-        if ob.type not in geometry_types or not inst.show_self:
+        if ob.type not in geometry_types or not inst.show_self or not moves(ob):
             continue
         key = instance_key(inst, ob)
         step.matrices[key] = np.array(inst.matrix_world, dtype=np.float64)
@@ -72,7 +102,7 @@ def _snapshot(depsgraph, camera_object, engine, geometry_types):
             positions = _vertex_positions(ob)
             if positions is not None:
                 step.positions[key] = positions
-    if camera_object is not None:
+    if camera_object is not None and moves(camera_object):
         evaluated = camera_object.original.evaluated_get(depsgraph)
         matrix = None
         try:
@@ -121,16 +151,62 @@ class Motion:
         return (previous, next_)
 
 
-def collect(engine, depsgraph, camera_object, geometry_types):
-    """Evaluates the depsgraph at the previous and the next frame (with the
-    render's subframe) and back at this one; returns a ``Motion``."""
+def _frame_set(engine, time):
+    frame = math.floor(time)
+    engine.frame_set(int(frame), subframe=float(time - frame))
+
+
+def collect(engine, depsgraph, camera_object, geometry_types, half_span=1.0, middle_delta=0.0):
+    """Evaluates the depsgraph ``half_span`` frames before and after the
+    middle step (the render's frame and subframe + ``middle_delta``) and
+    leaves it at the middle step, where this frame's export reads it;
+    ``restore`` goes back to the render's frame after that. Returns a
+    ``Motion``."""
     scene = depsgraph.scene
-    frame, subframe = scene.frame_current, scene.frame_subframe
+    middle = scene.frame_current + scene.frame_subframe + middle_delta
     steps = []
     try:
-        for offset in (-1, 1):
-            engine.frame_set(frame + offset, subframe=subframe)
+        for offset in (-half_span, half_span):
+            _frame_set(engine, middle + offset)
             steps.append(_snapshot(depsgraph, camera_object, engine, geometry_types))
     finally:
-        engine.frame_set(frame, subframe=subframe)
+        _frame_set(engine, middle)
     return Motion(steps[0], steps[1])
+
+
+def restore(engine, frame, subframe):
+    """Back at the render's own frame (after a middle step elsewhere)."""
+    engine.frame_set(frame, subframe=subframe)
+
+
+def blur_settings(scene):
+    """(shutter in frames, the middle step's offset from the frame) of
+    Render Properties > Motion Blur (Cycles' Shutter Position: Center, or
+    Start / End, the frame being the shutter's open / close)."""
+    shutter = float(getattr(scene.render, "motion_blur_shutter", 0.5))
+    if not math.isfinite(shutter) or shutter < 0.0:
+        shutter = 0.5
+    position = getattr(getattr(scene, "cycles", None), "motion_blur_position", "CENTER")
+    return shutter, {"START": 0.5 * shutter, "END": -0.5 * shutter}.get(position, 0.0)
+
+
+def blur_warnings(depsgraph):
+    """What of Render Properties > Motion Blur this engine does not render."""
+    scene = depsgraph.scene
+    notes = []
+    curve = getattr(scene.render, "motion_blur_shutter_curve", None)
+    try:
+        flat = all(abs(p.location[1] - 1.0) < 1e-6 for c in curve.curves for p in c.points)
+    except (AttributeError, TypeError):
+        flat = True
+    if not flat:
+        notes.append("Motion Blur: the Shutter Curve is not rendered (the shutter is open evenly)")
+    rolling = getattr(getattr(scene, "cycles", None), "rolling_shutter_type", "NONE")
+    if rolling != "NONE":
+        notes.append("Motion Blur: the Rolling Shutter is not rendered")
+    many = sorted({inst.object.original.name for inst in depsgraph.object_instances
+                   if inst.object.type != "LIGHT" and moves(inst.object) and motion_steps(inst.object) > 1})
+    if many:
+        names = ", ".join(f"'{n}'" for n in many[:3]) + (" ..." if len(many) > 3 else "")
+        notes.append(f"Motion Blur: Motion Steps above 1 are rendered with 3 steps (open, middle, close): {names}")
+    return notes

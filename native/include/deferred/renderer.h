@@ -115,6 +115,15 @@ struct RenderSettings {
     // index them from 1); each gets a Combined-like RGB image of the light
     // its members give (lights, emissive surfaces, the world). 0: none.
     int light_groups = 0;
+    // Motion blur (Render Properties > Motion Blur): each film sample renders
+    // the scene at one time of the shutter, the instances, the camera and
+    // deforming meshes moved between the motion the caller gives (previous,
+    // now, next: the shutter's open, middle and close), so the accumulated
+    // image converges to Cycles' motion blur. The Vector pass is then 0, as
+    // Cycles leaves it. Shadow rays fall back to maps for a frame in which
+    // anything moves (warned); emissive meshes light others from where they
+    // are at the middle of the shutter.
+    bool motion_blur = false;
     // Progressive preview (the 3D viewport): >= 0 publishes the Combined
     // estimate after the first sample, then at most every this many
     // milliseconds, and after the last sample, for Renderer::preview().

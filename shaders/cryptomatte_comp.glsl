@@ -2,8 +2,10 @@
  * the surface this sample sees at each pixel adds 1/samples of coverage to
  * its id in each layer's slots (object, material, asset): the slot that
  * already holds the id, else the first empty one; with every slot taken by
- * other ids the sample is dropped (Cycles keeps as many: the view layer's
- * Levels). As in Cycles, the pixel filter is in the jittered sample
+ * other ids, the last slot (Cycles' film_write_cryptomatte_slots: the
+ * coverage still adds up to 1, credited to that slot's id). Cycles 3.4 has
+ * no other mode: its Accurate Mode's unbounded per-pixel map is no longer
+ * built, and the switch renders the same. As in Cycles, the pixel filter is in the jittered sample
  * positions, so every sample weighs the same; background adds nothing.
  * Defines: CRYPTO_LEVELS, CRYPTO_LAYERS and CRYPTO_KIND_<i> (0 object,
  * 1 material, 2 asset) for each layer i. */
@@ -31,7 +33,7 @@ void add_coverage(uint base, uint id) {
             slots[base + k] = uvec2(id, floatBitsToUint(sample_weight));
             return;
         }
-        if (s.x == id) {
+        if (s.x == id || k == uint(CRYPTO_LEVELS) - 1u) {
             slots[base + k].y = floatBitsToUint(uintBitsToFloat(s.y) + sample_weight);
             return;
         }

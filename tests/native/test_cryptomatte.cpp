@@ -89,3 +89,37 @@ TEST(Cryptomatte, NothingAskedNothingMade) {
     s.cryptomatte_levels = 17;
     EXPECT_THROW(r.render(top_down_ortho(5.0, 4.0f), s), InvalidInput);
 }
+
+TEST(Cryptomatte, MoreIdsThanLevelsGoToTheLastSlotAsCycles) {
+    // Three stripes (object hashes 1, 2, 3) side by side across the middle
+    // pixel, Levels 2: Cycles' film_write_cryptomatte_slots adds a
+    // third id's coverage to the last slot, so the pixel's coverage still
+    // adds up to 1 (nothing is dropped).
+    Renderer r;
+    set_world_color(r, 0, 0, 0);
+    tools::MeshArrays plane = tools::make_plane(0.05f, 1);
+    MeshData data = plane.view();
+    const std::uint32_t mesh = r.add_mesh(data);
+    const std::uint32_t mat = r.add_material(Material{});
+    for (int k = 0; k < 3; ++k) {
+        // The middle stripe 0.1 m wide, the outer ones 0.9 m (beyond the
+        // pixel filter's reach), all stretched along y over the image.
+        Mat4d stripe = tools::translation(k == 1 ? 0.0 : (k == 0 ? -0.5 : 0.5), 0, 0);
+        stripe[0] = k == 1 ? 1.0 : 9.0;
+        stripe[5] = 100.0;
+        const std::uint32_t ids[2] = {std::uint32_t(k + 1), 7};
+        r.add_instances(mesh, stripe.data(), 1, nullptr, {mat}, true, nullptr, nullptr, ids);
+    }
+    RenderSettings s;
+    s.width = 3;
+    s.height = 1;
+    s.samples = 64;
+    s.cryptomatte = {CryptomatteKind::Object};
+    s.cryptomatte_levels = 2;
+    Camera cam = top_down_ortho(5.0, 0.9f);  // 0.3 m per pixel: the middle pixel spans the three stripes
+    const FrameResult f = r.render(cam, s);
+    const CryptomatteImage& obj = f.cryptomatte[0];
+    const float* p = &obj.pixels[std::size_t(1) * obj.levels * 2];
+    EXPECT_NEAR(p[1] + p[3], 1.0f, 1e-5);
+    EXPECT_GT(p[3], 0.0f);
+}

@@ -210,8 +210,8 @@ def test_cancel(checks, out):
                 if poll():
                     raise final.RenderCancelled()
 
-            def export_scene(depsgraph, renderer, warn=None, test_break=None):
-                return original_export(depsgraph, renderer, warn=warn, test_break=poll)
+            def export_scene(depsgraph, renderer, warn=None, test_break=None, **kwargs):
+                return original_export(depsgraph, renderer, warn=warn, test_break=poll, **kwargs)
 
             final.FinalRender.check_break = check_break
             final.export_scene = export_scene

@@ -394,6 +394,9 @@ void main() {
 #else
     const bool holdout_material = c.holdout != 0.0;  /* node_holdout, whole or drawn from a mix */
 #endif
+    /* A shadow catcher object (instance flag 4): emission.a 2 tells the
+     * lighting pass (SHADOW_CATCHER) to keep its light apart. */
+    if ((v_mirrored & 4u) != 0u) surf_emission.a = 2.0;
     if ((v_mirrored & 2u) != 0u || holdout_material) {
         /* A holdout (Cycles' holdout closure or the object's Holdout flag): a
          * hole, black with alpha 0; the lighting pass adds nothing where

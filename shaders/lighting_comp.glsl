@@ -80,6 +80,18 @@ layout(binding = IMG_AO, rgba32f) uniform image2D ao_image;
 layout(binding = IMG_DIFF_LIGHT, rgba32f) uniform image2D diffuse_light;
 layout(binding = IMG_GLOSS_LIGHT, rgba32f) uniform image2D glossy_light;
 #endif
+#ifdef SHADOW_CATCHER
+/* Cycles' shadow catcher (kernel/integrator/shadow_catcher.h): a camera ray's
+ * first hit on a catcher splits the path. The matte path goes on as if the
+ * catcher were transparent: Combined (Blender's, the matte pass) gets a hole
+ * there. The hit path shades the catcher with every shadow, the pass path
+ * with only catchers occluding; the Shadow Catcher pass is their ratio
+ * (passes_comp.glsl RESOLVE_CATCHER). Here the pass path's light is the
+ * unshadowed light (the catcher's own shadows on itself are not kept apart
+ * from the others'). */
+layout(binding = IMG_CATCHER_HIT, rgba32f) uniform image2D catcher_hit;
+layout(binding = IMG_CATCHER_PASS, rgba32f) uniform image2D catcher_pass;
+#endif
 
 /* What this sample shows of `value` (the opaque surface or the background)
  * through the Blend-mode layers in front of it, plus the layers themselves
@@ -175,6 +187,11 @@ void main() {
     }
 #endif
     float lum_shadowed = 0.0, lum_unshadowed = 0.0;
+#ifdef SHADOW_CATCHER
+    const bool catcher = emission.a > 1.5;
+    vec3 catcher_unshadowed = vec3(0.0);
+    if (catcher && first_batch) catcher_unshadowed = last_world_unoccluded.diffuse + last_world_unoccluded.glossy;
+#endif
     const vec3 luminance = vec3(0.2126729, 0.7151522, 0.0721750);
     const uint end = min(count, light_batch.y);
     if (!first_batch && light_batch.x >= end) return;
@@ -195,9 +212,26 @@ void main() {
         lum_unshadowed += dot(last_unshadowed.diffuse + last_unshadowed.glossy, luminance);
         lum_shadowed += dot(c.diffuse + c.glossy, luminance) * visible;
 #endif
+#ifdef SHADOW_CATCHER
+        catcher_unshadowed += last_unshadowed.diffuse + last_unshadowed.glossy;
+#endif
     }
 
     if (!first_batch) emission = vec4(0.0);
+#ifdef SHADOW_CATCHER
+    if (catcher) {
+        /* Both split paths shade the catcher's emission too. Its light
+         * reaches no light pass and no light group, as in Cycles. */
+        const vec3 shadowed = emission.rgb + total.diffuse + total.glossy;
+        imageStore(catcher_hit, pixel, imageLoad(catcher_hit, pixel) +
+                                           vec4(shadowed, first_batch ? 1.0 : 0.0) * share);
+        imageStore(catcher_pass, pixel, imageLoad(catcher_pass, pixel) +
+                                            vec4(emission.rgb + catcher_unshadowed, 0.0) * share);
+        if (first_batch)
+            imageStore(film, pixel, imageLoad(film, pixel) + behind_forward_layer(pixel, vec4(0.0), true) * share);
+        return;
+    }
+#endif
 #ifdef LIGHT_GROUPS
     add_to_group(instance_groups[texelFetch(gbuf_ids, pixel, 0).z], emission.rgb);
     store_groups(pixel, share);

@@ -308,6 +308,10 @@ LightContribution world_map_unoccluded(PrincipledWeights w, SurfaceParams s, vec
 }
 #endif
 
+/* The world's light before any occlusion (world_light sets it): what a
+ * shadow catcher gets without the other objects. */
+LightContribution last_world_unoccluded;
+
 LightContribution world_light(PrincipledWeights w, SurfaceParams s, vec3 P, vec3 N, vec3 V, ivec2 pixel,
                               out float ao) {
     /* Sharp glossy light whose screen-space visibility is unknown: AO below. */
@@ -318,6 +322,8 @@ LightContribution world_light(PrincipledWeights w, SurfaceParams s, vec3 P, vec3
 #else
     LightContribution r = world_constant_unoccluded(w, s, P, N, V, jitter, sharp_unknown);
 #endif
+    last_world_unoccluded = r;
+    last_world_unoccluded.glossy += sharp_unknown;
     ao = 1.0;
 #ifdef HAS_WORLD_OCCLUSION
     /* The sample's maps, each a direction pair with its own density; their

@@ -46,6 +46,26 @@ layout(binding = TEX_SHADOW_LIGHT) uniform sampler2D shadow_light;
 #ifdef RESOLVE_MOTION
 layout(binding = TEX_MOTION_WEIGHT) uniform sampler2D motion_count;
 #endif
+#if defined(RESOLVE_CATCHER) || defined(RESOLVE_CATCHER_COMBINED)
+layout(binding = TEX_CATCHER_HIT) uniform sampler2D catcher_hit;
+layout(binding = TEX_CATCHER_PASS) uniform sampler2D catcher_pass;
+layout(binding = TEX_CATCHER_FILM) uniform sampler2D catcher_film;
+
+/* Cycles' film_calculate_shadow_catcher (kernel/film/read.h): the catcher's
+ * light with every shadow over its light with only catchers occluding, per
+ * channel (safe_divide_shadow_catcher: 1 where the latter is 0), then
+ * alpha-over on white with the Combined alpha (the samples that hit any
+ * surface, the catcher's included); 1 where no sample hit a catcher. */
+vec3 shadow_catcher(ivec2 pixel, float matte_alpha) {
+    vec4 hit = texelFetch(catcher_hit, pixel, 0);
+    if (hit.a <= 0.0) return vec3(1.0);
+    vec3 pass = texelFetch(catcher_pass, pixel, 0).rgb;
+    vec3 ratio = vec3(pass.r != 0.0 ? hit.r / pass.r : 1.0, pass.g != 0.0 ? hit.g / pass.g : 1.0,
+                      pass.b != 0.0 ? hit.b / pass.b : 1.0);
+    float alpha = clamp(matte_alpha + hit.a, 0.0, 1.0);
+    return (1.0 - alpha) + alpha * ratio;
+}
+#endif
 
 layout(binding = IMG_PASS_OUT, rgba32f) uniform image2D pass_out;
 
@@ -66,7 +86,29 @@ void main() {
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
     if (any(greaterThanEqual(pixel, ivec2(frame.viewport.xy)))) return;
 
-#if defined(RESOLVE_MOTION)
+#if defined(RESOLVE_CATCHER)
+    /* The Shadow Catcher pass. */
+    imageStore(pass_out, pixel, vec4(shadow_catcher(pixel, texelFetch(catcher_film, pixel, 0).a), 0.0));
+#elif defined(RESOLVE_CATCHER_COMBINED)
+    /* Combined without the Shadow Catcher pass asked for: Cycles' approximate
+     * shadow catcher (film_calculate_shadow_catcher_matte_with_shadow): the
+     * matte with the shadow in its alpha, A = (1 - a)(1 - shadow) + a; with an
+     * opaque film, the world behind the catcher seen through 1 - A of it. */
+    vec4 matte = imageLoad(pass_out, pixel);
+    vec3 sc = shadow_catcher(pixel, matte.a);
+    float A = (1.0 - matte.a) * (1.0 - clamp((sc.r + sc.g + sc.b) * (1.0 / 3.0), 0.0, 1.0)) + matte.a;
+    if (frame.world_color.w > 0.5) {
+        imageStore(pass_out, pixel, vec4(matte.rgb, A));
+    } else {
+#ifdef HAS_WORLD_MAP
+        vec3 world = world_camera_radiance(-frame_view_vector(frame_position_from_depth(pixel, 0.5)));
+#else
+        vec3 world = frame.world_color.rgb;
+#endif
+        float behind = texelFetch(catcher_hit, pixel, 0).a;  /* the samples whose world the catcher hid */
+        imageStore(pass_out, pixel, vec4(matte.rgb + world * behind * (1.0 - A), 1.0));
+    }
+#elif defined(RESOLVE_MOTION)
     /* Vector: the motion summed over the samples that saw a surface, divided
      * by their count (Cycles' pass_motion_weight); 0 where none did. */
     float n = texelFetch(motion_count, pixel, 0).r;
@@ -134,6 +176,8 @@ void main() {
     value = vec4(1.0); /* accumulated by the lighting pass */
 #elif PASS_ID == PASS_VECTOR
     value = vec4(0.0); /* drawn by the motion module, divided by RESOLVE_MOTION */
+#elif PASS_ID == PASS_SHADOW_CATCHER
+    value = vec4(1.0); /* written by RESOLVE_CATCHER */
 #else
 #error "passes_comp.glsl: unknown PASS_ID"
 #endif

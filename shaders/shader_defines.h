@@ -59,6 +59,11 @@
 /* The Vector pass's sample count per pixel, read by its resolve after the
  * sample loop: TEX_SHADOW_LIGHT's unit again, in a dispatch of its own. */
 #define TEX_MOTION_WEIGHT 11
+/* The shadow catcher's resolves (after the sample loop, dispatches of their
+ * own): its shadowed and unshadowed light, and the film. */
+#define TEX_CATCHER_HIT 8
+#define TEX_CATCHER_PASS 9
+#define TEX_CATCHER_FILM 11
 /* Node materials: image slot k of the drawn material at unit TEX_MATERIAL_IMAGE0 + k */
 #define TEX_MATERIAL_IMAGE0 16
 
@@ -71,6 +76,12 @@
 #define IMG_AO 5          /* AO pass accumulation (lighting pass, first batch) */
 #define IMG_WORLD_BAKE 6  /* the world map being baked (world_bake_comp.glsl) */
 #define IMG_LIGHT_GROUPS 7 /* light groups: one layer of accumulated light per group (rgba32f array) */
+/* Shadow catchers (lighting pass, SHADOW_CATCHER): at catcher pixels the light
+ * with every shadow (rgb) and the samples' share (a), and the light the
+ * catcher would get without the other objects (rgb). Bindings of images the
+ * lighting pass does not otherwise use (the pass images and the world bake). */
+#define IMG_CATCHER_HIT 3
+#define IMG_CATCHER_PASS 6
 
 /* The world map's sampling density: this fraction uniform on the sphere, the
  * rest by luminance (defensive importance sampling: every direction keeps a
@@ -127,6 +138,7 @@
 #define PASS_SHADOW 14
 #define PASS_AO 15
 #define PASS_VECTOR 16
+#define PASS_SHADOW_CATCHER 17
 
 /* Compute workgroup size (8x8 pixels) */
 #define LIGHTING_GROUP_SIZE 8

@@ -421,7 +421,7 @@ void declare_renderer(py::module_& m) {
                 const py::object& object_indices, const py::object& material_slots, bool cast_shadow,
                 const py::object& colors_obj, const py::object& randoms_obj, const py::object& crypto_obj,
                 bool holdout, std::uint32_t light_group, const py::object& terminator_obj,
-                const py::object& motion_obj) {
+                const py::object& motion_obj, bool shadow_catcher) {
                  const std::uint32_t mesh_id = index_from(mesh_id_obj, "add_instances: mesh_id");
                  py::ssize_t n = 0, k = 0;
                  const double* rows = borrow<double>(matrices, "matrices", {-1, 4, 4}, &n);
@@ -465,18 +465,19 @@ void declare_renderer(py::module_& m) {
                  py::gil_scoped_release release;
                  self.get().add_instances(mesh_id, cols.data(), std::size_t(n), ids, slots, cast_shadow, colors, randoms,
                                           crypto, holdout, light_group, terminator,
-                                          motion.empty() ? nullptr : motion.data());
+                                          motion.empty() ? nullptr : motion.data(), shadow_catcher);
              },
              py::arg("mesh_id"), py::arg("matrices"), py::kw_only(), py::arg("object_indices") = py::none(),
              py::arg("material_slots") = py::none(), py::arg("cast_shadow") = true, py::arg("colors") = py::none(),
              py::arg("randoms") = py::none(), py::arg("crypto") = py::none(), py::arg("holdout") = false,
              py::arg("light_group") = 0u, py::arg("terminator_offsets") = py::none(),
-             py::arg("motion") = py::none(),
+             py::arg("motion") = py::none(), py::arg("shadow_catcher") = false,
              "crypto: uint32 (n, 2), each instance's Cryptomatte object and asset hashes (MurmurHash3_32 of "
              "the names). holdout: the instances are holes in the image (Object > Visibility > Holdout). "
              "terminator_offsets: float32 (n,), each instance's Shadow Terminator Geometry Offset (Cycles' "
              "object setting; 0, the default here, moves no shadow ray). motion: float64 (n, 2, 4, 4), each "
-             "instance's world matrices at the previous and the next frame (the Vector pass).")
+             "instance's world matrices at the previous and the next frame (the Vector pass). shadow_catcher: "
+             "Object > Visibility > Shadow Catcher.")
         .def("add_light",
              [](PyRenderer& self, const std::string& type, const py::object& matrix, const py::object& color,
                 float energy, float radius, float spot_size, float spot_blend, float angle, const std::string& shape,

@@ -14,7 +14,8 @@ static_assert(PASS_COMBINED == int(Pass::Combined) && PASS_DEPTH == int(Pass::De
               PASS_DIFF_DIR == int(Pass::DiffDir) && PASS_DIFF_COL == int(Pass::DiffCol) &&
               PASS_GLOSS_DIR == int(Pass::GlossDir) && PASS_GLOSS_COL == int(Pass::GlossCol) &&
               PASS_EMIT == int(Pass::Emit) && PASS_ENV == int(Pass::Env) && PASS_SHADOW == int(Pass::Shadow) &&
-              PASS_AO == int(Pass::AO) && PASS_VECTOR == int(Pass::Vector) && kPassCount == 17,
+              PASS_AO == int(Pass::AO) && PASS_VECTOR == int(Pass::Vector) &&
+              PASS_SHADOW_CATCHER == int(Pass::ShadowCatcher) && kPassCount == 18,
               "shader_defines.h PASS_* ids drifted from deferred::Pass");
 
 namespace {
@@ -36,6 +37,7 @@ const std::array<PassInfo, kPassCount> kPasses = {{
     {Pass::Shadow, "Shadow", "RGB", 3, {1, 1, 1, 0}},
     {Pass::AO, "AO", "RGB", 3, {0, 0, 0, 0}},
     {Pass::Vector, "Vector", "XYZW", 4, {0, 0, 0, 0}},
+    {Pass::ShadowCatcher, "Shadow Catcher", "RGB", 3, {1, 1, 1, 0}},
 }};
 }  // namespace
 

@@ -347,7 +347,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
             const glm::dmat4 world = to_glm(m);
             gpu::GpuInstance g{};
             g.ids = {b.object_indices[i], slot_offset, static_cast<std::uint32_t>(b.material_slots.size()),
-                     b.holdout ? 2u : 0u};
+                     (b.holdout ? 2u : 0u) | (b.shadow_catcher ? 4u : 0u)};
             Bound bound;
             place(world, mesh, g, bound);
             bounds.push_back(bound);
@@ -371,6 +371,11 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     // Motion blur moves something: the shadow casters (instances, deforming
     // meshes) or only the camera.
     const bool casters_move = settings.motion_blur && (!moving.empty() || deforming);
+    // Shadow catchers (lighting_comp.glsl SHADOW_CATCHER): their light kept
+    // apart; Combined becomes the matte.
+    bool catchers = false;
+    for (const InstanceBatch& b : scene.batches())
+        if (b.shadow_catcher && !b.object_indices.empty()) catchers = true;
     const bool camera_moves = settings.motion_blur && camera_in.has_motion;
     std::vector<gpu::GpuMaterial> gpu_materials;
     for (const Material& m : scene.materials()) {
@@ -613,6 +618,11 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     }
     Texture shadow_light;
     if (shadow_pass) shadow_light = accumulation("shadow light");
+    Texture catcher_hit, catcher_pass;
+    if (catchers) {
+        catcher_hit = accumulation("shadow catcher light");
+        catcher_pass = accumulation("shadow catcher light without the other objects");
+    }
     // Light groups: one layer per group, and each instance's group.
     Texture group_light;
     Buffer instance_group_buffer;
@@ -630,6 +640,11 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     std::vector<std::pair<Pass, Texture>> pass_images;
     for (Pass p : wanted.list())
         if (p != Pass::Combined) pass_images.emplace_back(p, accumulation(pass_info(p).name));
+    for (auto& [p, image] : pass_images)
+        if (p == Pass::ShadowCatcher) {  // 1 where no catcher is seen (RESOLVE_CATCHER writes the rest)
+            const float one[4] = {1, 1, 1, 0};
+            glClearTexImage(image.get(), 0, GL_RGBA, GL_FLOAT, one);
+        }
     result.timings.gbuffer_bytes = gbuffer.bytes() + pixels * 16 * (1 + pass_images.size() + (light_split ? 2 : 0));
 
     // Variants: which G-buffer targets exist, which light types are present.
@@ -658,6 +673,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     if (settings.light_groups > 0)
         lighting_variant.defines.push_back("LIGHT_GROUPS " + std::to_string(settings.light_groups));
     if (shadow_pass) lighting_variant.defines.push_back("OUT_SHADOW");
+    if (catchers) lighting_variant.defines.push_back("SHADOW_CATCHER");
     ShaderVariant geometry_variant = base_variant;
     if (scene_alpha) geometry_variant.defines.push_back("SCENE_ALPHA");
     const GLuint geometry = shaders->graphics_program("geometry_vert.glsl", "geometry_frag.glsl", geometry_variant);
@@ -982,8 +998,10 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         for (auto& [p, image] : pass_images) {
             const bool first_only = pass_from_first_sample(p);
             // Shadow: resolved below; AO: accumulated by the lighting pass;
-            // Vector: drawn by the motion module.
-            if ((first_only && sample > 0) || p == Pass::Shadow || p == Pass::AO || p == Pass::Vector) continue;
+            // Vector: drawn by the motion module; Shadow Catcher: resolved below.
+            if ((first_only && sample > 0) || p == Pass::Shadow || p == Pass::AO || p == Pass::Vector ||
+                p == Pass::ShadowCatcher)
+                continue;
             if (data_gbuffer && is_data_pass(p) != data) continue;
             glUseProgram(pass_program(p, first_only ? nullptr : "ACCUMULATE"));
             gbuffer.bind_textures();
@@ -1100,7 +1118,8 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     GLuint preview_image = film.get();
     if (settings.preview_pass != Pass::Combined) {
         const Pass p = settings.preview_pass;
-        if (p == Pass::DiffDir || p == Pass::GlossDir || p == Pass::Shadow || p == Pass::Vector)
+        if (p == Pass::DiffDir || p == Pass::GlossDir || p == Pass::Shadow || p == Pass::Vector ||
+            p == Pass::ShadowCatcher)
             throw InvalidInput(std::string("preview_pass: ") + pass_info(p).name +
                                " is resolved after the last sample and cannot be previewed");
         preview_image = 0;
@@ -1288,6 +1307,10 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         glBindImageTexture(IMG_FILM, film.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
         if (shadow_pass)
             glBindImageTexture(IMG_SHADOW, shadow_light.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
+        if (catchers) {
+            glBindImageTexture(IMG_CATCHER_HIT, catcher_hit.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
+            glBindImageTexture(IMG_CATCHER_PASS, catcher_pass.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
+        }
         for (auto& [p, image] : pass_images)
             if (p == Pass::AO) glBindImageTexture(IMG_AO, image.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
         if (group_light) {
@@ -1324,6 +1347,35 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
 
     // DiffDir/GlossDir: accumulated light over accumulated colour; Shadow:
     // shadowed over unshadowed light.
+    // Shadow catchers: the Shadow Catcher pass from the catchers' light and
+    // the matte's alpha, or without it Combined carries their shadow.
+    if (catchers) {
+        glBindTextureUnit(TEX_CATCHER_HIT, catcher_hit.get());
+        glBindTextureUnit(TEX_CATCHER_PASS, catcher_pass.get());
+        glBindTextureUnit(TEX_CATCHER_FILM, film.get());
+        bool pass = false;
+        for (auto& [p, image] : pass_images) {
+            if (p != Pass::ShadowCatcher) continue;
+            pass = true;
+            glUseProgram(pass_program(p, "RESOLVE_CATCHER"));
+            glBindImageTexture(IMG_PASS_OUT, image.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
+            glDispatchCompute(groups_x, groups_y, 1);
+        }
+        if (!pass) {
+            ShaderVariant v = base_variant;
+            v.defines.push_back("PASS_ID " + std::to_string(int(Pass::ShadowCatcher)));
+            v.defines.push_back("RESOLVE_CATCHER_COMBINED");
+            world_module.add_defines(v);
+            glUseProgram(shaders->compute_program("passes_comp.glsl", v));
+            world_module.bind();
+            glBindImageTexture(IMG_PASS_OUT, film.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
+            glDispatchCompute(groups_x, groups_y, 1);
+        }
+        glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+        // The viewport's last image with the catchers' shadows (the samples'
+        // images show them as holes).
+        if (!pass && settings.preview_pass == Pass::Combined) preview.publish(film.get(), settings.samples);
+    }
     for (auto& [p, image] : pass_images) {
         if (p == Pass::Vector) {
             glUseProgram(pass_program(p, "RESOLVE_MOTION"));
@@ -1479,10 +1531,11 @@ void Renderer::add_instances(std::uint32_t mesh_id, const double* matrices, std:
                              const std::uint32_t* object_indices, const std::vector<std::uint32_t>& material_slots,
                              bool cast_shadow, const float* colors, const float* randoms,
                              const std::uint32_t* crypto, bool holdout, std::uint32_t light_group,
-                             const float* terminator_offsets, const double* motion) {
+                             const float* terminator_offsets, const double* motion, bool shadow_catcher) {
     impl_->thread.run([&] {
         impl_->scene.add_instances(mesh_id, matrices, count, object_indices, material_slots, cast_shadow, colors,
-                                   randoms, crypto, holdout, light_group, terminator_offsets, motion);
+                                   randoms, crypto, holdout, light_group, terminator_offsets, motion,
+                                   shadow_catcher);
     });
 }
 

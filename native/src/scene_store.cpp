@@ -384,7 +384,7 @@ void SceneStore::add_instances(std::uint32_t mesh_id, const double* matrices, st
                                const std::uint32_t* object_indices, const std::vector<std::uint32_t>& slots,
                                bool cast_shadow, const float* colors, const float* randoms,
                                const std::uint32_t* crypto, bool holdout, std::uint32_t light_group,
-                               const float* terminator_offsets, const double* motion) {
+                               const float* terminator_offsets, const double* motion, bool shadow_catcher) {
     if (mesh_id >= meshes_.size() || !mesh_slots_[mesh_id].alive)
         invalid("add_instances: mesh id " + std::to_string(mesh_id) + " does not exist (" +
                 std::to_string(meshes_.size()) + " meshes)");
@@ -415,6 +415,7 @@ void SceneStore::add_instances(std::uint32_t mesh_id, const double* matrices, st
     b.mesh_id = mesh_id;
     b.cast_shadow = cast_shadow;
     b.holdout = holdout;
+    b.shadow_catcher = shadow_catcher;
     b.light_group = light_group;
     b.matrices.assign(matrices, matrices + count * 16);
     b.object_indices = object_indices ? std::vector<std::uint32_t>(object_indices, object_indices + count)

@@ -92,6 +92,7 @@ struct InstanceBatch {
     std::vector<float> terminator_offsets;     // one per instance: Shadow Terminator Geometry Offset
     std::vector<std::uint32_t> crypto;         // two per instance: Cryptomatte object and asset hashes
     std::vector<double> motion;                // 32 per instance (previous, next matrix) or empty: static
+    bool shadow_catcher = false;               // Object > Visibility > Shadow Catcher
 };
 
 class SceneStore {
@@ -116,7 +117,7 @@ public:
                        bool cast_shadow = true, const float* colors = nullptr, const float* randoms = nullptr,
                        const std::uint32_t* crypto = nullptr, bool holdout = false,
                        std::uint32_t light_group = 0, const float* terminator_offsets = nullptr,
-                       const double* motion = nullptr);
+                       const double* motion = nullptr, bool shadow_catcher = false);
     void add_light(const Light& light);
     void set_world(const World& world);
 

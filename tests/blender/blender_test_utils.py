@@ -139,6 +139,9 @@ def set_all_passes(view_layer, on=True):
                  "use_pass_emit", "use_pass_environment", "use_pass_shadow", "use_pass_ambient_occlusion",
                  "use_pass_vector"):
         setattr(view_layer, flag, on)
+    cycles = getattr(view_layer, "cycles", None)  # Cycles' own view-layer passes
+    if cycles is not None:
+        cycles.use_pass_shadow_catcher = on
 
 
 def bare_setup(scene, world=False):

@@ -45,6 +45,7 @@ set(DEFERRED_BLENDER_TESTS
     light_groups
     vector_pass
     motion_blur
+    shadow_catcher
 )
 
 foreach(_name IN LISTS DEFERRED_BLENDER_TESTS)

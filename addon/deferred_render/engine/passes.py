@@ -31,7 +31,25 @@ PASS_TABLE = {
     "Env": ("COLOR", "use_pass_environment"),
     "Shadow": ("COLOR", "use_pass_shadow"),
     "AO": ("COLOR", "use_pass_ambient_occlusion"),
+    # Cycles' own view-layer setting (its add-on's property group).
+    "Shadow Catcher": ("COLOR", "cycles.use_pass_shadow_catcher"),
 }
+
+
+def flag_owner(view_layer, flag):
+    """(the data holding a pass flag, its property name): the view layer, or
+    for a dotted flag its property group (``cycles.use_pass_shadow_catcher``);
+    (None, name) when that group is not there (the Cycles add-on disabled)."""
+    owner = view_layer
+    *groups, name = flag.split(".")
+    for group in groups:
+        owner = getattr(owner, group, None) if owner is not None else None
+    return owner, name
+
+
+def flag_value(view_layer, flag):
+    owner, name = flag_owner(view_layer, flag)
+    return bool(getattr(owner, name, False)) if owner is not None else False
 
 # What is registered when the native module cannot be imported: the render
 # fails with a clear message anyway, and Blender needs a Combined pass.
@@ -93,7 +111,7 @@ def enabled_passes(view_layer, native_passes):
     """PassSpecs to register for ``view_layer`` (Combined always first)."""
     specs = []
     for spec in supported_passes(native_passes):
-        if spec.flag is None or (view_layer is not None and getattr(view_layer, spec.flag, False)):
+        if spec.flag is None or (view_layer is not None and flag_value(view_layer, spec.flag)):
             specs.append(spec)
     if native_passes is not COMBINED_ONLY:
         specs += cryptomatte_passes(view_layer)

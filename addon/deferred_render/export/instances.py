@@ -141,14 +141,15 @@ def terminator_offset(ob):
 
 
 class _Group:
-    __slots__ = ("mesh_id", "material_ids", "cast_shadow", "holdout", "light_group", "matrices", "object_indices",
-                 "names", "colors", "randoms", "crypto", "terminator_offsets", "motion")
+    __slots__ = ("mesh_id", "material_ids", "cast_shadow", "holdout", "shadow_catcher", "light_group", "matrices",
+                 "object_indices", "names", "colors", "randoms", "crypto", "terminator_offsets", "motion")
 
-    def __init__(self, mesh_id, material_ids, cast_shadow, holdout=False):
+    def __init__(self, mesh_id, material_ids, cast_shadow, holdout=False, shadow_catcher=False):
         self.mesh_id = mesh_id
         self.material_ids = material_ids
         self.cast_shadow = cast_shadow
         self.holdout = holdout
+        self.shadow_catcher = shadow_catcher
         self.light_group = 0
         self.matrices = []
         self.object_indices = []
@@ -485,10 +486,15 @@ class SceneExporter:
         # layer: a hole in the image (Cycles' SD_OBJECT_HOLDOUT_MASK).
         holdout = bool(getattr(ob, "is_holdout", False)) or ob.original.name in self._holdout_objects
         light_group = self.light_group_of(ob)
-        group_key = (mesh_id, material_ids, cast_shadow, holdout, light_group)
+        # Object > Visibility > Mask > Shadow Catcher (Cycles: the object's or
+        # its instancer's flag).
+        parent = getattr(inst, "parent", None) if inst.is_instance else None
+        shadow_catcher = bool(getattr(ob, "is_shadow_catcher", False)) or \
+            bool(getattr(parent, "is_shadow_catcher", False))
+        group_key = (mesh_id, material_ids, cast_shadow, holdout, light_group, shadow_catcher)
         group = self._groups.get(group_key)
         if group is None:
-            group = self._groups[group_key] = _Group(mesh_id, material_ids, cast_shadow, holdout)
+            group = self._groups[group_key] = _Group(mesh_id, material_ids, cast_shadow, holdout, shadow_catcher)
             group.light_group = light_group
         group.matrices.append(matrix)
         group.object_indices.append(ob.pass_index)
@@ -534,6 +540,8 @@ class SceneExporter:
                 extras["crypto"] = np.ascontiguousarray(group.crypto, dtype=np.uint32).reshape(-1, 2)
             if group.holdout:
                 extras["holdout"] = True
+            if group.shadow_catcher:
+                extras["shadow_catcher"] = True
             if group.light_group:
                 extras["light_group"] = group.light_group
             if group.motion:

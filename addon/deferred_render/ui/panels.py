@@ -122,6 +122,7 @@ _PASS_LABELS = {
     "use_pass_environment": "Environment",
     "use_pass_shadow": "Shadow",
     "use_pass_ambient_occlusion": "Ambient Occlusion",
+    "cycles.use_pass_shadow_catcher": "Shadow Catcher",
 }
 
 
@@ -139,7 +140,9 @@ class DEFERRED_RENDER_PT_passes(_EnginePanel, bpy.types.Panel):
         col = layout.column(heading="Include", align=True)
         # Combined is always produced (Blender's image output needs it).
         for flag in pass_table.supported_flags(mod.PASSES):
-            col.prop(view_layer, flag, text=_PASS_LABELS.get(flag, flag))
+            owner, name = pass_table.flag_owner(view_layer, flag)
+            if owner is not None:
+                col.prop(owner, name, text=_PASS_LABELS.get(flag, flag))
         col = layout.column(heading="Cryptomatte", align=True)
         col.prop(view_layer, "use_pass_cryptomatte_object", text="Object")
         col.prop(view_layer, "use_pass_cryptomatte_material", text="Material")

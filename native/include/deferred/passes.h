@@ -32,6 +32,11 @@ enum class Pass : std::uint32_t {
                    // xy = raster(previous frame) - raster(now), zw = raster(now) - raster(next frame),
                    // averaged over the samples that hit a surface; background 0. Needs the motion
                    // the caller gives (instances, camera, deforming meshes); none: 0
+    ShadowCatcher, // RGB: Cycles' Shadow Catcher pass (film_calculate_shadow_catcher): at shadow
+                   // catcher objects their light with every shadow over their light without the
+                   // other objects, alpha-over on white; 1 elsewhere. Asked for, Combined holds the
+                   // catchers as holes (the matte); not asked for, Combined carries their shadow
+                   // in alpha (Cycles' approximate shadow catcher)
     Count
 };
 

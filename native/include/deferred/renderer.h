@@ -255,14 +255,15 @@ public:
     // Offset in 0..1 (null: 0, shadow rays leave from the triangle itself).
     // `motion`: per instance its world matrices at the previous and the next
     // frame (2 x 16 doubles, column-major; null: it does not move), for the
-    // Vector pass.
+    // Vector pass and motion blur. `shadow_catcher`: Object > Visibility >
+    // Shadow Catcher (Pass::ShadowCatcher says what it does to the image).
     void add_instances(std::uint32_t mesh_id, const double* matrices, std::size_t count,
                        const std::uint32_t* object_indices,
                        const std::vector<std::uint32_t>& material_slots, bool cast_shadow = true,
                        const float* colors = nullptr, const float* randoms = nullptr,
                        const std::uint32_t* crypto = nullptr, bool holdout = false,
                        std::uint32_t light_group = 0, const float* terminator_offsets = nullptr,
-                       const double* motion = nullptr);
+                       const double* motion = nullptr, bool shadow_catcher = false);
     // Node materials: an image texture nodes sample (returns its id), and a
     // material evaluated from a graph (material_graph.h). `base` gives what
     // the graph does not: the pass index. Returns the material id.

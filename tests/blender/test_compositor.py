@@ -8,7 +8,10 @@ Builds, in the analytic scene:
     Render Layers.IndexOB -> ID Mask(index 4)                    -> File Output "mask"
 
 renders (F12 with write_still) and compares the File Output EXRs with the
-same passes of the multilayer EXR written by the render.
+same passes of the multilayer EXR written by the render. A second File
+Output node (multilayer EXR) writes every output of the Render Layers node
+(every pass, Vector, Shadow Catcher and Cryptomatte included): each of its
+layers equals the render's pass (a vector socket carries three channels).
 
     blender -b --factory-startup blend_samples/analytic.blend --addons deferred_render \
         -E DEFERRED_RENDER --python-exit-code 1 --python tests/blender/test_compositor.py
@@ -67,7 +70,49 @@ def build_tree(scene, out):
     fo.file_slots.new("mask")
     for index, socket in enumerate((scale.outputs[0], half.outputs[0], mask.outputs[0])):
         tree.links.new(socket, fo.inputs[index])
+
+    every = tree.nodes.new("CompositorNodeOutputFile")
+    every.base_path = os.path.join(out, "everypass") + os.sep
+    every.format.file_format = 'OPEN_EXR_MULTILAYER'
+    every.format.color_depth = '32'
+    outputs = [s for s in rl.outputs if s.enabled]
+    every.layer_slots[0].name = outputs[0].name
+    for socket in outputs[1:]:
+        every.layer_slots.new(socket.name)
+    for index, socket in enumerate(outputs):
+        tree.links.new(socket, every.inputs[index])
     return rl
+
+
+# A channel's place in its pass: RGBA, XYZW, UVA (the UV pass), rgba (Cryptomatte), V (a value).
+CHANNEL_ORDER = {"R": 0, "G": 1, "B": 2, "A": 3, "X": 0, "Y": 1, "Z": 2, "W": 3, "U": 0, "V": 1,
+                 "r": 0, "g": 1, "b": 2, "a": 3}
+
+
+def check_every_pass(checks, out, render_channels, socket_names):
+    """Each layer the multilayer File Output wrote equals the render's pass."""
+    files = sorted(glob.glob(os.path.join(out, "everypass", "*.exr")))
+    if not checks.check(len(files) == 1, "a File Output node writes every pass", str(files)):
+        return
+    written = U.read_exr(files[0])
+    compared, worst = [], 0.0
+    for name in socket_names:
+        pass_name = "Combined" if name in ("Image", "Alpha") else name
+        theirs = sorted((k for k in render_channels if k.startswith(f"ViewLayer.{pass_name}.")),
+                        key=lambda k: CHANNEL_ORDER[k.rsplit(".", 1)[1]])
+        mine = sorted((k for k in written if k.startswith(f"{name}.")), key=lambda k: CHANNEL_ORDER[k.rsplit(".", 1)[1]])
+        if name == "Alpha":
+            theirs = [f"ViewLayer.Combined.A"]
+        n = min(len(theirs), len(mine))
+        if not checks.check(n > 0, f"File Output layer {name} has the pass's channels", f"{mine} / {theirs}"):
+            continue
+        for a, b in zip(mine[:n], theirs[:n]):
+            worst = max(worst, float(np.abs(written[a].astype(np.float64) - render_channels[b]).max()))
+        compared.append(name)
+    print(f"  File Output layers compared: {compared}")
+    checks.check(len(compared) == len(socket_names) and worst < 1e-5,
+                 f"every pass written through the compositor equals the render's ({len(compared)} layers)",
+                 f"largest difference {worst:.2e}")
 
 
 def main():
@@ -77,8 +122,9 @@ def main():
         checks.finish()
     scene.deferred_render.samples = 1
     U.set_all_passes(scene.view_layers[0], True)
+    scene.view_layers[0].use_pass_cryptomatte_object = True
     out = U.out_dir("compositor")
-    for old in glob.glob(os.path.join(out, "fileout", "*")):
+    for old in glob.glob(os.path.join(out, "fileout", "*")) + glob.glob(os.path.join(out, "everypass", "*")):
         os.remove(old)
     rl = build_tree(scene, out)
     enabled = [s.name for s in rl.outputs if s.enabled]
@@ -113,6 +159,7 @@ def main():
         expected = (index == 4).astype(np.float32)
         checks.check(np.array_equal(got, expected), "ID Mask of IndexOB selects SphereB exactly",
                      f"{int(expected.sum())} px")
+    check_every_pass(checks, out, ch, [s.name for s in rl.outputs if s.enabled])
     layers = sorted({name.rsplit(".", 2)[0] for name in ch})
     print("  EXR layers:", layers)
     if "Composite" in layers:

@@ -4,7 +4,6 @@
 #include <deferred/renderer.h>
 
 #include "aov_module.h"
-#include "motion_module.h"
 #include "camera.h"
 #include "cryptomatte_module.h"
 #include "egl_context.h"
@@ -16,6 +15,7 @@
 #include "light_culling.h"
 #include "light_module.h"
 #include "material_module.h"
+#include "motion_module.h"
 #include "progressive_preview.h"
 #include "render_thread.h"
 #include "scene_store.h"
@@ -430,13 +430,18 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
                 }
             }
         }
-        // The ray scene is built once per frame, at the middle of the shutter.
-        if (rays_fallback.empty() && casters_move)
-            rays_fallback = "Shadow rays do not follow motion blur yet: this render uses shadow maps";
+        // Moving instances are placed in the ray scene each sample; a
+        // mesh's hierarchy is built from its vertices at the middle of the
+        // shutter, so deforming ones cannot follow.
+        if (rays_fallback.empty() && deforming)
+            rays_fallback = "Shadow rays do not follow deforming meshes under motion blur yet: this render uses "
+                            "shadow maps";
         shadow_rays = rays_fallback.empty();
     }
     // The ray scene: every shadow-casting instance, with its slots' alphas
     // (constant materials; a mix chain averaged, as material_alpha_lib.glsl).
+    std::vector<RayScene::Instance> casters;
+    std::vector<std::int64_t> caster_of_instance;  // instance -> its entry in casters, -1: casts nothing
     if (shadow_rays) {
         StageTimer ray_timer;
         auto chain_alpha = [&](std::uint32_t id) {
@@ -451,8 +456,11 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
             }
             return alpha + weight * m->mix.w;
         };
-        std::vector<RayScene::Instance> casters;
+        caster_of_instance.assign(instances.size(), -1);
+        std::size_t first_instance = 0;
         for (const InstanceBatch& b : scene.batches()) {
+            const std::size_t batch_first = first_instance;
+            first_instance += b.object_indices.size();
             if (!b.cast_shadow) continue;
             const GpuMesh& mesh = scene.meshes()[b.mesh_id];
             if (mesh.triangle_count == 0) continue;
@@ -464,6 +472,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
                 std::copy(b.matrices.begin() + long(i * 16), b.matrices.begin() + long(i * 16 + 16), m.begin());
                 glm::dmat4 model = to_glm(m);
                 model[3] = glm::dvec4(glm::dvec3(model[3]) - cam.position, 1.0);
+                caster_of_instance[batch_first + i] = std::int64_t(casters.size());
                 casters.push_back({bvh, model, slot_alpha});
             }
         }
@@ -1153,11 +1162,27 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         }
         fc.motion = {float(eye.x), float(eye.y), float(eye.z), float(r)};
         if (moving.empty()) return;
-        for (const MovingInstance& mi : moving)
-            place(interpolate_motion(mi.steps[0], mi.steps[1], mi.steps[2], r), scene.meshes()[mi.mesh],
-                  instances[mi.index], bounds[mi.index]);
+        bool casters_moved = false;
+        for (const MovingInstance& mi : moving) {
+            const glm::dmat4 world = interpolate_motion(mi.steps[0], mi.steps[1], mi.steps[2], r);
+            place(world, scene.meshes()[mi.mesh], instances[mi.index], bounds[mi.index]);
+            if (shadow_rays && caster_of_instance[mi.index] >= 0) {
+                glm::dmat4 model = world;
+                model[3] = glm::dvec4(glm::dvec3(model[3]) - cam.position, 1.0);
+                casters[std::size_t(caster_of_instance[mi.index])].model = model;
+                casters_moved = true;
+            }
+        }
         glNamedBufferSubData(instance_buffer.get(), 0, GLsizeiptr(instances.size() * sizeof(gpu::GpuInstance)),
                              instances.data());
+        // The ray scene again at this time: the instances' hierarchy over the
+        // meshes' kept ones (each mesh's hierarchy is built once).
+        if (casters_moved) {
+            StageTimer ray_timer;
+            ray_scene.build(casters);
+            ray_scene.upload();
+            result.timings.ray_build_ms += ray_timer.lap_ms();
+        }
     };
     preview.begin(settings.width, settings.height, settings.samples, settings.preview_interval_ms);
     for (int sample = 0; sample < settings.samples; ++sample) {

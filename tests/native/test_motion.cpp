@@ -321,3 +321,59 @@ TEST(MotionBlur, DeformingMeshIsSmearedOverTheShutter) {
     for (double x : {-1.47, -1.22, -0.97, -0.47, 0.03, 0.53, 1.03, 1.28, 1.53})
         EXPECT_NEAR(red_at(img, x), coverage(x), 0.03) << "x " << x;
 }
+
+TEST(MotionBlur, ShadowRaysFollowTheMovingCasterAsTheMapsDo) {
+    // A box (1 x 1 m, z from 0.75 to 1.25) moving from x = -1 to +1 over the
+    // shutter above a floor, a sun 45 degrees from +x: at the box's centre c
+    // its shadow covers the floor's x in [c - 1.75, c - 0.25], the box itself
+    // hides [c - 0.5, c + 0.5] from the camera above, and the box's top and
+    // the lit floor look alike (both at 45 degrees to the sun). So a floor
+    // pixel at x is dark for the share of the shutter with c in
+    // [x + 0.5, x + 1.75]. Shadow rays (the instances' hierarchy rebuilt each
+    // sample) and maps (drawn each sample) must both give that.
+    auto render = [](bool rays, std::vector<std::string>& warnings) {
+        Renderer r;
+        tools::MeshArrays box = tools::make_box(0.5f, 0.5f, 0.25f), floor = tools::make_plane(6.0f);
+        Material white;
+        white.base_color = {1.0f, 1.0f, 1.0f};
+        white.specular = 0.0f;
+        white.diffuse_roughness = 0.0f;
+        const std::uint32_t mat = r.add_material(white);
+        const Mat4d now = tools::translation(0, 0, 1.0), at_origin = tools::translation(0, 0, 0);
+        const std::array<double, 32> motion = motion_of(tools::translation(-1, 0, 1.0), tools::translation(1, 0, 1.0));
+        r.add_instances(r.add_mesh(box.view()), now.data(), 1, nullptr, {mat}, true, nullptr, nullptr, nullptr,
+                        false, 0, nullptr, motion.data());
+        r.add_instances(r.add_mesh(floor.view()), at_origin.data(), 1, nullptr, {mat});
+        Light sun;
+        sun.type = LightType::Sun;
+        const double from[3] = {3.0, 0.0, 3.0}, to[3] = {0.0, 0.0, 0.0};
+        sun.matrix = tools::look_at(from, to);
+        sun.energy = 3.0f;
+        sun.angle = 0.0f;
+        r.add_light(sun);
+        deferred::testing::set_world_color(r, 0.0f, 0.0f, 0.0f);
+        RenderSettings s;
+        s.width = 64;
+        s.height = 16;
+        s.samples = 81;
+        s.motion_blur = true;
+        s.shadow_rays = rays;
+        s.shadow_quality = 4.0f;
+        const FrameResult f = r.render(deferred::testing::top_down_ortho(5.0, 4.0f), s);
+        warnings = f.warnings;
+        return *f.find(Pass::Combined);
+    };
+    std::vector<std::string> maps_warnings, rays_warnings;
+    const PassImage maps = render(false, maps_warnings), rays = render(true, rays_warnings);
+    for (const std::string& w : rays_warnings) EXPECT_EQ(w.find("shadow maps"), std::string::npos) << w;
+    const double lit = 3.0 * std::sqrt(0.5) / M_PI;
+    auto dark_share = [](double x) {
+        const double lo = std::max(x + 0.5, -1.0), hi = std::min(x + 1.75, 1.0);
+        return std::max(0.0, hi - lo) / 2.0;
+    };
+    for (double x : {-1.83, -1.53, -1.28, -1.03, -0.78, -0.53, -0.28, 0.53, 1.03}) {
+        const double expected = lit * (1.0 - dark_share(x));
+        EXPECT_NEAR(red_at(rays, x), expected, 0.03 * lit) << "rays, x " << x;
+        EXPECT_NEAR(red_at(maps, x), expected, 0.05 * lit) << "maps, x " << x;
+    }
+}

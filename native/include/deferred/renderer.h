@@ -120,9 +120,10 @@ struct RenderSettings {
     // deforming meshes moved between the motion the caller gives (previous,
     // now, next: the shutter's open, middle and close), so the accumulated
     // image converges to Cycles' motion blur. The Vector pass is then 0, as
-    // Cycles leaves it. Shadow rays fall back to maps for a frame in which
-    // anything moves (warned); emissive meshes light others from where they
-    // are at the middle of the shutter.
+    // Cycles leaves it. Shadow rays place the moving instances each sample
+    // (the instances' hierarchy rebuilt) and fall back to maps when a mesh
+    // deforms (warned); emissive meshes light others from where they are at
+    // the middle of the shutter.
     bool motion_blur = false;
     // Progressive preview (the 3D viewport): >= 0 publishes the Combined
     // estimate after the first sample, then at most every this many

@@ -46,6 +46,7 @@ set(DEFERRED_BLENDER_TESTS
     vector_pass
     motion_blur
     shadow_catcher
+    glossy_highlights
 )
 
 foreach(_name IN LISTS DEFERRED_BLENDER_TESTS)

@@ -11,8 +11,11 @@
  * RESOLVE_LIGHT divides the accumulated light by it at the end, as Cycles
  * divides the accumulated passes; RESOLVE_SHADOW turns the accumulated
  * shadowed/unshadowed luminance into the Shadow pass, RESOLVE_MOTION divides
- * the Vector pass's summed motion by its count (motion_module.h). Compiled
- * only for the passes requested. */
+ * the Vector pass's summed motion by its count (motion_module.h);
+ * RESOLVE_CATCHER makes the Shadow Catcher pass from the catchers' light and
+ * RESOLVE_CATCHER_COMBINED, without that pass, puts their shadow into
+ * Combined (lighting_comp.glsl SHADOW_CATCHER). Compiled only for the passes
+ * requested. */
 #include "frame_lib.glsl"
 #include "gbuffer_lib.glsl"
 #include "bsdf_lib.glsl"

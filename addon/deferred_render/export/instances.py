@@ -158,7 +158,7 @@ class _Group:
         self.randoms = []
         self.crypto = []    # (object hash, asset hash) per instance, when Cryptomatte is asked for
         self.terminator_offsets = []  # Object > Shading > Shadow Terminator > Geometry Offset
-        self.motion = []    # (2, 4, 4) previous and next world matrices, when the Vector pass is asked for
+        self.motion = []    # (2, 4, 4) previous and next world matrices (Vector pass, motion blur)
 
 
 class MeshKeeper:
@@ -224,7 +224,9 @@ class SceneExporter:
         # Meshes the renderer keeps between syncs (the viewport; None: each
         # sync uploads every mesh, as a final render does).
         self.mesh_keeper = mesh_keeper if hasattr(renderer, "find_mesh") else None
-        # The neighbouring frames (motion.Motion) for the Vector pass; None: no motion.
+        # The scene at other times (motion.Motion): the Vector pass's
+        # neighbouring frames or motion blur's shutter open and close; None:
+        # nothing moves.
         self.motion = motion
         # The view layer's light groups, name -> index from 1 (none: {}).
         self.light_groups = light_groups or {}
@@ -401,7 +403,7 @@ class SceneExporter:
                     if motion_positions is False:
                         self._warn_once(("motion-topology", ob.name),
                                         f"Object '{ob.name}': its vertex count changes between frames, so its "
-                                        "deformation is not in the Vector pass (as Cycles)")
+                                        "deformation has no motion (Vector pass, motion blur), as in Cycles")
                     elif motion_positions is not None:
                         extras["motion_positions"] = motion_positions
                 mesh_id = self.renderer.add_mesh(

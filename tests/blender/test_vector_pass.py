@@ -16,7 +16,9 @@ away from edges, where both engines average the same surface):
     Box: up to 3 px from one pixel to the next) they differ by that
     variation's sampling noise: there the bound is 0.05 px plus a tenth of
     the neighbourhood's range, on 99 % of all the interior pixels;
-  * the still sphere is 0 in the objects case, the background 0 in both;
+  * the still sphere is 0 in the objects case (a Decimate modifier changes
+    its vertex count every frame: warned, its deformation left out, as
+    Cycles), the background 0 in both;
   * the motion is real: the Box moves by pixels, SphereA's deformation
     makes its rim move outwards.
 (With Motion Blur on the pass is 0, as in Cycles: test_motion_blur.py.)
@@ -63,6 +65,12 @@ def animate_objects(scene):
     for frame, value in zip((1, 2, 3), (0.0, 0.4, 1.0)):
         grow.value = value
         grow.keyframe_insert("value", frame=frame)
+    # SphereC stands still but a Decimate modifier changes its vertex count
+    # every frame: its deformation cannot be matched (warned, no motion).
+    decimate = bpy.data.objects["SphereC"].modifiers.new("Decimate", 'DECIMATE')
+    for frame, ratio in zip((1, 2, 3), (0.5, 0.7, 0.9)):
+        decimate.ratio = ratio
+        decimate.keyframe_insert("ratio", frame=frame)
 
 
 def animate_camera(scene):
@@ -195,6 +203,9 @@ def main():
     left = sphere & (np.arange(sphere.shape[1])[None, :] < np.percentile(xs, 10))
     checks.check(float(o[left][:, 2].mean()) > 0.2, "objects: the shape key's growth is in the pass",
                  f"zw.x on the left rim {o[left][:, 2].mean():.3f} px (Cycles {c[left][:, 2].mean():.3f})")
+    warned = [m for _, m in U.last_messages() if "'SphereC'" in m and "vertex count changes" in m]
+    checks.check(len(warned) >= 1, "objects: a vertex count that changes between frames is warned about",
+                 f"{warned[:1]}")
 
     # Vector Blur on the objects case: ours blurs as Cycles' passes do.
     sharp_ours = U.exr_pass(ours, "ViewLayer", "Combined", "RGB").astype(np.float64)

@@ -288,6 +288,12 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         throw InvalidInput("light_groups must be in 0.." + std::to_string(kMaxLightGroups) + ", got " +
                            std::to_string(settings.light_groups));
     per_pixel += 16 * std::size_t(settings.light_groups) + (settings.light_groups > 0 ? 16 : 0);
+    // Shadow catchers (lighting_comp.glsl SHADOW_CATCHER): their light kept
+    // apart (two RGBA32F accumulations); Combined becomes the matte.
+    bool catchers = false;
+    for (const InstanceBatch& b : scene.batches())
+        if (b.shadow_catcher && !b.object_indices.empty()) catchers = true;
+    if (catchers) per_pixel += 32;
     check_settings(settings, pixels * per_pixel + 2 * CryptomatteModule::bytes(settings) + AovModule::bytes(settings) +
                                  (wanted.contains(Pass::Vector) ? MotionModule::bytes(settings) : 0));
 
@@ -371,11 +377,6 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     // Motion blur moves something: the shadow casters (instances, deforming
     // meshes) or only the camera.
     const bool casters_move = settings.motion_blur && (!moving.empty() || deforming);
-    // Shadow catchers (lighting_comp.glsl SHADOW_CATCHER): their light kept
-    // apart; Combined becomes the matte.
-    bool catchers = false;
-    for (const InstanceBatch& b : scene.batches())
-        if (b.shadow_catcher && !b.object_indices.empty()) catchers = true;
     const bool camera_moves = settings.motion_blur && camera_in.has_motion;
     std::vector<gpu::GpuMaterial> gpu_materials;
     for (const Material& m : scene.materials()) {
@@ -1370,8 +1371,6 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         preview_ms += timer.lap_ms();
     }
 
-    // DiffDir/GlossDir: accumulated light over accumulated colour; Shadow:
-    // shadowed over unshadowed light.
     // Shadow catchers: the Shadow Catcher pass from the catchers' light and
     // the matte's alpha, or without it Combined carries their shadow.
     if (catchers) {
@@ -1401,6 +1400,8 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         // images show them as holes).
         if (!pass && settings.preview_pass == Pass::Combined) preview.publish(film.get(), settings.samples);
     }
+    // DiffDir/GlossDir: accumulated light over accumulated colour; Shadow:
+    // shadowed over unshadowed light; Vector: summed motion over its count.
     for (auto& [p, image] : pass_images) {
         if (p == Pass::Vector) {
             glUseProgram(pass_program(p, "RESOLVE_MOTION"));

@@ -96,6 +96,18 @@ void node_bsdf_transparent(vec3 color, out Closure c) {
     c.alpha = clamp01(1.0 - (color.r + color.g + color.b) * (1.0 / 3.0));
 }
 
+/* One of two closures, b with probability pb, drawn from g_mix_u, which is
+ * then rescaled to [0, 1) within the chosen side so nested mixes stay
+ * uniform and stratified. */
+Closure pick_closure(Closure a, Closure b, float pb) {
+    if (g_mix_u < pb) {
+        g_mix_u = g_mix_u / max(pb, 1e-30);
+        return b;
+    }
+    g_mix_u = (g_mix_u - pb) / max(1.0 - pb, 1e-30);
+    return a;
+}
+
 /* A closure is the opaque part of the surface, with coverage `alpha`: the
  * surface contributes alpha x (its lobes and emission) and lets 1 - alpha of
  * what is behind through (the geometry pass keeps it with probability alpha).
@@ -136,14 +148,7 @@ void node_mix_shader(float fac, Closure a, Closure b, out Closure c) {
          * emission) with probability its share, so the image converges to
          * Cycles' holdout weight wb (or wa) and the other side's closures
          * at their weight. */
-        float pb = wb * inv;
-        if (g_mix_u < pb) {
-            c = b;
-            g_mix_u = g_mix_u / max(pb, 1e-30);
-        } else {
-            c = a;
-            g_mix_u = (g_mix_u - pb) / max(1.0 - pb, 1e-30);
-        }
+        c = pick_closure(a, b, wb * inv);
         c.alpha = coverage;
         return;
     }
@@ -157,14 +162,7 @@ void node_mix_shader(float fac, Closure a, Closure b, out Closure c) {
         c.clearcoat *= w;
         c.reflects = (a.reflects != 0.0 || b.reflects != 0.0) ? 1.0 : 0.0;
     } else {
-        float pb = wb * inv;
-        if (g_mix_u < pb) {
-            c = b;
-            g_mix_u = g_mix_u / pb;
-        } else {
-            c = a;
-            g_mix_u = (g_mix_u - pb) / max(1.0 - pb, 1e-30);
-        }
+        c = pick_closure(a, b, wb * inv);
     }
     c.emission = emission;
     c.alpha = coverage;
@@ -197,14 +195,7 @@ void node_add_shader(Closure a, Closure b, out Closure c) {
         c.sheen *= w;
         c.clearcoat *= w;
     } else {
-        float pb = wb / max(wa + wb, 1e-30);
-        if (g_mix_u < pb) {
-            c = b;
-            g_mix_u = g_mix_u / max(pb, 1e-30);
-        } else {
-            c = a;
-            g_mix_u = (g_mix_u - pb) / max(1.0 - pb, 1e-30);
-        }
+        c = pick_closure(a, b, wb / max(wa + wb, 1e-30));
         float scale = (wa + wb) * inv;
         c.base_color *= scale;
         c.specular = min(c.specular * scale, 12.0);

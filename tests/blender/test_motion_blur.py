@@ -14,7 +14,8 @@ Cycles images differ by more than 0.02, grown by 2 px):
     unblurred render there by more than twice that noise, and by as much as
     Cycles' blurred render differs from its unblurred one (within 15 %);
   * the frame is left where it was, and the Vector pass, asked for, is 0
-    with a warning (Cycles leaves it empty with motion blur).
+    with a warning (Cycles leaves it empty with motion blur);
+  * a lens animated over the shutter (not blurred here) is warned about.
 
     blender -b --factory-startup blend_samples/analytic.blend --addons deferred_render \\
         -E DEFERRED_RENDER --python-exit-code 1 --python tests/blender/test_motion_blur.py
@@ -105,6 +106,18 @@ def main():
     V.animate_camera(scene)
     scene.frame_set(2)
     compare(checks, scene, "camera")
+    lens_warnings = [m for _, m in U.last_messages() if "lens, ortho scale or shift" in m]
+    checks.check(not lens_warnings, "no lens warning while only the camera's transform moves", f"{lens_warnings}")
+
+    # A zoom over the shutter is not blurred: said.
+    lens = scene.camera.data
+    for frame, value in zip((1, 2, 3), (45.0, 50.0, 55.0)):
+        lens.lens = value
+        lens.keyframe_insert("lens", frame=frame)
+    scene.frame_set(2)
+    render(scene, "DEFERRED_RENDER", "zoom_ours")
+    lens_warnings = [m for _, m in U.last_messages() if "lens, ortho scale or shift" in m]
+    checks.check(len(lens_warnings) == 1, "a zoom over the shutter is warned about", f"{lens_warnings}")
     checks.finish()
 
 

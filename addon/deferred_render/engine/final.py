@@ -289,6 +289,9 @@ class FinalRender:
             if middle_delta != 0.0:  # the camera at the middle of the shutter
                 camera_object = camera_object.original.evaluated_get(self.depsgraph)
                 cam_params, _ = camera_export.camera_params(scene, camera_object, engine)
+            if motion.lens_moves(cam_params):
+                self.warn("Motion Blur: the camera's lens, ortho scale or shift change over the shutter; "
+                          "not blurred (the middle of the shutter's is used)")
         elif "Vector" in pass_names:
             self.status("evaluating the previous and next frames (Vector pass)", 0.01)
             motion = motion_export.collect(engine, self.depsgraph, camera_object, mesh_export.MESHABLE_TYPES)

@@ -88,6 +88,7 @@ class _Step:
         self.matrices = {}
         self.positions = {}
         self.camera = None
+        self.camera_lens = None  # (lens, ortho_scale, shift_x, shift_y): what the matrices do not say
 
 
 def _snapshot(depsgraph, camera_object, engine, geometry_types):
@@ -104,6 +105,9 @@ def _snapshot(depsgraph, camera_object, engine, geometry_types):
                 step.positions[key] = positions
     if camera_object is not None and moves(camera_object):
         evaluated = camera_object.original.evaluated_get(depsgraph)
+        data = getattr(evaluated, "data", None)
+        if data is not None:
+            step.camera_lens = tuple(float(getattr(data, k, 0.0)) for k in ("lens", "ortho_scale", "shift_x", "shift_y"))
         matrix = None
         try:
             matrix = engine.camera_model_matrix(evaluated)
@@ -141,6 +145,14 @@ class Motion:
         if any(p is None or len(p) != vertex_count or not np.isfinite(p).all() for p in steps):
             return False
         return np.ascontiguousarray(np.stack(steps), dtype=np.float32)
+
+    def lens_moves(self, params):
+        """Whether the camera's lens, ortho scale or shift differ at the other
+        times from ``params`` (camera.camera_params of this frame)."""
+        now = tuple(float(params.get(k, 0.0)) for k in ("lens", "ortho_scale", "shift_x", "shift_y"))
+        return any(step.camera_lens is not None and
+                   any(abs(a - b) > 1e-6 * max(1.0, abs(b)) for a, b in zip(step.camera_lens, now))
+                   for step in (self.previous, self.next))
 
     def camera(self, now):
         """(previous, next) camera matrices, or None when it does not move."""

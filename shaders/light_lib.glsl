@@ -156,16 +156,41 @@ bool emitter_hit(vec3 c, vec3 a, vec3 b, bool ellipse, vec3 emit_dir, vec3 L, ou
  * point (att_center at the centre; spot lights only, 1 otherwise), emitting
  * along `emit_dir` (unit). `sphere_disk`: the disk a sphere light presents,
  * facing the shading point. */
-/* Two numbers in [0, 1) per pixel, film sample and `salt`: the R2 sequence
- * over the samples (Roberts 2018, in 32-bit fixed point), rotated per pixel
- * and salt by a pcg4d hash (decorrelated pixels: noise, not bands). */
-vec2 light_ray_sequence(uint salt) {
+/* A per-pixel, per-salt rotation (pcg4d hash) of the light sequences
+ * below, in 32-bit fixed point. */
+uvec2 light_ray_rotation(uint salt) {
     uvec4 v = uvec4(shading_pixel(), salt * 0x9E3779B9u + 0x7F4A7C15u, 0x2545F491u);
     v = v * 1664525u + 1013904223u;
     v.x += v.y * v.w; v.y += v.z * v.x; v.z += v.x * v.y; v.w += v.y * v.z;
     v ^= v >> 16u;
     v.x += v.y * v.w; v.y += v.z * v.x; v.z += v.x * v.y; v.w += v.y * v.z;
-    uvec2 x = v.xy + uint(frame.sample_shift.w) * uvec2(0xC13FA9A9u, 0x91E10DA5u);
+    return v.xy;
+}
+
+/* Two numbers in [0, 1) per pixel, film sample and `salt`: the R2 sequence
+ * over the samples (Roberts 2018, in 32-bit fixed point), rotated per pixel
+ * and salt (decorrelated pixels: noise, not bands). Every salt steps by the
+ * same alphas: two salts' numbers differ by a constant shift, so they are
+ * not independent of each other (fine for estimates that are summed). */
+vec2 light_ray_sequence(uint salt) {
+    uvec2 x = light_ray_rotation(salt) + uint(frame.sample_shift.w) * uvec2(0xC13FA9A9u, 0x91E10DA5u);
+    return vec2(x >> 8u) * (1.0 / 16777216.0);
+}
+
+/* As light_ray_sequence, but independent of it and of the film's own
+ * sequence (sample_point: R4, the pixel jitter and the shared light points,
+ * frame.sample_shift.xy): the last two dimensions of the R3 sequence
+ * (alpha_i = phi3^-i, phi3^4 = phi3 + 1; the world's world_sequence uses
+ * R3 too, but no estimate multiplies the two). Fields of degree 3 (R2), 4
+ * (R3) and 5 (R4) share no irrationals, so the alphas are rationally
+ * independent and over the samples the numbers of the three sequences fill
+ * their joint cube evenly. For an estimate that multiplies two samples (the
+ * shadow probe times the control variate), whose expectation is the
+ * product only when they are independent: with the probe on
+ * light_ray_sequence, its point was a fixed shift of the traced point's
+ * (per pixel), and each pixel of a penumbra kept its own bias. */
+vec2 light_ray_independent(uint salt) {
+    uvec2 x = light_ray_rotation(salt) + uint(frame.sample_shift.w) * uvec2(0xABC98388u, 0x8CB92BA7u);
     return vec2(x >> 8u) * (1.0 / 16777216.0);
 }
 
@@ -835,7 +860,7 @@ PlanarSamples planar_light_samples(vec3 c, vec3 a, vec3 b, bool ellipse, vec3 em
  * candidates above it; none: 1, the light is about below the horizon). */
 float planar_light_probe(vec3 c, vec3 a, vec3 b, bool ellipse, uint salt, SurfaceParams s, vec3 P) {
     for (uint k = 0u; k < 4u; ++k) {
-        vec2 u = light_ray_sequence(salt + 2u + k);
+        vec2 u = light_ray_independent(salt + 2u + k);
         vec2 xy = ellipse ? concentric_disk(u) : 2.0 * u - 1.0;
         vec3 v = c + a * xy.x + b * xy.y;
         float t = length(v);

@@ -47,6 +47,7 @@ set(DEFERRED_BLENDER_TESTS
     motion_blur
     shadow_catcher
     glossy_highlights
+    capture_replay
 )
 
 foreach(_name IN LISTS DEFERRED_BLENDER_TESTS)

@@ -23,7 +23,7 @@ import time
 import traceback
 
 from .. import native
-from . import session
+from . import capture, session
 from ..export import camera as camera_export
 from ..export import mesh as mesh_export
 from ..export import motion as motion_export
@@ -205,6 +205,24 @@ class FinalRender:
             renderer = None  # noqa: F841
             engine.end_result(result, cancel=cancelled)
 
+    def _write_capture(self, recorder, path, renderer, t_export, t_render):
+        """The calls of this render to ``path`` (capture.py); a failure to
+        write is reported, the render itself stands."""
+        if recorder.error:
+            self.warn(f"scene not captured to '{path}': {recorder.error}")
+            return
+        try:
+            import bpy
+            meta = {"blender": bpy.app.version_string, "file": bpy.data.filepath, "scene": self.scene.name,
+                    "view_layer": self.view_layer.name, "frame": self.scene.frame_current,
+                    "gl_renderer": self.gl_name, "export_s": t_export, "render_s": t_render,
+                    "timings": {k: v for k, v in dict(renderer.last_timings).items()
+                                if isinstance(v, (int, float, bool))}}
+            recorder.write(path, meta)
+            self.report('INFO', f"scene captured to {path} ({len(recorder.calls)} calls, {len(recorder.arrays)} arrays)")
+        except Exception as ex:
+            self.warn(f"scene capture to '{path}' failed: {ex}")
+
     def _log_device(self, renderer):
         """Names the GPU in the status line and, once per new renderer, in the log."""
         try:
@@ -302,10 +320,18 @@ class FinalRender:
             self.check_break()
 
         persistent = bool(getattr(scene.render, "use_persistent_data", False))
+        # DEFERRED_RENDER_CAPTURE: record every call on the renderer (capture.py);
+        # a fresh renderer, so the file holds every mesh and image.
+        capture_to = capture.capture_path(scene.frame_current)
+        recorder = capture.Recorder() if capture_to else None
+        if recorder is not None:
+            persistent = False
         self.status("starting GL" if not (persistent and session.kept()) else
                     "reusing the renderer kept by the last render (Persistent Data)", 0.02)
         renderer, self.reused_renderer = session.acquire(mod, device_index, persistent)
         self._session = (mod, device_index, persistent)
+        if recorder is not None:
+            renderer = capture.CaptureRenderer(renderer, recorder)
         self._log_device(renderer)
         self.check_break()
 
@@ -329,7 +355,7 @@ class FinalRender:
         if "Combined" not in requested:
             requested.insert(0, "Combined")
 
-        camera = mod.Camera(**cam_params)
+        camera = recorder.camera(mod, **cam_params) if recorder is not None else mod.Camera(**cam_params)
         mist = world_export.mist_params(scene.world)
         self.status(f"rendering {frame.full_width}x{frame.full_height}, {samples} samples, "
                     f"{len(requested)} passes", 0.35)
@@ -351,6 +377,8 @@ class FinalRender:
             if f"#lightgroup{index}" in images:
                 images[f"Combined_{name}"] = images.pop(f"#lightgroup{index}")
         t_render = time.perf_counter() - t_render
+        if recorder is not None:
+            self._write_capture(recorder, capture_to, renderer, t_export, t_render)
         for message in getattr(renderer, "last_warnings", ()):
             self.warn(message)
         self.check_break()

@@ -1,12 +1,16 @@
 // Many-lights benchmark: frame time against light count with tiled culling
 // and with brute force (every light at every pixel), same build, same scene:
 // a floor with boxes and N small random point lights (energy 0.05..0.55 W,
-// radius <= 2 cm, seed 99), one sample, Combined only.
+// radius <= 2 cm, seed 99), one sample, Combined only. Also culled with
+// stochastic light selection (RenderSettings::light_samples = 16): its time,
+// and the one sample's error against every light's (its noise, which the
+// film's samples average out; the mean stays every light's).
 // Usage: deferred_bench_lights [width height] [brute_max_lights] [csv_path]
 // Prints a markdown table; rows with more lights than brute_max skip brute
 // force (llvmpipe would take minutes per frame).
 #include "builtin_scenes.h"
 
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <random>
@@ -56,8 +60,9 @@ int main(int argc, char** argv) {
         Renderer r;
         std::printf("GL: %s | %s\n%dx%d, 1 sample, light threshold 1e-3 (ms, one frame after a warm-up)\n\n",
                     r.gl_info().renderer.c_str(), r.gl_info().version.c_str(), width, height);
-        std::printf("| lights | culled total | culling | shading | tile-light pairs | brute force | brute/culled |\n");
-        std::printf("|---:|---:|---:|---:|---:|---:|---:|\n");
+        std::printf("| lights | culled total | culling | shading | tile-light pairs | brute force | brute/culled | "
+                    "16 light samples: total | shading | per-pixel rms | mean ratio |\n");
+        std::printf("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
         Camera cam;
         const double eye[3] = {0, -22, 12}, target[3] = {0, 0, 0};
         cam.matrix = tools::look_at(eye, target);
@@ -71,7 +76,28 @@ int main(int argc, char** argv) {
             s.width = width;
             s.height = height;
             r.render(cam, s);  // warm-up: compile, allocate
-            const FrameTimings culled = r.render(cam, s).timings;
+            const FrameResult culled_frame = r.render(cam, s);
+            const FrameTimings culled = culled_frame.timings;
+            // Stochastic selection of 16 lights per pixel (where more reach it).
+            s.light_samples = 16;
+            r.render(cam, s);
+            const FrameResult sampled = r.render(cam, s);
+            s.light_samples = 0;
+            double err2 = 0, sum_a = 0, sum_b = 0;
+            int lit = 0;
+            const PassImage& a = *sampled.find(Pass::Combined);
+            const PassImage& b = *culled_frame.find(Pass::Combined);
+            for (std::size_t i = 0; i < b.pixels.size(); i += 4) {
+                const double la = 0.2126 * a.pixels[i] + 0.7152 * a.pixels[i + 1] + 0.0722 * a.pixels[i + 2];
+                const double lb = 0.2126 * b.pixels[i] + 0.7152 * b.pixels[i + 1] + 0.0722 * b.pixels[i + 2];
+                sum_a += la;
+                sum_b += lb;
+                if (lb > 1e-3) {
+                    err2 += (la - lb) * (la - lb) / (lb * lb);
+                    ++lit;
+                }
+            }
+            const double rms = std::sqrt(err2 / std::max(lit, 1));
             double brute_ms = -1;
             if (n <= brute_max) {
                 s.light_culling = false;
@@ -79,11 +105,12 @@ int main(int argc, char** argv) {
                 brute_ms = r.render(cam, s).timings.total_ms;
             }
             if (n == 1) one_light_ms = culled.total_ms;
-            std::printf("| %d | %.0f (%.2fx one light) | %.0f | %.0f | %llu | %s | %s |\n", n, culled.total_ms,
-                        culled.total_ms / one_light_ms, culled.culling_ms, culled.lighting_ms,
+            std::printf("| %d | %.0f (%.2fx one light) | %.0f | %.0f | %llu | %s | %s | %.0f | %.0f | %.3f | %.4f |\n", n,
+                        culled.total_ms, culled.total_ms / one_light_ms, culled.culling_ms, culled.lighting_ms,
                         (unsigned long long)culled.tile_light_pairs,
                         brute_ms < 0 ? "skipped" : std::to_string(int(brute_ms)).c_str(),
-                        brute_ms < 0 ? "-" : std::to_string(brute_ms / culled.total_ms).substr(0, 5).c_str());
+                        brute_ms < 0 ? "-" : std::to_string(brute_ms / culled.total_ms).substr(0, 5).c_str(),
+                        sampled.timings.total_ms, sampled.timings.lighting_ms, rms, sum_a / sum_b);
             if (csv)
                 std::fprintf(csv, "%d,%.2f,%.2f,%.2f,%llu,%.2f\n", n, culled.total_ms, culled.culling_ms,
                              culled.lighting_ms, (unsigned long long)culled.tile_light_pairs, brute_ms);

@@ -18,6 +18,61 @@ layout(local_size_x = LIGHTING_GROUP_SIZE, local_size_y = LIGHTING_GROUP_SIZE) i
  * world light and background belong to the batch starting at 0. */
 layout(location = 0) uniform uvec2 light_batch;
 
+#ifdef LIGHT_SAMPLING
+/* Stochastic light selection (RenderSettings::light_samples, the define's
+ * value M): where a pixel's part of the batch holds more than M lights
+ * (suns and emissive meshes apart, always shaded), each light i is shaded
+ * this sample with probability p_i = min(1, M e_i / sum e) and weight 1 / p_i,
+ * e_i its light_importance, so the sum's expectation is every light's sum
+ * (unbiased, converging over the film's samples as Cycles' one light sample
+ * per path does). The choice is systematic sampling along the running sum
+ * of the p_i with one uniform per pixel and sample (Madow 1949): light i is
+ * taken when that sum crosses an integer within its p_i, so each light has
+ * exactly its probability, at most M lights are taken, and strong lights
+ * (p_i = 1) are shaded every sample. The chosen lights go to a short list
+ * that the shading loop runs over: SIMD lanes (a GPU warp, llvmpipe's
+ * vectors) run a loop as long as its longest lane, so skipping lights inside
+ * the full loop would save nothing. */
+#define LIGHT_SLOTS_ALWAYS 16
+#define LIGHT_SLOTS (LIGHT_SAMPLING + 1 + LIGHT_SLOTS_ALWAYS)
+
+/* A rough share of the light `light` gives P (normal N): radiant intensity
+ * over squared distance, times how far it stands above P's horizon; never 0
+ * for a light that can reach P (a floor of 5 % keeps the estimate unbiased
+ * where the rough share is wrong: bumped or glossy lobes, spot cones seen
+ * from within the light's radius). 0 for the lights shaded every sample. */
+float light_importance(GpuLight light, vec3 P, vec3 N) {
+    const int type = int(light.position_type.w);
+    if (type == LIGHT_SUN || type == LIGHT_MESH) return 0.0;
+    vec3 d = light.position_type.xyz - P;
+    float d2 = dot(d, d);
+    float inv_d = inversesqrt(max(d2, 1e-20));
+    float size2 = type == LIGHT_AREA ? dot(light.axis_x.xyz, light.axis_x.xyz) + dot(light.axis_y.xyz, light.axis_y.xyz)
+                                     : light.strength.w * light.strength.w;
+    float sin_r = min(sqrt(size2) * inv_d, 1.0); /* ~ sine of the light's angular radius */
+    float facing = clamp(dot(N, d) * inv_d + sin_r, 0.0, 1.0);
+    float power = max(dot(light.strength.rgb, vec3(0.2126729, 0.7151522, 0.0721750)), 0.0);
+    /* Radiant intensity towards P: a point or spot light's power over 4 pi,
+     * a one-sided area light's over pi times its cosine. */
+    float intensity = power * (0.25 * M_1_PI_F);
+    if (type == LIGHT_AREA) intensity = power * M_1_PI_F * max(-dot(light.direction.xyz, d) * inv_d + sin_r, 0.05);
+    if (type == LIGHT_SPOT && -dot(light.direction.xyz, d) * inv_d + sin_r < light.direction.w) intensity *= 0.05;
+    return max(intensity * (0.05 + facing) / (d2 + size2), 1e-30);
+}
+
+/* One number in [0, 1) per pixel, film sample and batch: the golden-ratio
+ * sequence over the samples (stratified), rotated per pixel and batch. */
+float light_selection_offset(ivec2 pixel) {
+    uvec4 v = uvec4(uvec2(pixel), light_batch.x * 0x9E3779B9u + 0x68E31DA4u, 0xB5297A4Du);
+    v = v * 1664525u + 1013904223u;
+    v.x += v.y * v.w; v.y += v.z * v.x; v.z += v.x * v.y; v.w += v.y * v.z;
+    v ^= v >> 16u;
+    v.x += v.y * v.w; v.y += v.z * v.x; v.z += v.x * v.y; v.w += v.y * v.z;
+    uint x = v.x + uint(frame.sample_shift.w) * 0x9E3779B9u;
+    return float(x >> 8u) * (1.0 / 16777216.0);
+}
+#endif
+
 #ifdef LIGHT_CULLING
 layout(std430, binding = SSBO_TILES) readonly buffer Tiles { GpuTile tiles[]; };
 layout(std430, binding = SSBO_TILE_LIGHTS) readonly buffer TileLights { uint tile_lights[]; };
@@ -195,14 +250,73 @@ void main() {
     const vec3 luminance = vec3(0.2126729, 0.7151522, 0.0721750);
     const uint end = min(count, light_batch.y);
     if (!first_batch && light_batch.x >= end) return;
+    uint iterations = end > light_batch.x ? end - light_batch.x : 0u;
+#ifdef LIGHT_SAMPLING
+    uint chosen[LIGHT_SLOTS];
+    float chosen_weight[LIGHT_SLOTS];
+    float importance_sum = 0.0;
+    uint candidates = 0u, always = 0u;
     for (uint k = light_batch.x; k < end; ++k) {
 #ifdef LIGHT_CULLING
         uint i = from_list ? tile_lights[first + k] : k;
 #else
         uint i = k;
 #endif
+        float e = light_importance(lights[i], P, N);
+        importance_sum += e;
+        if (e > 0.0) ++candidates;
+        else ++always;
+    }
+    /* Too many lights shaded every sample for the list: every light. */
+    const bool selecting = candidates > uint(LIGHT_SAMPLING) && always <= uint(LIGHT_SLOTS_ALWAYS);
+    if (selecting) {
+        const float budget_scale = float(LIGHT_SAMPLING) / importance_sum;
+        const float comb = light_selection_offset(pixel);
+        float running = 0.0;
+        uint n = 0u;
+        for (uint k = light_batch.x; k < end && n < uint(LIGHT_SLOTS); ++k) {
+#ifdef LIGHT_CULLING
+            uint i = from_list ? tile_lights[first + k] : k;
+#else
+            uint i = k;
+#endif
+            float e = light_importance(lights[i], P, N);
+            float weight = 1.0;
+            if (e > 0.0) {
+                float p = min(e * budget_scale, 1.0);
+                float before = floor(running + comb);
+                running += p;
+                weight = floor(running + comb) != before ? 1.0 / p : 0.0; /* 0: not this sample */
+            }
+            if (weight > 0.0) {
+                chosen[n] = i;
+                chosen_weight[n] = weight;
+                ++n;
+            }
+        }
+        iterations = n;
+    }
+#endif
+    for (uint j = 0u; j < iterations; ++j) {
+        uint k = light_batch.x + j;
+#ifdef LIGHT_CULLING
+        uint i = from_list ? tile_lights[first + k] : k;
+#else
+        uint i = k;
+#endif
+        float weight = 1.0;
+#ifdef LIGHT_SAMPLING
+        if (selecting) {
+            i = chosen[j];
+            weight = chosen_weight[j];
+        }
+#endif
         float visible;
         LightContribution c = shade_light(lights[i], s, w, P, N, V, visible);
+        c.diffuse *= weight;
+        c.glossy *= weight;
+        last_unshadowed.diffuse *= weight;
+        last_unshadowed.glossy *= weight;
         total.diffuse += c.diffuse * visible;
         total.glossy += c.glossy * visible;
 #ifdef LIGHT_GROUPS

@@ -6,6 +6,7 @@ prints where the time went.
 
     build/tools/deferred_render_replay scene.npz [--size WxH] [--samples N]
         [--passes A,B] [--repeat K] [--json] [--out OUT.exr] [--device N]
+        [--light-samples N] [--shadow-rays | --shadow-maps]
 
 Each repeat renders the captured frame again on the same renderer (the first
 one compiles or loads the programs; later ones are warm). Printed per
@@ -122,6 +123,11 @@ def main(argv=None):
     ap.add_argument("--json", action="store_true", help="print the results as one JSON object")
     ap.add_argument("--out", help="write the last render's passes here (.exr multilayer, or .npz)")
     ap.add_argument("--device", type=int, default=-1, help="EGL device index (default: the best one)")
+    ap.add_argument("--light-samples", type=int, help="lights per pixel and sample (0: every light) instead of "
+                    "the captured setting")
+    rays = ap.add_mutually_exclusive_group()
+    rays.add_argument("--shadow-rays", action="store_true", help="shadow rays instead of the captured method")
+    rays.add_argument("--shadow-maps", action="store_true", help="shadow maps instead of the captured method")
     args = ap.parse_args(argv)
 
     data, calls, meta = load_capture(args.capture)
@@ -153,6 +159,10 @@ def main(argv=None):
         kwargs["samples"] = args.samples
     if args.passes:
         kwargs["passes"] = [p.strip() for p in args.passes.split(",") if p.strip()]
+    if args.light_samples is not None:
+        kwargs["light_samples"] = args.light_samples
+    if args.shadow_rays or args.shadow_maps:
+        kwargs["shadow_rays"] = bool(args.shadow_rays)
     kwargs["preview_interval_ms"] = -1
 
     info = dict(renderer.gl_info)
@@ -168,6 +178,7 @@ def main(argv=None):
 
     result = {"capture": os.path.abspath(args.capture), "gl_renderer": info.get("renderer"),
               "gl_version": info.get("version"), "size": [width, height], "samples": kwargs.get("samples"),
+              "light_samples": kwargs.get("light_samples", 0), "shadow_rays": kwargs.get("shadow_rays", False),
               "passes": sorted(images), "context_ms": t_context * 1e3, "scene_ms": t_scene * 1e3,
               "runs": runs, "warnings": warnings, "captured": meta}
     if args.json:

@@ -530,7 +530,7 @@ void declare_renderer(py::module_& m) {
         .def("render",
              [](PyRenderer& self, const Camera& camera, int width, int height, const std::vector<std::string>& passes,
                 bool film_transparent, float mist_start, float mist_depth, const std::string& mist_falloff,
-                int samples, float filter_width, bool light_culling, float light_threshold, bool shadows,
+                int samples, float filter_width, bool light_culling, float light_threshold, int light_samples, bool shadows,
                 int shadow_resolution, float shadow_quality, bool shadow_rays, float alpha_threshold,
                 const std::vector<std::string>& cryptomatte, int cryptomatte_levels,
                 const std::vector<std::pair<std::string, std::string>>& aovs, int light_groups,
@@ -561,6 +561,7 @@ void declare_renderer(py::module_& m) {
                  s.filter_width = filter_width;
                  s.light_culling = light_culling;
                  s.light_threshold = light_threshold;
+                 s.light_samples = light_samples;
                  s.shadows = shadows;
                  s.shadow_resolution = shadow_resolution;
                  s.shadow_quality = shadow_quality;
@@ -635,7 +636,7 @@ void declare_renderer(py::module_& m) {
              py::arg("passes") = std::vector<std::string>{"Combined"}, py::arg("film_transparent") = false,
              py::arg("mist_start") = 5.0f, py::arg("mist_depth") = 25.0f, py::arg("mist_falloff") = "QUADRATIC",
              py::arg("samples") = 1, py::arg("filter_width") = 1.5f, py::arg("light_culling") = true,
-             py::arg("light_threshold") = 1e-3f, py::arg("shadows") = true, py::arg("shadow_resolution") = 1024,
+             py::arg("light_threshold") = 1e-3f, py::arg("light_samples") = 0, py::arg("shadows") = true, py::arg("shadow_resolution") = 1024,
              py::arg("shadow_quality") = 1.0f, py::arg("shadow_rays") = false, py::arg("alpha_threshold") = 0.5f,
              py::arg("cryptomatte") = std::vector<std::string>{}, py::arg("cryptomatte_levels") = 6,
              py::arg("aovs") = std::vector<std::pair<std::string, std::string>>{}, py::arg("light_groups") = 0,

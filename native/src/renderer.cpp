@@ -267,6 +267,9 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         throw InvalidInput("filter_width must be in (0, 100] pixels");
     if (!(settings.light_threshold >= 0.0f) || !std::isfinite(settings.light_threshold))
         throw InvalidInput("light_threshold must be a finite number >= 0");
+    if (settings.light_samples < 0 || settings.light_samples > 65536)
+        throw InvalidInput("light_samples must be in 0..65536 (0: every light), got " +
+                           std::to_string(settings.light_samples));
     if (!(settings.alpha_threshold >= 0.0f && settings.alpha_threshold <= 1.0f))
         throw InvalidInput("alpha_threshold must be in [0, 1]");
     if (!(settings.shadow_quality > 0.0f && settings.shadow_quality <= 16.0f))
@@ -675,6 +678,9 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     lights.add_defines(lighting_variant);
     if (light_split) lighting_variant.defines.push_back("OUT_LIGHT_SPLIT");
     if (culled) lighting_variant.defines.push_back("LIGHT_CULLING");
+    // Selection only where some pixel can have more lights than the budget.
+    const bool light_sampling = settings.light_samples > 0 && lights.count() > std::uint32_t(settings.light_samples);
+    if (light_sampling) lighting_variant.defines.push_back("LIGHT_SAMPLING " + std::to_string(settings.light_samples));
     if (!shadows.empty()) lighting_variant.defines.push_back("HAS_SHADOWS");
     if (shadow_rays) lighting_variant.defines.push_back("SHADOW_RAYS");
     if (shadows.world_index() >= 0) lighting_variant.defines.push_back("HAS_WORLD_OCCLUSION");

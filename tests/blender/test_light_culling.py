@@ -1,6 +1,7 @@
 """Light culling on the many-lights sample (1024 point lights + a sun):
 the culled render differs from brute force (every light at every pixel) by
-no more than the threshold predicts, pixel by pixel.
+no more than the threshold predicts, pixel by pixel. Then Light Samples
+(stochastic light selection) on the same scene.
 
 Bound at a pixel with world position P: the sum, over the point lights
 farther than their influence radius r = R + sqrt(S / (4 pi^2 T)), of
@@ -30,6 +31,7 @@ def main():
     scene.render.engine = U.ENGINE
     scene.render.resolution_percentage = 25
     scene.deferred_render.samples = 1
+    scene.deferred_render.light_samples = 0  # every light: the culling alone is under test
     layer = scene.view_layers[0]
     layer.use_pass_position = True
     out = U.out_dir("light_culling")
@@ -68,6 +70,20 @@ def main():
     checks.check(np.isfinite(culled).all() and np.isfinite(brute).all(), "finite pixels")
     checks.check(excess.max() <= 0.0, "culled - brute within the predicted bound", f"{excess.max():.3e}")
     checks.check(diff.max() > 0.0 or bound.max() == 0.0, "culling was active (results differ where allowed)")
+
+    # Light Samples (stochastic selection, default 16) reaches the renderer:
+    # the image changes (pixels reached by more than 16 lights shade a
+    # selection) and its mean stays that of every light's (one sample here;
+    # the convergence is LightSampling.* in the native tests).
+    scene.deferred_render.light_culling = True
+    scene.deferred_render.light_samples = 16
+    ch = U.read_exr(U.render_exr(os.path.join(out, "sampled")))
+    sampled = U.exr_pass(ch, layer.name, "Combined", "RGB")
+    change = np.abs(sampled - culled).max()
+    ratio = float(sampled.mean() / culled.mean())
+    checks.check(np.isfinite(sampled).all() and change > 1e-3, "Light Samples 16 selects lights",
+                 f"max change {change:.3g}")
+    checks.check(abs(ratio - 1.0) < 0.03, "and keeps the image's mean (one sample)", f"{ratio:.4f}")
     checks.finish()
 
 

@@ -59,6 +59,20 @@ class DeferredRenderSettings(bpy.types.PropertyGroup):
         soft_max=0.1,
         precision=5,
     )
+    light_samples: IntProperty(
+        name="Light Samples",
+        description=(
+            "Lights shaded per pixel and sample where more lights reach a pixel: each is picked "
+            "with a probability from its share of the light there and weighted by its inverse, so "
+            "the image converges to every light's sum as samples accumulate (suns and emissive "
+            "meshes are always shaded). 0: every light every sample (exact per sample, slow with "
+            "many lights)"
+        ),
+        default=16,
+        min=0,
+        soft_max=64,
+        max=4096,
+    )
     shadow_resolution: IntProperty(
         name="Max Shadow Resolution",
         description=(

@@ -55,6 +55,7 @@ class DEFERRED_RENDER_PT_lights(_EnginePanel, bpy.types.Panel):
         row = layout.row()
         row.active = settings.light_culling
         row.prop(settings, "light_threshold")
+        layout.prop(settings, "light_samples")
         layout.prop(settings, "shadow_method")
         col = layout.column()
         col.active = settings.shadow_method == "MAPS"

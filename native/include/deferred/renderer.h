@@ -84,6 +84,14 @@ struct RenderSettings {
     // Scenes with fewer than 8 lights are never culled (it would cost more).
     bool light_culling = true;
     float light_threshold = 1e-3f;
+    // Stochastic light selection: 0 shades every light that reaches a pixel
+    // each sample (exact per sample). N > 0: where more than N lights reach
+    // a pixel (suns and emissive meshes apart, always shaded), each is shaded
+    // with a probability from its rough share of the light there and weighted
+    // by its inverse (at most N per pixel, sample and lighting dispatch of
+    // 512 lights, 8 with shadow rays), so the image converges over the film's
+    // samples to the same sum (lighting_comp.glsl LIGHT_SAMPLING).
+    int light_samples = 0;
     // Shadow maps for lights whose cast_shadow is on (one set per sample,
     // from that sample's point on the light: soft shadows converge with
     // samples; lights without size are rendered once). Each light's

@@ -1,0 +1,172 @@
+// Stochastic light selection (RenderSettings::light_samples) against shading
+// every light: the same film samples (jitter, light points) with and without
+// selection differ only by the selection's noise, which must average out
+// over the samples (unbiased) and keep every output consistent (light
+// groups, the Shadow pass).
+#include "test_helpers.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+using namespace deferred;
+using deferred::testing::pixel3;
+
+namespace {
+
+// A floor with boxes under 800 lights of every kind but the sun (points,
+// spots, rectangles; sizes and powers spread over two decades), plus one
+// sun, which selection never skips.
+void build_scene(Renderer& r, bool groups = false) {
+    tools::MeshArrays floor = tools::make_plane(30.0f);
+    tools::MeshArrays box = tools::make_box(1.0f, 1.0f, 1.0f);
+    Material grey;
+    grey.base_color = {0.7f, 0.7f, 0.7f};
+    grey.roughness = 0.4f;
+    const std::uint32_t mat = r.add_material(grey);
+    const std::uint32_t floor_mesh = r.add_mesh(floor.view()), box_mesh = r.add_mesh(box.view());
+    Mat4d I = identity_matrix();
+    r.add_instances(floor_mesh, I.data(), 1, nullptr, {mat});
+    for (int i = 0; i < 4; ++i) {
+        Mat4d t = tools::translation(-6.0 + 4.0 * i, 2.0 * (i % 2), 1.0);
+        r.add_instances(box_mesh, t.data(), 1, nullptr, {mat});
+    }
+    World black;
+    black.color = {0, 0, 0};
+    r.set_world(black);
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    for (int i = 0; i < 800; ++i) {
+        Light l;
+        l.type = i % 3 == 0 ? LightType::Point : i % 3 == 1 ? LightType::Spot : LightType::Area;
+        l.cast_shadow = false;
+        const double eye[3] = {-28 + 56 * u(rng), -28 + 56 * u(rng), 0.2 + 3.0 * u(rng)};
+        const double target[3] = {eye[0] + u(rng) - 0.5, eye[1] + u(rng) - 0.5, 0.0};
+        l.matrix = tools::look_at(eye, target);
+        l.energy = float(std::pow(10.0, 2.0 * u(rng)) * (l.type == LightType::Area ? 1.0 : 3.0));
+        l.radius = float(0.1 * u(rng));
+        l.size = l.size_y = float(0.05 + 0.5 * u(rng));
+        l.spot_size = float(0.5 + 1.5 * u(rng));
+        l.color = {float(0.3 + 0.7 * u(rng)), float(0.3 + 0.7 * u(rng)), float(0.3 + 0.7 * u(rng))};
+        l.light_group = groups ? 1 + std::uint32_t(i % 2) : 0;
+        r.add_light(l);
+    }
+    Light sun;
+    sun.type = LightType::Sun;
+    const double eye[3] = {-3.0, -2.0, 5.0}, target[3] = {0.0, 0.0, 0.0};
+    sun.matrix = tools::look_at(eye, target);
+    sun.energy = 0.5f;
+    sun.cast_shadow = false;
+    sun.light_group = groups ? 1 : 0;
+    r.add_light(sun);
+}
+
+Camera overview_camera() {
+    Camera cam;
+    const double eye[3] = {0, -22, 12}, target[3] = {0, 0, 0};
+    cam.matrix = tools::look_at(eye, target);
+    cam.lens = 30.0f;
+    cam.clip_start = 0.05f;
+    cam.clip_end = 200.0f;
+    return cam;
+}
+
+struct Difference {
+    double mean_ratio = 0, rel_rms = 0;
+};
+
+// Combined with selection over Combined shading every light: the ratio of
+// the image means and the RMS per-pixel difference relative to the pixel
+// (luminance, pixels with light).
+Difference compare(const PassImage& sampled, const PassImage& exact) {
+    double sum_a = 0, sum_b = 0, err2 = 0;
+    int n = 0;
+    for (int y = 0; y < exact.height; ++y)
+        for (int x = 0; x < exact.width; ++x) {
+            const glm::dvec3 a = pixel3(sampled, x, y), b = pixel3(exact, x, y);
+            const double la = 0.2126 * a.x + 0.7152 * a.y + 0.0722 * a.z;
+            const double lb = 0.2126 * b.x + 0.7152 * b.y + 0.0722 * b.z;
+            sum_a += la;
+            sum_b += lb;
+            if (lb > 1e-4) {
+                err2 += (la - lb) * (la - lb) / (lb * lb);
+                ++n;
+            }
+        }
+    return {sum_a / sum_b, std::sqrt(err2 / std::max(n, 1))};
+}
+
+}  // namespace
+
+TEST(LightSampling, ConvergesToTheSumOfEveryLight) {
+    Renderer r;
+    build_scene(r);
+    RenderSettings s;
+    s.width = 48;
+    s.height = 32;
+    s.light_threshold = 1e-4f;  // long reaches: most lights in every tile
+    double rms_few = 0;
+    for (int samples : {4, 64}) {
+        s.samples = samples;
+        s.light_samples = 0;
+        FrameResult exact = r.render(overview_camera(), s);
+        s.light_samples = 8;
+        FrameResult sampled = r.render(overview_camera(), s);
+        const Difference d = compare(*sampled.find(Pass::Combined), *exact.find(Pass::Combined));
+        std::printf("%d samples, 8 lights per pixel of %llu tile-light pairs: image mean %.5f of every light's, "
+                    "per-pixel rms %.4f; lighting %.0f ms vs %.0f ms\n",
+                    samples, (unsigned long long)exact.timings.tile_light_pairs, d.mean_ratio, d.rel_rms,
+                    sampled.timings.lighting_ms, exact.timings.lighting_ms);
+        EXPECT_GT(exact.timings.tile_light_pairs, 6u * 8u * 4u);  // more lights per tile (6 tiles) than the budget
+        if (samples == 4) {
+            rms_few = d.rel_rms;
+            EXPECT_GT(d.rel_rms, 1e-3);  // selection happened
+        } else {
+            EXPECT_NEAR(d.mean_ratio, 1.0, 0.005);
+            EXPECT_LT(d.rel_rms, 0.3 * rms_few);  // 16x the samples: 4x less noise if unbiased (3.7x measured)
+        }
+    }
+}
+
+TEST(LightSampling, GroupsAndShadowPassStayConsistent) {
+    // Each light's weight reaches every output: the groups (every light in
+    // one of two) sum to Combined, and the Shadow pass reads 1 without
+    // shadows, with or without selection.
+    Renderer r;
+    build_scene(r, true);
+    RenderSettings s;
+    s.width = 48;
+    s.height = 32;
+    s.samples = 2;
+    s.light_threshold = 1e-4f;
+    s.light_samples = 4;
+    s.light_groups = 2;
+    s.passes = {Pass::Shadow};
+    FrameResult f = r.render(overview_camera(), s);
+    ASSERT_EQ(f.light_groups.size(), 2u);
+    const PassImage& combined = *f.find(Pass::Combined);
+    const PassImage& shadow = *f.find(Pass::Shadow);
+    double worst = 0, worst_shadow = 0;
+    for (int i = 0; i < s.width * s.height; ++i)
+        for (int c = 0; c < 3; ++c) {
+            const double sum = double(f.light_groups[0][std::size_t(i) * 4 + c]) + f.light_groups[1][std::size_t(i) * 4 + c];
+            const double value = combined.pixels[std::size_t(i) * 4 + c];
+            worst = std::max(worst, std::abs(sum - value) / std::max(std::abs(value), 1e-3));
+            worst_shadow = std::max(worst_shadow, std::abs(shadow.pixels[std::size_t(i * shadow.channels + c)] - 1.0));
+        }
+    std::printf("groups' sum against Combined: worst relative difference %.2e; Shadow pass off 1 by %.2e\n", worst,
+                worst_shadow);
+    EXPECT_LT(worst, 1e-4);
+    EXPECT_LT(worst_shadow, 1e-4);
+}
+
+TEST(LightSampling, RejectsANegativeBudget) {
+    Renderer r;
+    build_scene(r);
+    RenderSettings s;
+    s.width = 8;
+    s.height = 8;
+    s.light_samples = -1;
+    EXPECT_THROW(r.render(overview_camera(), s), InvalidInput);
+}

@@ -88,4 +88,68 @@ double StageTimer::lap_ms() {
     return d;
 }
 
+double StageTimer::lap_cpu_ms() {
+    const double t = now_ms();
+    const double d = t - last_;
+    last_ = t;
+    return d;
+}
+
+void StageTimer::restart() { last_ = now_ms(); }
+
+GpuStageTimer::GpuStageTimer() {
+    const GLuint q = acquire();
+    glQueryCounter(q, GL_TIMESTAMP);
+    pending_.push_back({q, nullptr});
+}
+
+GpuStageTimer::~GpuStageTimer() {
+    if (!all_.empty()) glDeleteQueries(GLsizei(all_.size()), all_.data());
+}
+
+GLuint GpuStageTimer::acquire() {
+    if (free_.empty()) {
+        GLuint q = 0;
+        glGenQueries(1, &q);
+        all_.push_back(q);
+        return q;
+    }
+    const GLuint q = free_.back();
+    free_.pop_back();
+    return q;
+}
+
+void GpuStageTimer::lap(double& into_ms) {
+    const GLuint q = acquire();
+    glQueryCounter(q, GL_TIMESTAMP);
+    pending_.push_back({q, &into_ms});
+    // Read what has finished now and then; the GPU runs a few samples
+    // behind at most, so the oldest queries are done and reading them waits
+    // for nothing. Far behind (thousands of laps), wait for the oldest.
+    if (pending_.size() > 64) collect(false);
+    while (pending_.size() > 4096) {
+        GLuint64 t = 0;
+        glGetQueryObjectui64v(pending_.front().query, GL_QUERY_RESULT, &t);
+        collect(false);
+    }
+}
+
+void GpuStageTimer::collect(bool wait) {
+    while (!pending_.empty()) {
+        const Pending p = pending_.front();
+        if (!wait) {
+            GLint available = 0;
+            glGetQueryObjectiv(p.query, GL_QUERY_RESULT_AVAILABLE, &available);
+            if (!available) break;
+        }
+        GLuint64 t = 0;
+        glGetQueryObjectui64v(p.query, GL_QUERY_RESULT, &t);
+        if (have_last_ && p.into_ms) *p.into_ms += double(t - std::min(t, last_)) * 1e-6;
+        last_ = t;
+        have_last_ = true;
+        free_.push_back(p.query);
+        pending_.pop_front();
+    }
+}
+
 }  // namespace deferred

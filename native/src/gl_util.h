@@ -3,8 +3,10 @@
 
 #include <epoxy/gl.h>
 
+#include <deque>
 #include <string>
 #include <utility>
+#include <vector>
 
 namespace deferred {
 
@@ -54,14 +56,47 @@ Texture make_texture_2d(GLenum internal_format, int width, int height, const cha
 std::size_t texel_bytes(GLenum internal_format);
 
 // Wall-clock milliseconds since construction, after glFinish, so the GPU
-// work issued in between is counted (llvmpipe and GPUs alike).
+// work issued in between is counted (llvmpipe and GPUs alike). For the CPU
+// stages around the frame (upload, compile, readback): it waits for the GPU.
 class StageTimer {
 public:
     StageTimer();
-    double lap_ms();  // glFinish, time since the previous lap
+    double lap_ms();      // glFinish, time since the previous lap
+    double lap_cpu_ms();  // the same without glFinish (CPU work only)
+    void restart();       // the next lap counts from now
 
 private:
     double last_;
+};
+
+// The frame's stages timed on the GPU's own clock without waiting for it:
+// each lap() writes a timestamp query (glQueryCounter) and names the
+// accumulator the time since the previous lap goes to; collect() reads the
+// queries the GPU has finished (never stalling unless asked to wait), so
+// the sample loop issues no glFinish. The accumulators must outlive the
+// last collect(true). A GPU timestamp advances while the GPU waits for the
+// CPU too, so a lap also counts CPU work issued between its queries.
+class GpuStageTimer {
+public:
+    GpuStageTimer();
+    ~GpuStageTimer();
+    GpuStageTimer(const GpuStageTimer&) = delete;
+    GpuStageTimer& operator=(const GpuStageTimer&) = delete;
+    void lap(double& into_ms);
+    // Adds every finished lap; wait: every lap, waiting for the GPU.
+    void collect(bool wait);
+
+private:
+    struct Pending {
+        GLuint query;
+        double* into_ms;  // null: the first timestamp
+    };
+    GLuint acquire();
+    std::deque<Pending> pending_;
+    std::vector<GLuint> free_;
+    std::vector<GLuint> all_;
+    GLuint64 last_ = 0;
+    bool have_last_ = false;
 };
 
 }  // namespace deferred

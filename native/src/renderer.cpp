@@ -791,6 +791,9 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         result.timings.material_programs = distinct.size();
     }
     result.timings.upload_ms += timer.lap_ms();  // compiling stays out of the geometry pass's time
+    // From here to the readback the stages are timed on the GPU's clock:
+    // no glFinish inside the sample loop.
+    GpuStageTimer gpu_timer;
     // Node materials whose alpha can be below 1 (their program discards).
     auto is_alpha_graph = [&](std::uint32_t id) {
         const Material& m = scene.materials()[id];
@@ -1185,10 +1188,10 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         // The ray scene again at this time: the instances' hierarchy over the
         // meshes' kept ones (each mesh's hierarchy is built once).
         if (casters_moved) {
-            StageTimer ray_timer;
+            StageTimer ray_timer;  // CPU work: its own clock, no glFinish
             ray_scene.build(casters);
             ray_scene.upload();
-            result.timings.ray_build_ms += ray_timer.lap_ms();
+            result.timings.ray_build_ms += ray_timer.lap_cpu_ms();
         }
     };
     preview.begin(settings.width, settings.height, settings.samples, settings.preview_interval_ms);
@@ -1234,10 +1237,10 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
             glBindFramebuffer(GL_FRAMEBUFFER, 0);
             draw_motion();
             glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
-            geometry_ms += timer.lap_ms();
+            gpu_timer.lap(geometry_ms);
             run_passes(sample, true);
             set_alpha_mode(false);
-            passes_ms += timer.lap_ms();
+            gpu_timer.lap(passes_ms);
         }
 
         // Geometry pass.
@@ -1267,7 +1270,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         }
         if (!data_gbuffer) draw_motion();
         check_gl("geometry pass");
-        geometry_ms += timer.lap_ms();
+        gpu_timer.lap(geometry_ms);
 
         // A cancel (a viewport edit waits for it) stops between stages too,
         // not only between samples: everything below is redone from scratch
@@ -1305,7 +1308,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
                                                float(std::fmod(0.5 + sample * 0.5698402909980532, 1.0))};
             shadows.render_sample(*shaders, {u[2], u[3]}, grid, world_dirs, draw_shadow_casters,
                                   caster_defines, scene_alpha || alpha_graphs || casters_move);
-            shadow_ms += timer.lap_ms();
+            gpu_timer.lap(shadow_ms);
         }
 
         // Light lists, once per frame from sample 0's depth (later samples
@@ -1315,7 +1318,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         lights.bind();
         if (culled && sample == 0) {
             culling.build(*shaders, tiles_x, tiles_y);
-            culling_ms += timer.lap_ms();
+            gpu_timer.lap(culling_ms);
         }
 
         shadows.bind();
@@ -1329,7 +1332,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
             glViewport(0, 0, settings.width, settings.height);
             forward.bind_layer();
             check_gl("forward pass");
-            forward_ms += timer.lap_ms();
+            gpu_timer.lap(forward_ms);
         }
 
         check_cancel();
@@ -1363,7 +1366,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
             glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
         }
         check_gl("lighting pass");
-        lighting_ms += timer.lap_ms();
+        gpu_timer.lap(lighting_ms);
 
         // Other passes (the data passes came from their own G-buffer above).
         run_passes(sample, false);
@@ -1372,9 +1375,9 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
             cryptomatte.accumulate(*shaders, settings.samples, groups_x, groups_y);
         }
         check_gl("passes");
-        passes_ms += timer.lap_ms();
+        gpu_timer.lap(passes_ms);
         preview.publish(preview_image, sample + 1, preview_averaged, preview_channels);
-        preview_ms += timer.lap_ms();
+        gpu_timer.lap(preview_ms);
     }
 
     // Shadow catchers: the Shadow Catcher pass from the catchers' light and
@@ -1425,7 +1428,11 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         glDispatchCompute(groups_x, groups_y, 1);
     }
     glMemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT | GL_PIXEL_BUFFER_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
-    passes_ms += timer.lap_ms();
+    gpu_timer.lap(passes_ms);
+
+    // The stages' times (waits for the GPU once), then the readback on the CPU's clock.
+    gpu_timer.collect(true);
+    timer.restart();
 
     // --- Readback. ---
     auto read = [&](GLuint texture, Pass pass) {

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstring>
 
 namespace deferred {
 
@@ -96,6 +97,50 @@ double StageTimer::lap_cpu_ms() {
 }
 
 void StageTimer::restart() { last_ = now_ms(); }
+
+UniformRing::UniformRing(std::size_t block_bytes, int slots, GLuint binding, const char* what)
+    : block_bytes_(block_bytes), binding_(binding), fences_(std::size_t(std::max(slots, 1)), nullptr) {
+    GLint align = 256;
+    glGetIntegerv(GL_UNIFORM_BUFFER_OFFSET_ALIGNMENT, &align);
+    align = std::max(align, 1);
+    stride_ = (block_bytes + std::size_t(align) - 1) / std::size_t(align) * std::size_t(align);
+    GLuint id = 0;
+    glCreateBuffers(1, &id);
+    buffer_ = Buffer(id);
+    const GLbitfield flags = GL_MAP_WRITE_BIT | GL_MAP_PERSISTENT_BIT | GL_MAP_COHERENT_BIT;
+    const GLsizeiptr size = GLsizeiptr(stride_ * fences_.size());
+    glNamedBufferStorage(id, size, nullptr, flags);
+    mapped_ = static_cast<unsigned char*>(glMapNamedBufferRange(id, 0, size, flags));
+    check_gl((std::string("allocating the ring buffer '") + what + "'").c_str());
+    if (!mapped_) throw Error(std::string("mapping the ring buffer '") + what + "' failed");
+}
+
+UniformRing::~UniformRing() {
+    for (GLsync f : fences_)
+        if (f) glDeleteSync(f);
+    if (buffer_) glUnmapNamedBuffer(buffer_.get());
+}
+
+void UniformRing::push(const void* block) {
+    // The commands issued since the last push read the current slot: fence them.
+    if (pushed_) {
+        GLsync& done = fences_[current_];
+        if (done) glDeleteSync(done);
+        done = glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
+    }
+    pushed_ = true;
+    current_ = next_;
+    next_ = (next_ + 1) % fences_.size();
+    if (GLsync& f = fences_[current_]) {  // the GPU may still read this slot
+        while (glClientWaitSync(f, GL_SYNC_FLUSH_COMMANDS_BIT, 1000000000) == GL_TIMEOUT_EXPIRED) {
+        }
+        glDeleteSync(f);
+        f = nullptr;
+    }
+    std::memcpy(mapped_ + current_ * stride_, block, block_bytes_);
+    glBindBufferRange(GL_UNIFORM_BUFFER, binding_, buffer_.get(), GLintptr(current_ * stride_),
+                      GLsizeiptr(block_bytes_));
+}
 
 GpuStageTimer::GpuStageTimer() {
     const GLuint q = acquire();

@@ -69,6 +69,30 @@ private:
     double last_;
 };
 
+// Per-sample constants without a CPU-GPU sync: a ring of slots in one
+// persistently mapped, coherent buffer. push() fences the commands issued
+// with the current slot, then takes the next one, waiting only for the
+// fence of its use `slots` pushes ago (long done unless the GPU is that far
+// behind), copies the block in and binds that slot's range as the uniform
+// block.
+class UniformRing {
+public:
+    UniformRing(std::size_t block_bytes, int slots, GLuint binding, const char* what);
+    ~UniformRing();
+    UniformRing(const UniformRing&) = delete;
+    UniformRing& operator=(const UniformRing&) = delete;
+    void push(const void* block);
+
+private:
+    Buffer buffer_;
+    unsigned char* mapped_ = nullptr;
+    std::size_t block_bytes_, stride_;
+    GLuint binding_;
+    std::vector<GLsync> fences_;
+    std::size_t next_ = 0, current_ = 0;
+    bool pushed_ = false;
+};
+
 // The frame's stages timed on the GPU's own clock without waiting for it:
 // each lap() writes a timestamp query (glQueryCounter) and names the
 // accumulator the time since the previous lap goes to; collect() reads the

@@ -612,8 +612,11 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     fc.tiles = {tiles_x, tiles_y, culled ? 1u : 0u, reach};
     fc.world_occlusion = {float(shadows.world_index()), float(shadows.world_count()), float(world_module.width()),
                           float(world_module.height())};
-    Buffer frame_buffer = make_storage_buffer(nullptr, sizeof(fc), "frame constants");
-    glBindBufferBase(GL_UNIFORM_BUFFER, UBO_FRAME, frame_buffer.get());
+    // The frame constants, new each sample: a ring of slots in a persistently
+    // mapped buffer (gl_util.h UniformRing), so updating them never waits
+    // for the samples still in flight.
+    UniformRing frame_ring(sizeof(fc), 4, UBO_FRAME, "frame constants");
+    frame_ring.push(&fc);
 
     // --- Targets: the per-sample G-buffer, the accumulations (the film). ---
     gbuffer.ensure(settings.width, settings.height, features);
@@ -1222,7 +1225,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
                 world_module.occlusion_direction(world_sample_point(sample * shadows.world_count() + k));
             world_dirs.emplace_back(d.dir, d.pair_pdf);
         }
-        glNamedBufferSubData(frame_buffer.get(), 0, sizeof(fc), &fc);
+        frame_ring.push(&fc);
         glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
 
         if (data_gbuffer && (sample == 0 || data_every_sample)) {
@@ -1435,22 +1438,53 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     timer.restart();
 
     // --- Readback. ---
-    auto read = [&](GLuint texture, Pass pass) {
-        const PassInfo& info = pass_info(pass);
+    // Every pass into one pixel pack buffer, each at its offset in its final
+    // layout (1, 3 or 4 floats per pixel, rows bottom-up), queued without
+    // waiting; mapping the buffer waits once for all of them (a read into
+    // client memory would wait for each pass in turn).
+    std::vector<std::pair<Pass, GLuint>> reads{{Pass::Combined, film.get()}};
+    for (auto& [p, image] : pass_images) reads.emplace_back(p, image.get());
+    std::vector<std::size_t> offsets;
+    std::size_t readback_bytes = 0;
+    for (const auto& [p, texture] : reads) {
+        offsets.push_back(readback_bytes);
+        readback_bytes += pixels * std::size_t(pass_info(p).channels) * sizeof(float);
+    }
+    Buffer pack;
+    {
+        GLuint id = 0;
+        glCreateBuffers(1, &id);
+        pack = Buffer(id);
+        glNamedBufferStorage(id, GLsizeiptr(readback_bytes), nullptr, GL_MAP_READ_BIT);
+        check_gl("allocating the readback buffer");
+    }
+    glBindBuffer(GL_PIXEL_PACK_BUFFER, pack.get());
+    glPixelStorei(GL_PACK_ALIGNMENT, 1);
+    for (std::size_t k = 0; k < reads.size(); ++k) {
+        const int channels = pass_info(reads[k].first).channels;
+        const GLenum format = channels == 1 ? GL_RED : channels == 3 ? GL_RGB : GL_RGBA;
+        glGetTextureImage(reads[k].second, 0, format, GL_FLOAT,
+                          GLsizei(pixels * std::size_t(channels) * sizeof(float)),
+                          reinterpret_cast<void*>(offsets[k]));
+    }
+    glBindBuffer(GL_PIXEL_PACK_BUFFER, 0);
+    const auto* mapped =
+        static_cast<const float*>(glMapNamedBufferRange(pack.get(), 0, GLsizeiptr(readback_bytes), GL_MAP_READ_BIT));
+    if (!mapped) check_gl("mapping the readback buffer");
+    if (!mapped) throw Error("mapping the readback buffer failed");
+    for (std::size_t k = 0; k < reads.size(); ++k) {
+        const PassInfo& info = pass_info(reads[k].first);
         PassImage img;
-        img.pass = pass;
+        img.pass = reads[k].first;
         img.width = settings.width;
         img.height = settings.height;
         img.channels = info.channels;
-        img.pixels.resize(pixels * std::size_t(info.channels));
-        const GLenum format = info.channels == 1 ? GL_RED : info.channels == 3 ? GL_RGB : GL_RGBA;
-        glPixelStorei(GL_PACK_ALIGNMENT, 1);
-        glGetTextureImage(texture, 0, format, GL_FLOAT, GLsizei(img.pixels.size() * sizeof(float)),
-                          img.pixels.data());
+        const float* from = mapped + offsets[k] / sizeof(float);
+        img.pixels.assign(from, from + pixels * std::size_t(info.channels));
         result.passes.push_back(std::move(img));
-    };
-    read(film.get(), Pass::Combined);
-    for (auto& [p, image] : pass_images) read(image.get(), p);
+    }
+    glUnmapNamedBuffer(pack.get());
+    pack.reset();
     result.cryptomatte = cryptomatte.finish();
     result.aovs = aovs.finish();
     motion.release();

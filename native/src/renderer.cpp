@@ -15,6 +15,7 @@
 #include "light_culling.h"
 #include "light_module.h"
 #include "material_module.h"
+#include "film_module.h"
 #include "motion_module.h"
 #include "progressive_preview.h"
 #include "render_thread.h"
@@ -620,48 +621,28 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
 
     // --- Targets: the per-sample G-buffer, the accumulations (the film). ---
     gbuffer.ensure(settings.width, settings.height, features);
-    const float zero[4] = {0, 0, 0, 0};
-    auto accumulation = [&](const char* name) {
-        Texture t = make_texture_2d(GL_RGBA32F, settings.width, settings.height, name);
-        glClearTexImage(t.get(), 0, GL_RGBA, GL_FLOAT, zero);
-        return t;
-    };
-    Texture film = accumulation("film (Combined)");
-    Texture diffuse_light, glossy_light;
-    if (light_split) {
-        diffuse_light = accumulation("diffuse light");
-        glossy_light = accumulation("glossy light");
+    FilmModule film;
+    {
+        FilmModule::Layout layout;
+        layout.width = settings.width;
+        layout.height = settings.height;
+        for (Pass p : wanted.list())
+            if (p != Pass::Combined) layout.passes.push_back(p);
+        layout.light_split = light_split;
+        layout.shadow_pass = shadow_pass;
+        layout.catchers = catchers;
+        layout.light_groups = settings.light_groups;
+        film.allocate(layout);
     }
-    Texture shadow_light;
-    if (shadow_pass) shadow_light = accumulation("shadow light");
-    Texture catcher_hit, catcher_pass;
-    if (catchers) {
-        catcher_hit = accumulation("shadow catcher light");
-        catcher_pass = accumulation("shadow catcher light without the other objects");
-    }
-    // Light groups: one layer per group, and each instance's group.
-    Texture group_light;
+    // Each instance's light group.
     Buffer instance_group_buffer;
     if (settings.light_groups > 0) {
-        GLuint t = 0;
-        glCreateTextures(GL_TEXTURE_2D_ARRAY, 1, &t);
-        group_light = Texture(t);
-        glTextureStorage3D(t, 1, GL_RGBA32F, settings.width, settings.height, settings.light_groups);
-        glClearTexImage(t, 0, GL_RGBA, GL_FLOAT, zero);
         const std::uint32_t none = 0;
         instance_group_buffer = instance_groups.empty()
             ? make_storage_buffer(&none, 4, "instance light groups")
             : make_storage_buffer(instance_groups.data(), instance_groups.size() * 4, "instance light groups");
     }
-    std::vector<std::pair<Pass, Texture>> pass_images;
-    for (Pass p : wanted.list())
-        if (p != Pass::Combined) pass_images.emplace_back(p, accumulation(pass_info(p).name));
-    for (auto& [p, image] : pass_images)
-        if (p == Pass::ShadowCatcher) {  // 1 where no catcher is seen (RESOLVE_CATCHER writes the rest)
-            const float one[4] = {1, 1, 1, 0};
-            glClearTexImage(image.get(), 0, GL_RGBA, GL_FLOAT, one);
-        }
-    result.timings.gbuffer_bytes = gbuffer.bytes() + pixels * 16 * (1 + pass_images.size() + (light_split ? 2 : 0));
+    result.timings.gbuffer_bytes = gbuffer.bytes() + film.bytes();
 
     // Variants: which G-buffer targets exist, which light types are present.
     ShaderVariant base_variant;
@@ -879,7 +860,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     }
     // The Vector pass: every instance's and the camera's motion (motion_module.h).
     GLuint motion_program = 0;
-    for (auto& [p, image] : pass_images) {
+    for (auto& [p, image] : film.pass_images()) {
         if (p != Pass::Vector || settings.motion_blur) continue;  // with motion blur 0, as Cycles
         motion.begin(scene, camera_in, cam, settings.width, settings.height, image.get(), gbuffer.depth_texture());
         ShaderVariant motion_variant;
@@ -1001,7 +982,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     };
     bool data_gbuffer = false, data_every_sample = false;
     if (scene_alpha || alpha_graphs)
-        for (auto& [p, image] : pass_images)
+        for (auto& [p, image] : film.pass_images())
             if (is_data_pass(p)) {
                 data_gbuffer = true;
                 // Depth, Position and the indices come from sample 0 only;
@@ -1017,7 +998,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     if (scene_alpha || alpha_graphs) set_alpha_mode(false);
     auto run_passes = [&](int sample, bool data) {
         // Filtered passes every sample, the rest at sample 0.
-        for (auto& [p, image] : pass_images) {
+        for (auto& [p, image] : film.pass_images()) {
             const bool first_only = pass_from_first_sample(p);
             // Shadow: resolved below; AO: accumulated by the lighting pass;
             // Vector: drawn by the motion module; Shadow Catcher: resolved below.
@@ -1137,7 +1118,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     };
 
     double preview_ms = 0;  // progressive preview read-backs, counted as readback
-    GLuint preview_image = film.get();
+    GLuint preview_image = film.combined();
     if (settings.preview_pass != Pass::Combined) {
         const Pass p = settings.preview_pass;
         if (p == Pass::DiffDir || p == Pass::GlossDir || p == Pass::Shadow || p == Pass::Vector ||
@@ -1145,7 +1126,7 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
             throw InvalidInput(std::string("preview_pass: ") + pass_info(p).name +
                                " is resolved after the last sample and cannot be previewed");
         preview_image = 0;
-        for (auto& [q, image] : pass_images)
+        for (auto& [q, image] : film.pass_images())
             if (q == p) preview_image = image.get();
         if (!preview_image)
             throw InvalidInput(std::string("preview_pass: ") + pass_info(p).name + " is not among the passes rendered");
@@ -1342,24 +1323,11 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         // Lighting pass: adds this sample's share to the film.
         glUseProgram(lighting);
         if (culled) culling.bind();
-        glBindImageTexture(IMG_FILM, film.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
-        if (shadow_pass)
-            glBindImageTexture(IMG_SHADOW, shadow_light.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
-        if (catchers) {
-            glBindImageTexture(IMG_CATCHER_HIT, catcher_hit.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
-            glBindImageTexture(IMG_CATCHER_PASS, catcher_pass.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
-        }
-        for (auto& [p, image] : pass_images)
-            if (p == Pass::AO) glBindImageTexture(IMG_AO, image.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
-        if (group_light) {
-            glBindImageTexture(IMG_LIGHT_GROUPS, group_light.get(), 0, GL_TRUE, 0, GL_READ_WRITE, GL_RGBA32F);
+        film.bind_for_lighting();
+        if (settings.light_groups > 0) {
             lights.bind_groups();
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_INSTANCE_GROUPS, instance_group_buffer.get());
             glUniform1ui(1, world.light_group);
-        }
-        if (light_split) {
-            glBindImageTexture(IMG_DIFF_LIGHT, diffuse_light.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
-            glBindImageTexture(IMG_GLOSS_LIGHT, glossy_light.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
         }
         const std::uint32_t batch = shadow_rays ? kRayLightBatch : kLightBatch;
         for (std::uint32_t begin = 0; begin == 0 || begin < lights.count(); begin += batch) {
@@ -1386,11 +1354,11 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     // Shadow catchers: the Shadow Catcher pass from the catchers' light and
     // the matte's alpha, or without it Combined carries their shadow.
     if (catchers) {
-        glBindTextureUnit(TEX_CATCHER_HIT, catcher_hit.get());
-        glBindTextureUnit(TEX_CATCHER_PASS, catcher_pass.get());
-        glBindTextureUnit(TEX_CATCHER_FILM, film.get());
+        glBindTextureUnit(TEX_CATCHER_HIT, film.catcher_hit());
+        glBindTextureUnit(TEX_CATCHER_PASS, film.catcher_pass());
+        glBindTextureUnit(TEX_CATCHER_FILM, film.combined());
         bool pass = false;
-        for (auto& [p, image] : pass_images) {
+        for (auto& [p, image] : film.pass_images()) {
             if (p != Pass::ShadowCatcher) continue;
             pass = true;
             glUseProgram(pass_program(p, "RESOLVE_CATCHER"));
@@ -1404,17 +1372,17 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
             world_module.add_defines(v);
             glUseProgram(shaders->compute_program("passes_comp.glsl", v));
             world_module.bind();
-            glBindImageTexture(IMG_PASS_OUT, film.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
+            glBindImageTexture(IMG_PASS_OUT, film.combined(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
             glDispatchCompute(groups_x, groups_y, 1);
         }
         glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
         // The viewport's last image with the catchers' shadows (the samples'
         // images show them as holes).
-        if (!pass && settings.preview_pass == Pass::Combined) preview.publish(film.get(), settings.samples);
+        if (!pass && settings.preview_pass == Pass::Combined) preview.publish(film.combined(), settings.samples);
     }
     // DiffDir/GlossDir: accumulated light over accumulated colour; Shadow:
     // shadowed over unshadowed light; Vector: summed motion over its count.
-    for (auto& [p, image] : pass_images) {
+    for (auto& [p, image] : film.pass_images()) {
         if (p == Pass::Vector) {
             glUseProgram(pass_program(p, "RESOLVE_MOTION"));
             motion.bind_resolve();
@@ -1424,9 +1392,9 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
         }
         if (p != Pass::DiffDir && p != Pass::GlossDir && p != Pass::Shadow) continue;
         glUseProgram(pass_program(p, p == Pass::Shadow ? "RESOLVE_SHADOW" : "RESOLVE_LIGHT"));
-        glBindTextureUnit(TEX_DIFF_LIGHT, diffuse_light.get());
-        glBindTextureUnit(TEX_GLOSS_LIGHT, glossy_light.get());
-        glBindTextureUnit(TEX_SHADOW_LIGHT, shadow_light.get());
+        glBindTextureUnit(TEX_DIFF_LIGHT, film.diffuse_light());
+        glBindTextureUnit(TEX_GLOSS_LIGHT, film.glossy_light());
+        glBindTextureUnit(TEX_SHADOW_LIGHT, film.shadow_light());
         glBindImageTexture(IMG_PASS_OUT, image.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
         glDispatchCompute(groups_x, groups_y, 1);
     }
@@ -1437,64 +1405,12 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     gpu_timer.collect(true);
     timer.restart();
 
-    // --- Readback. ---
-    // Every pass into one pixel pack buffer, each at its offset in its final
-    // layout (1, 3 or 4 floats per pixel, rows bottom-up), queued without
-    // waiting; mapping the buffer waits once for all of them (a read into
-    // client memory would wait for each pass in turn).
-    std::vector<std::pair<Pass, GLuint>> reads{{Pass::Combined, film.get()}};
-    for (auto& [p, image] : pass_images) reads.emplace_back(p, image.get());
-    std::vector<std::size_t> offsets;
-    std::size_t readback_bytes = 0;
-    for (const auto& [p, texture] : reads) {
-        offsets.push_back(readback_bytes);
-        readback_bytes += pixels * std::size_t(pass_info(p).channels) * sizeof(float);
-    }
-    Buffer pack;
-    {
-        GLuint id = 0;
-        glCreateBuffers(1, &id);
-        pack = Buffer(id);
-        glNamedBufferStorage(id, GLsizeiptr(readback_bytes), nullptr, GL_MAP_READ_BIT);
-        check_gl("allocating the readback buffer");
-    }
-    glBindBuffer(GL_PIXEL_PACK_BUFFER, pack.get());
-    glPixelStorei(GL_PACK_ALIGNMENT, 1);
-    for (std::size_t k = 0; k < reads.size(); ++k) {
-        const int channels = pass_info(reads[k].first).channels;
-        const GLenum format = channels == 1 ? GL_RED : channels == 3 ? GL_RGB : GL_RGBA;
-        glGetTextureImage(reads[k].second, 0, format, GL_FLOAT,
-                          GLsizei(pixels * std::size_t(channels) * sizeof(float)),
-                          reinterpret_cast<void*>(offsets[k]));
-    }
-    glBindBuffer(GL_PIXEL_PACK_BUFFER, 0);
-    const auto* mapped =
-        static_cast<const float*>(glMapNamedBufferRange(pack.get(), 0, GLsizeiptr(readback_bytes), GL_MAP_READ_BIT));
-    if (!mapped) check_gl("mapping the readback buffer");
-    if (!mapped) throw Error("mapping the readback buffer failed");
-    for (std::size_t k = 0; k < reads.size(); ++k) {
-        const PassInfo& info = pass_info(reads[k].first);
-        PassImage img;
-        img.pass = reads[k].first;
-        img.width = settings.width;
-        img.height = settings.height;
-        img.channels = info.channels;
-        const float* from = mapped + offsets[k] / sizeof(float);
-        img.pixels.assign(from, from + pixels * std::size_t(info.channels));
-        result.passes.push_back(std::move(img));
-    }
-    glUnmapNamedBuffer(pack.get());
-    pack.reset();
+    // --- Readback (film_module.h: one pixel pack buffer, mapped once). ---
+    result.passes = film.read_passes();
     result.cryptomatte = cryptomatte.finish();
     result.aovs = aovs.finish();
     motion.release();
-    if (group_light) {
-        std::vector<float> all(pixels * 4 * std::size_t(settings.light_groups));
-        glGetTextureImage(group_light.get(), 0, GL_RGBA, GL_FLOAT, GLsizei(all.size() * 4), all.data());
-        for (int g = 0; g < settings.light_groups; ++g)
-            result.light_groups.emplace_back(all.begin() + long(pixels * 4 * g), all.begin() + long(pixels * 4 * (g + 1)));
-        check_gl("reading the light groups");
-    }
+    result.light_groups = film.read_light_groups();
     check_gl("readback");
     result.timings.readback_ms = timer.lap_ms() + preview_ms;
     result.timings.geometry_ms = geometry_ms;

@@ -46,6 +46,16 @@ float fresnel_dielectric_cos(float cosi, float eta) {
 
 /* Smith G1 for GGX, separable form used by Cycles 3.4. sin^2 comes from a
  * cross product: 1 - cos^2 cancels catastrophically in float near cos = 1. */
+/* GGX's D = alpha^2 / (pi cos^4 (alpha^2 + tan^2)^2) (Cycles'
+ * bsdf_microfacet_ggx_eval_reflect), written as alpha^2 / (pi (alpha^2 cos^2
+ * + sin^2)^2): the same value, but cos^4 alone underflows below cos ~ 1e-10,
+ * which a GPU that flushes denormals to zero turned into 0 and D into inf
+ * (NVIDIA: BsdfExtremes.GrazingAnglesAreFiniteAndBounded at N.V = N.L = 1e-10). */
+float ggx_D(float alpha2, float cos2, float sin2) {
+    float t = alpha2 * cos2 + sin2;
+    return alpha2 / (M_PI_F * t * t);
+}
+
 float ggx_G1(float alpha2, vec3 N, vec3 D) {
     float c = dot(N, D);
     vec3 nxd = cross(N, D);
@@ -173,15 +183,17 @@ vec3 principled_specular(PrincipledWeights w, vec3 N, vec3 V, vec3 L) {
     if (cosH <= 0.0) return vec3(0.0);
     float cosH2 = cosH * cosH;
     vec3 nxh = cross(N, H);
-    float tanH2 = dot(nxh, nxh) / cosH2;
     if (w.glossy_model == 2) {
         float alpha = sqrt(w.alpha2);
-        float D = exp(-tanH2 / w.alpha2) / (M_PI_F * w.alpha2 * cosH2 * cosH2);
+        float tanH2 = dot(nxh, nxh) / cosH2;
+        /* exp() is 0 long before cos^4 could underflow; evaluating cos^4
+         * first would give 0 / 0 where a GPU flushes denormals to zero. */
+        float e = exp(-tanH2 / w.alpha2);
+        float D = e > 0.0 ? e / (M_PI_F * w.alpha2 * cosH2 * cosH2) : 0.0;
         float G = beckmann_G1(alpha, NdotV) * beckmann_G1(alpha, NdotL);
         return w.cspec0 * (D * G * 0.25 / NdotV);
     }
-    float denom = w.alpha2 + tanH2;
-    float D = w.alpha2 / (M_PI_F * cosH2 * cosH2 * denom * denom);
+    float D = ggx_D(w.alpha2, cosH2, dot(nxh, nxh));
     float G = ggx_G1(w.alpha2, N, V) * ggx_G1(w.alpha2, N, L);
     if (w.glossy_model != 0) return w.cspec0 * (D * G * 0.25 / NdotV);
     float FH = (fresnel_dielectric_cos(dot(L, H), w.spec_eta) - w.spec_F0) / (1.0 - w.spec_F0);
@@ -318,9 +330,7 @@ float principled_specular_pdf(PrincipledWeights w, vec3 N, vec3 V, vec3 L) {
     if (cosH <= 0.0) return 0.0;
     float cosH2 = cosH * cosH;
     vec3 nxh = cross(N, H);
-    float tanH2 = dot(nxh, nxh) / cosH2;
-    float denom = w.alpha2 + tanH2;
-    float D = w.alpha2 / (M_PI_F * cosH2 * cosH2 * denom * denom);
+    float D = ggx_D(w.alpha2, cosH2, dot(nxh, nxh));
     return ggx_G1(w.alpha2, N, V) * D * 0.25 / NdotV;
 }
 

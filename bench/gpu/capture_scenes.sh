@@ -16,3 +16,7 @@ for scene in box_room many_lights showcase instancing; do
     | grep -E "captured|Error" || true
   test -f "$repo/bench/gpu/captures/$scene.npz"
 done
+# The node-materials scene (constant and textured materials).
+BLENDER_USER_SCRIPTS="$build/blender_scripts" \
+  blender -b --factory-startup --addons deferred_render -E DEFERRED_RENDER --python-exit-code 1 \
+    --python "$repo/bench/gpu/capture_materials.py" | grep -E "captured|Error" || true

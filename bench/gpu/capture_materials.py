@@ -1,0 +1,104 @@
+"""Captures the node-materials benchmark scene (bench/materials/bench_materials.py's
+geometry-pass case) for the GPU benchmark: 64 spheres of 2 304 triangles
+filling the frame under a sun, once with a constant Principled BSDF
+(materials_constant.npz) and once with the textured material (UV + Mapping ->
+Image Texture -> Base Color, Noise -> ColorRamp -> Roughness, the image
+through a tangent-space Normal Map: materials_textured.npz). The spheres share
+one mesh here and the image is 512 x 512, 8-bit (bench_materials uses 2048),
+so the captures stay small enough to commit (bench/gpu/captures/).
+
+    BLENDER_USER_SCRIPTS=build/blender_scripts blender -b --factory-startup --addons deferred_render \\
+        -E DEFERRED_RENDER --python bench/gpu/capture_materials.py
+"""
+
+import os
+
+import bpy
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+OUT = os.path.join(HERE, "captures")
+
+
+def clear_scene():
+    for ob in list(bpy.data.objects):
+        bpy.data.objects.remove(ob)
+    scene = bpy.context.scene
+    scene.render.engine = "DEFERRED_RENDER"
+    cam = bpy.data.objects.new("cam", bpy.data.cameras.new("cam"))
+    scene.collection.objects.link(cam)
+    scene.camera = cam
+    cam.location = (0, 0, 14)
+    sun = bpy.data.objects.new("sun", bpy.data.lights.new("sun", "SUN"))
+    sun.rotation_euler = (0.5, 0.3, 0)
+    scene.collection.objects.link(sun)
+    scene.render.resolution_x, scene.render.resolution_y = 192, 108  # replayed at 1920x1080
+    scene.render.resolution_percentage = 100
+    scene.deferred_render.samples = 1
+    return scene
+
+
+def sphere_grid(material, n=8):
+    bpy.ops.mesh.primitive_uv_sphere_add(segments=48, ring_count=24, radius=0.95)
+    base = bpy.context.object
+    mesh = base.data
+    mesh.materials.append(material)
+    bpy.data.objects.remove(base)
+    for i in range(n):
+        for j in range(n):
+            ob = bpy.data.objects.new(f"sphere_{i}_{j}", mesh)
+            ob.location = (2 * i - n + 1, (2 * j - n + 1) * 0.6, 0)
+            bpy.context.scene.collection.objects.link(ob)
+
+
+def textured_material(image):
+    mat = bpy.data.materials.new("textured")
+    mat.use_nodes = True
+    nt = mat.node_tree
+    bsdf = nt.nodes["Principled BSDF"]
+    tc = nt.nodes.new("ShaderNodeTexCoord")
+    mp = nt.nodes.new("ShaderNodeMapping")
+    mp.inputs["Scale"].default_value = (4, 2, 1)
+    tex = nt.nodes.new("ShaderNodeTexImage")
+    tex.image = image
+    nt.links.new(tc.outputs["UV"], mp.inputs["Vector"])
+    nt.links.new(mp.outputs["Vector"], tex.inputs["Vector"])
+    nt.links.new(tex.outputs["Color"], bsdf.inputs["Base Color"])
+    noise = nt.nodes.new("ShaderNodeTexNoise")
+    noise.inputs["Scale"].default_value = 8
+    ramp = nt.nodes.new("ShaderNodeValToRGB")
+    nt.links.new(noise.outputs["Fac"], ramp.inputs["Fac"])
+    nt.links.new(ramp.outputs["Color"], bsdf.inputs["Roughness"])
+    nmap = nt.nodes.new("ShaderNodeNormalMap")
+    nt.links.new(tex.outputs["Color"], nmap.inputs["Color"])
+    nt.links.new(nmap.outputs["Normal"], bsdf.inputs["Normal"])
+    return mat
+
+
+def constant_material():
+    mat = bpy.data.materials.new("constant")
+    mat.use_nodes = True
+    mat.node_tree.nodes["Principled BSDF"].inputs["Base Color"].default_value = (0.6, 0.4, 0.3, 1)
+    return mat
+
+
+def capture(name, material):
+    clear_scene()
+    sphere_grid(material)
+    os.environ["DEFERRED_RENDER_CAPTURE"] = os.path.join(OUT, name + ".npz")
+    try:
+        bpy.ops.render.render()
+    finally:
+        del os.environ["DEFERRED_RENDER_CAPTURE"]
+    print(f"captured {name}: {os.path.getsize(os.path.join(OUT, name + '.npz')) >> 10} KiB")
+
+
+def main():
+    image = bpy.data.images.new("bench_texture", 512, 512)
+    image.pixels.foreach_set(np.random.default_rng(1).random(512 * 512 * 4, dtype=np.float32))
+    image.pack()
+    capture("materials_constant", constant_material())
+    capture("materials_textured", textured_material(image))
+
+
+main()

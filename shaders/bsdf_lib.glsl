@@ -44,8 +44,6 @@ float fresnel_dielectric_cos(float cosi, float eta) {
     return 1.0;
 }
 
-/* Smith G1 for GGX, separable form used by Cycles 3.4. sin^2 comes from a
- * cross product: 1 - cos^2 cancels catastrophically in float near cos = 1. */
 /* GGX's D = alpha^2 / (pi cos^4 (alpha^2 + tan^2)^2) (Cycles'
  * bsdf_microfacet_ggx_eval_reflect), written as alpha^2 / (pi (alpha^2 cos^2
  * + sin^2)^2): the same value, but cos^4 alone underflows below cos ~ 1e-10,
@@ -56,6 +54,8 @@ float ggx_D(float alpha2, float cos2, float sin2) {
     return alpha2 / (M_PI_F * t * t);
 }
 
+/* Smith G1 for GGX, separable form used by Cycles 3.4. sin^2 comes from a
+ * cross product: 1 - cos^2 cancels catastrophically in float near cos = 1. */
 float ggx_G1(float alpha2, vec3 N, vec3 D) {
     float c = dot(N, D);
     vec3 nxd = cross(N, D);

@@ -28,8 +28,8 @@ layout(location = 0) uniform uvec2 light_batch;
  * per path does). The choice is systematic sampling along the running sum
  * of the p_i with one uniform per pixel and sample (Madow 1949): light i is
  * taken when that sum crosses an integer within its p_i, so each light has
- * exactly its probability, at most M lights are taken, and strong lights
- * (p_i = 1) are shaded every sample. The chosen lights go to a short list
+ * exactly its probability, at most M (+ 1 from rounding) lights are taken,
+ * and strong lights (p_i = 1) are shaded every sample. The chosen lights go to a short list
  * that the shading loop runs over: SIMD lanes (a GPU warp, llvmpipe's
  * vectors) run a loop as long as its longest lane, so skipping lights inside
  * the full loop would save nothing. */
@@ -57,18 +57,22 @@ float light_importance(GpuLight light, vec3 P, vec3 N) {
     float intensity = power * (0.25 * M_1_PI_F);
     if (type == LIGHT_AREA) intensity = power * M_1_PI_F * max(-dot(light.direction.xyz, d) * inv_d + sin_r, 0.05);
     if (type == LIGHT_SPOT && -dot(light.direction.xyz, d) * inv_d + sin_r < light.direction.w) intensity *= 0.05;
-    return max(intensity * (0.05 + facing) / (d2 + size2), 1e-30);
+    return max(intensity * (0.05 + facing) / max(d2 + size2, 1e-20), 1e-30);
 }
 
-/* One number in [0, 1) per pixel, film sample and batch: the golden-ratio
- * sequence over the samples (stratified), rotated per pixel and batch. */
+/* One number in [0, 1) per pixel, film sample and batch: the first
+ * dimension of the R3 sequence over the samples (stratified; Roberts 2018,
+ * alpha = 1/phi3), rotated per pixel and batch. Not the golden-ratio step:
+ * the Mix Shader's choice (sample_shift.z) steps by it, and a selection
+ * shifted from it by a constant per pixel would take each light only with
+ * one of the mix's alternatives, a bias per pixel. */
 float light_selection_offset(ivec2 pixel) {
     uvec4 v = uvec4(uvec2(pixel), light_batch.x * 0x9E3779B9u + 0x68E31DA4u, 0xB5297A4Du);
     v = v * 1664525u + 1013904223u;
     v.x += v.y * v.w; v.y += v.z * v.x; v.z += v.x * v.y; v.w += v.y * v.z;
     v ^= v >> 16u;
     v.x += v.y * v.w; v.y += v.z * v.x; v.z += v.x * v.y; v.w += v.y * v.z;
-    uint x = v.x + uint(frame.sample_shift.w) * 0x9E3779B9u;
+    uint x = v.x + uint(frame.sample_shift.w) * 0xD1B54A32u;
     return float(x >> 8u) * (1.0 / 16777216.0);
 }
 #endif
@@ -267,12 +271,19 @@ void main() {
         if (e > 0.0) ++candidates;
         else ++always;
     }
-    /* Too many lights shaded every sample for the list: every light. */
-    const bool selecting = candidates > uint(LIGHT_SAMPLING) && always <= uint(LIGHT_SLOTS_ALWAYS);
+    /* Too many lights shaded every sample for the list, or an importance
+     * that is not finite: every light. */
+    const bool selecting = candidates > uint(LIGHT_SAMPLING) && always <= uint(LIGHT_SLOTS_ALWAYS) &&
+                           !isinf(importance_sum) && !isnan(importance_sum);
     if (selecting) {
+        /* The running sum in fixed point (2^22 per unit; at most 512 units):
+         * each light's probability is its quantised q / 2^22 (at least one
+         * step, never 0) and its weight exactly the inverse, so the rounding
+         * of a float sum cannot bias the lights with tiny p. */
+        const float unit = 4194304.0;
         const float budget_scale = float(LIGHT_SAMPLING) / importance_sum;
-        const float comb = light_selection_offset(pixel);
-        float running = 0.0;
+        const uint comb = uint(light_selection_offset(pixel) * unit);
+        uint running = 0u;
         uint n = 0u;
         for (uint k = light_batch.x; k < end && n < uint(LIGHT_SLOTS); ++k) {
 #ifdef LIGHT_CULLING
@@ -283,10 +294,10 @@ void main() {
             float e = light_importance(lights[i], P, N);
             float weight = 1.0;
             if (e > 0.0) {
-                float p = min(e * budget_scale, 1.0);
-                float before = floor(running + comb);
-                running += p;
-                weight = floor(running + comb) != before ? 1.0 / p : 0.0; /* 0: not this sample */
+                uint q = max(uint(min(e * budget_scale, 1.0) * unit + 0.5), 1u);
+                uint before = (running + comb) >> 22u;
+                running += q;
+                weight = ((running + comb) >> 22u) != before ? unit / float(q) : 0.0; /* 0: not this sample */
             }
             if (weight > 0.0) {
                 chosen[n] = i;

@@ -662,9 +662,18 @@ FrameResult Renderer::Impl::render(const Camera& camera_in, const RenderSettings
     lights.add_defines(lighting_variant);
     if (light_split) lighting_variant.defines.push_back("OUT_LIGHT_SPLIT");
     if (culled) lighting_variant.defines.push_back("LIGHT_CULLING");
-    // Selection only where some pixel can have more lights than the budget.
-    const bool light_sampling = settings.light_samples > 0 && lights.count() > std::uint32_t(settings.light_samples);
+    // Selection only where some pixel can have more lights than the budget,
+    // within one lighting dispatch (512 lights, 8 with shadow rays): a budget
+    // of a dispatch's size or more never selects.
+    const std::uint32_t light_dispatch = shadow_rays ? kRayLightBatch : kLightBatch;
+    const bool light_sampling = settings.light_samples > 0 && lights.count() > std::uint32_t(settings.light_samples) &&
+                                std::uint32_t(settings.light_samples) < light_dispatch;
     if (light_sampling) lighting_variant.defines.push_back("LIGHT_SAMPLING " + std::to_string(settings.light_samples));
+    if (settings.light_samples > 0 && !light_sampling && lights.count() > std::uint32_t(settings.light_samples))
+        result.warnings.push_back("Light Samples " + std::to_string(settings.light_samples) +
+                                  " has no effect: the lighting runs in groups of " + std::to_string(light_dispatch) +
+                                  " lights" + (shadow_rays ? " with shadow rays" : "") +
+                                  ", and a budget that large never selects; every light is shaded");
     if (!shadows.empty()) lighting_variant.defines.push_back("HAS_SHADOWS");
     if (shadow_rays) lighting_variant.defines.push_back("SHADOW_RAYS");
     if (shadows.world_index() >= 0) lighting_variant.defines.push_back("HAS_WORLD_OCCLUSION");

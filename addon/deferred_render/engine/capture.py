@@ -113,11 +113,14 @@ class CaptureRenderer:
             return attr
 
         def call(*args, **kwargs):
+            # Recorded once it succeeded: a call the exporter sees fail (and
+            # skips, warned) is not in the file, so the replay does not fail on it.
+            result = attr(*args, **kwargs)
             try:  # a capture never fails the render: a call it cannot record only voids the file
                 self._recorder.record(name, args, kwargs)
             except Exception as ex:
                 self._recorder.error = self._recorder.error or f"{name}: {ex}"
-            return attr(*args, **kwargs)
+            return result
 
         return call
 

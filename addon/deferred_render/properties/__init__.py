@@ -66,12 +66,13 @@ class DeferredRenderSettings(bpy.types.PropertyGroup):
             "with a probability from its share of the light there and weighted by its inverse, so "
             "the image converges to every light's sum as samples accumulate (suns and emissive "
             "meshes are always shaded). 0: every light every sample (exact per sample, slow with "
-            "many lights)"
+            "many lights). With Shadow Rays the lights come in groups of 8, so only values below 8 "
+            "select there"
         ),
         default=16,
         min=0,
         soft_max=64,
-        max=4096,
+        max=511,
     )
     shadow_resolution: IntProperty(
         name="Max Shadow Resolution",

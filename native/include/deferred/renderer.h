@@ -89,8 +89,9 @@ struct RenderSettings {
     // a pixel (suns and emissive meshes apart, always shaded), each is shaded
     // with a probability from its rough share of the light there and weighted
     // by its inverse (at most N per pixel, sample and lighting dispatch of
-    // 512 lights, 8 with shadow rays), so the image converges over the film's
-    // samples to the same sum (lighting_comp.glsl LIGHT_SAMPLING).
+    // 512 lights, 8 with shadow rays: N at or above that selects nothing,
+    // warned), so the image converges over the film's samples to the same sum
+    // (lighting_comp.glsl LIGHT_SAMPLING).
     int light_samples = 0;
     // Shadow maps for lights whose cast_shadow is on (one set per sample,
     // from that sample's point on the light: soft shadows converge with

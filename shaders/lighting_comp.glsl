@@ -260,7 +260,9 @@ void main() {
     float chosen_weight[LIGHT_SLOTS];
     float importance_sum = 0.0;
     uint candidates = 0u, always = 0u;
-    for (uint k = light_batch.x; k < end; ++k) {
+    /* A pixel whose part of the batch holds no more lights than the budget
+     * shades them all: no pass over them to sum. */
+    for (uint k = light_batch.x; iterations > uint(LIGHT_SAMPLING) && k < end; ++k) {
 #ifdef LIGHT_CULLING
         uint i = from_list ? tile_lights[first + k] : k;
 #else

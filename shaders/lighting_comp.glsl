@@ -82,6 +82,16 @@ layout(std430, binding = SSBO_TILES) readonly buffer Tiles { GpuTile tiles[]; };
 layout(std430, binding = SSBO_TILE_LIGHTS) readonly buffer TileLights { uint tile_lights[]; };
 #endif
 
+/* Entry k of the pixel's light sequence: its tile's list (from `first`),
+ * or every light. */
+uint light_entry(uint k, bool from_list, uint first) {
+#ifdef LIGHT_CULLING
+    return from_list ? tile_lights[first + k] : k;
+#else
+    return k;
+#endif
+}
+
 layout(binding = TEX_GBUF_EMISSION) uniform sampler2D gbuf_emission;
 layout(binding = TEX_GBUF_BASE) uniform sampler2D gbuf_base;
 layout(binding = TEX_GBUF_PARAMS0) uniform sampler2D gbuf_params0;
@@ -263,11 +273,7 @@ void main() {
     /* A pixel whose part of the batch holds no more lights than the budget
      * shades them all: no pass over them to sum. */
     for (uint k = light_batch.x; iterations > uint(LIGHT_SAMPLING) && k < end; ++k) {
-#ifdef LIGHT_CULLING
-        uint i = from_list ? tile_lights[first + k] : k;
-#else
-        uint i = k;
-#endif
+        uint i = light_entry(k, from_list, first);
         float e = light_importance(lights[i], P, N);
         importance_sum += e;
         if (e > 0.0) ++candidates;
@@ -288,11 +294,7 @@ void main() {
         uint running = 0u;
         uint n = 0u;
         for (uint k = light_batch.x; k < end && n < uint(LIGHT_SLOTS); ++k) {
-#ifdef LIGHT_CULLING
-            uint i = from_list ? tile_lights[first + k] : k;
-#else
-            uint i = k;
-#endif
+            uint i = light_entry(k, from_list, first);
             float e = light_importance(lights[i], P, N);
             float weight = 1.0;
             if (e > 0.0) {
@@ -312,11 +314,7 @@ void main() {
 #endif
     for (uint j = 0u; j < iterations; ++j) {
         uint k = light_batch.x + j;
-#ifdef LIGHT_CULLING
-        uint i = from_list ? tile_lights[first + k] : k;
-#else
-        uint i = k;
-#endif
+        uint i = light_entry(k, from_list, first);
         float weight = 1.0;
 #ifdef LIGHT_SAMPLING
         if (selecting) {

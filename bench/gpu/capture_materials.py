@@ -12,12 +12,15 @@ so the captures stay small enough to commit (bench/gpu/captures/).
 """
 
 import os
+import sys
 
 import bpy
 import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 OUT = os.path.join(HERE, "captures")
+sys.path.insert(0, os.path.join(os.path.dirname(HERE), "materials"))
+from bench_materials import constant_material, textured_material  # noqa: E402  (the benchmark's own materials)
 
 
 def clear_scene():
@@ -49,37 +52,6 @@ def sphere_grid(material, n=8):
             ob = bpy.data.objects.new(f"sphere_{i}_{j}", mesh)
             ob.location = (2 * i - n + 1, (2 * j - n + 1) * 0.6, 0)
             bpy.context.scene.collection.objects.link(ob)
-
-
-def textured_material(image):
-    mat = bpy.data.materials.new("textured")
-    mat.use_nodes = True
-    nt = mat.node_tree
-    bsdf = nt.nodes["Principled BSDF"]
-    tc = nt.nodes.new("ShaderNodeTexCoord")
-    mp = nt.nodes.new("ShaderNodeMapping")
-    mp.inputs["Scale"].default_value = (4, 2, 1)
-    tex = nt.nodes.new("ShaderNodeTexImage")
-    tex.image = image
-    nt.links.new(tc.outputs["UV"], mp.inputs["Vector"])
-    nt.links.new(mp.outputs["Vector"], tex.inputs["Vector"])
-    nt.links.new(tex.outputs["Color"], bsdf.inputs["Base Color"])
-    noise = nt.nodes.new("ShaderNodeTexNoise")
-    noise.inputs["Scale"].default_value = 8
-    ramp = nt.nodes.new("ShaderNodeValToRGB")
-    nt.links.new(noise.outputs["Fac"], ramp.inputs["Fac"])
-    nt.links.new(ramp.outputs["Color"], bsdf.inputs["Roughness"])
-    nmap = nt.nodes.new("ShaderNodeNormalMap")
-    nt.links.new(tex.outputs["Color"], nmap.inputs["Color"])
-    nt.links.new(nmap.outputs["Normal"], bsdf.inputs["Normal"])
-    return mat
-
-
-def constant_material():
-    mat = bpy.data.materials.new("constant")
-    mat.use_nodes = True
-    mat.node_tree.nodes["Principled BSDF"].inputs["Base Color"].default_value = (0.6, 0.4, 0.3, 1)
-    return mat
 
 
 def capture(name, material):

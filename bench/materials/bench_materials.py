@@ -214,4 +214,5 @@ def main():
     sys.stdout.flush()
 
 
-main()
+if __name__ == "__main__":  # run by --python; bench/gpu/capture_materials.py imports the materials
+    main()

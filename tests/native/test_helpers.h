@@ -9,6 +9,17 @@
 
 namespace deferred::testing {
 
+// The many-lights tests' view: from (0, -22, 12) at the origin, a 30 mm lens.
+inline Camera overview_camera() {
+    Camera cam;
+    const double eye[3] = {0, -22, 12}, target[3] = {0, 0, 0};
+    cam.matrix = tools::look_at(eye, target);
+    cam.lens = 30.0f;
+    cam.clip_start = 0.05f;
+    cam.clip_end = 200.0f;
+    return cam;
+}
+
 // Orthographic camera at height `h` above the origin looking straight down,
 // covering `extent` metres across.
 inline Camera top_down_ortho(double h, float extent) {

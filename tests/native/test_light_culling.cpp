@@ -10,6 +10,7 @@
 #include <random>
 
 using namespace deferred;
+using deferred::testing::overview_camera;
 using deferred::testing::pixel3;
 
 namespace {
@@ -34,16 +35,6 @@ void build_geometry(Renderer& r) {
     World black;
     black.color = {0, 0, 0};
     r.set_world(black);
-}
-
-Camera overview_camera() {
-    Camera cam;
-    const double eye[3] = {0, -22, 12}, target[3] = {0, 0, 0};
-    cam.matrix = tools::look_at(eye, target);
-    cam.lens = 30.0f;
-    cam.clip_start = 0.05f;
-    cam.clip_end = 200.0f;
-    return cam;
 }
 
 std::vector<Light> random_point_lights(int n, std::uint32_t seed, float energy_max) {

@@ -12,6 +12,7 @@
 #include <string>
 
 using namespace deferred;
+using deferred::testing::overview_camera;
 using deferred::testing::pixel3;
 
 namespace {
@@ -74,16 +75,6 @@ void build_scene(Renderer& r, bool groups = false, bool mixed = false, bool cast
     sun.cast_shadow = false;
     sun.light_group = groups ? 1 : 0;
     r.add_light(sun);
-}
-
-Camera overview_camera() {
-    Camera cam;
-    const double eye[3] = {0, -22, 12}, target[3] = {0, 0, 0};
-    cam.matrix = tools::look_at(eye, target);
-    cam.lens = 30.0f;
-    cam.clip_start = 0.05f;
-    cam.clip_end = 200.0f;
-    return cam;
 }
 
 struct Difference {

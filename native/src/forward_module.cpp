@@ -1,12 +1,76 @@
 #include "forward_module.h"
 
+#include "geometry_stage.h"
+#include "material_module.h"
+
 #include <deferred/renderer.h>
 
 #include "../../shaders/shader_defines.h"
 
+#include <algorithm>
 #include <string>
 
 namespace deferred {
+
+std::vector<bool> ForwardModule::prepare(ShaderLibrary& shaders, MaterialModule& materials, const FrameScene& scene,
+                                         const GeometryStage& geometry, const ShaderVariant& variant,
+                                         std::vector<std::string>& warnings) {
+    materials_ = &materials;
+    geometry_ = &geometry;
+    programs_.clear();
+    std::vector<bool> forward(scene.material_count(), false);
+    for (std::uint32_t id = 0; id < scene.material_count(); ++id) {
+        const Material& m = scene.scene_material(id);
+        if (!m.blend) continue;
+        try {
+            programs_[id] = m.graph >= 0 && !geometry.failed(id)
+                ? materials.program(shaders, std::uint32_t(m.graph), variant)
+                : shaders.graphics_program("geometry_vert.glsl", "geometry_frag.glsl", variant);
+            forward[id] = true;
+        } catch (const Error& e) {
+            warnings.push_back("Material " + std::to_string(id) +
+                               ": its Blend-mode (forward) program did not compile; rendered with "
+                               "stochastic transparency instead: " + std::string(e.what()));
+        }
+    }
+    return forward;
+}
+
+std::uint64_t ForwardModule::draw(FrameScene& scene, const ViewVolume& view) {
+    const std::uint64_t kept = scene.cull([&](const glm::dvec3& c, double r) { return view.contains(c, r); }, false);
+    sorted_.clear();
+    for (const FrameScene::Culled& c : scene.visible()) {
+        const GpuMesh& mesh = scene.mesh(*c.draw);
+        bool any = false;
+        for (std::size_t s = 0; s < mesh.slot_ranges.size(); ++s)
+            if (programs_.count(scene.slot_material(*c.draw, s)) && mesh.slot_ranges[s].second > 0) any = true;
+        if (!any) continue;
+        for (std::uint32_t j = 0; j < c.count; ++j) {
+            const glm::dvec3 v = view.to_view * scene.bounds()[scene.kept(c.first + j)].center;
+            sorted_.push_back({view.orthographic ? -v.z : glm::length(v), {c.draw, c.first + j, 1}});
+        }
+    }
+    std::stable_sort(sorted_.begin(), sorted_.end(), [](const Sorted& a, const Sorted& b) { return a.depth > b.depth; });
+    begin_sample();
+    materials_->bind_constants();
+    for (const Sorted& f : sorted_) {
+        const GpuMesh& mesh = scene.mesh(*f.one.draw);
+        for (std::size_t s = 0; s < mesh.slot_ranges.size(); ++s) {
+            const std::uint32_t id = scene.slot_material(*f.one.draw, s);
+            auto program = programs_.find(id);
+            if (program == programs_.end() || mesh.slot_ranges[s].second == 0) continue;
+            glUseProgram(program->second);
+            const Material& m = scene.scene_material(id);
+            if (m.graph >= 0 && !geometry_->failed(id)) {
+                materials_->bind_for_draw(std::uint32_t(m.graph), mesh);
+                scene.bind_attributes(mesh);
+            }
+            scene.draw_range(f.one, mesh.slot_ranges[s].first, mesh.slot_ranges[s].second);
+        }
+    }
+    end_sample();
+    return kept;
+}
 
 void ForwardModule::ensure(int width, int height) {
     if (layer_ && width == width_ && height == height_) return;

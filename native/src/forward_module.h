@@ -15,12 +15,35 @@
 // partly transparent caster has.
 #pragma once
 
+#include "frame_scene.h"
 #include "gl_util.h"
+#include "shader_library.h"
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
 
 namespace deferred {
 
+class GeometryStage;
+class MaterialModule;
+
 class ForwardModule {
 public:
+    // The forward program (`variant`: the lighting's defines and
+    // FORWARD_PASS) of every Blend-mode material: its graph's, or
+    // geometry_frag.glsl's for a constant one. One that does not compile
+    // stays in the stochastic path, warned. Returns, per material id,
+    // whether the forward pass draws it.
+    std::vector<bool> prepare(ShaderLibrary& shaders, MaterialModule& materials, const FrameScene& scene,
+                              const GeometryStage& geometry, const ShaderVariant& variant,
+                              std::vector<std::string>& warnings);
+    bool active() const { return !programs_.empty(); }
+    // One sample's forward pass: the instances `view` keeps that have
+    // Blend-mode slots, one draw each, farthest first (by the bounding
+    // sphere's centre), over a cleared layer. Returns the instances kept.
+    std::uint64_t draw(FrameScene& scene, const ViewVolume& view);
     // Allocates the layer for the frame size (reallocated only when it changes).
     void ensure(int width, int height);
     // Binds the layer's framebuffer, clears it to (0, 0, 0, T = 1) and sets
@@ -34,6 +57,14 @@ public:
     std::size_t bytes() const { return std::size_t(width_) * std::size_t(height_) * 16; }
 
 private:
+    struct Sorted {
+        double depth;
+        FrameScene::Culled one;
+    };
+    const MaterialModule* materials_ = nullptr;
+    const GeometryStage* geometry_ = nullptr;
+    std::map<std::uint32_t, GLuint> programs_;  // material id -> its forward program
+    std::vector<Sorted> sorted_;
     int width_ = 0, height_ = 0;
     Texture layer_;
     Framebuffer fbo_;

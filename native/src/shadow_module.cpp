@@ -432,7 +432,7 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
         glUniformMatrix4fv(2, 1, GL_FALSE, &m.cols[0].x);
         glUniform4f(3, float(origin.x), float(origin.y), float(origin.z), float(kind));
         glUniform3f(4, float(axis.x), float(axis.y), float(axis.z));
-        draw_casters(casts);
+        draw_casters(casts, false);
         ++layers_rendered_;
     };
 
@@ -561,7 +561,7 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
             glUniformMatrix4fv(2, 1, GL_FALSE, &m.cols[0].x);
             glUniform4f(3, 0.0f, 0.0f, 0.0f, float(SHADOW_CASCADES));
             glUniform3f(4, float(axis.x), float(axis.y), float(axis.z));
-            draw_casters(ortho_casters(axis, receivers_center_, receivers_radius_, false));
+            draw_casters(ortho_casters(axis, receivers_center_, receivers_radius_, false), true);
             ++layers_rendered_;
         }
         glDisable(GL_BLEND);

@@ -92,8 +92,9 @@ public:
     // can cast into the map being drawn.
     using CasterTest = std::function<bool(const glm::dvec3&, double)>;
     // Draws the scene's shadow casters that pass the test, with the
-    // currently bound program.
-    using DrawCasters = std::function<void(const CasterTest&)>;
+    // currently bound program (world_map: it draws a world occlusion map,
+    // else a light's map).
+    using DrawCasters = std::function<void(const CasterTest&, bool world_map)>;
     // Renders every kept light's maps (and the world's) for one film sample.
     // `u`: the sample's point on the light shapes; `world_dirs`: its
     // directions of the world, one per world map (xyz unit, towards the

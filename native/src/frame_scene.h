@@ -1,0 +1,161 @@
+// The scene as one frame draws it: every instance placed camera-relative
+// (in double, then packed), the material table, the per-instance data the
+// passes read (Cryptomatte hashes, light groups), and the draw calls over
+// it. Stages never walk SceneStore's batches themselves: they cull the
+// instances with a test on their bounding spheres (the camera's frustum, a
+// shadow map's volume) and draw the ones kept, a batch's triangles at a time
+// or one material slot's range at a time, through an instance remap buffer
+// (geometry_vert.glsl pulls its vertices from the mesh's storage buffers).
+//
+// Motion blur: the instances that move over the shutter keep their three
+// steps; place_at() puts them (and their shadow-ray casters) at a sample's
+// time.
+#pragma once
+
+#include "camera.h"
+#include "gl_util.h"
+#include "ray_scene.h"
+#include "scene_store.h"
+
+#include "../../shaders/shader_shared.h"
+
+#include <deferred/renderer.h>
+
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+namespace deferred {
+
+class MaterialModule;
+
+gpu::mat4 to_gpu(const glm::dmat4& m);
+
+// GpuMaterial.base_diffuse.w of a Holdout material (the closure model codes
+// of gbuffer_lib.glsl end at 3); geometry_frag.glsl turns it into a hole.
+constexpr float kClosureHoldout = 4.0f;
+
+// What a sample's camera sees: its rotation, its position relative to the
+// frame's camera (non-zero under camera motion blur) and the frustum widened
+// by the pixel filter's reach and a pixel, as a test on bounding spheres.
+struct ViewVolume {
+    glm::dmat3 to_view{1.0};
+    glm::dvec3 eye{0.0};
+    double left = 0, right = 0, bottom = 0, top = 0;
+    double clip_start = 0, clip_end = 0;
+    bool orthographic = false;
+
+    ViewVolume() = default;
+    ViewVolume(const CameraMatrices& cam, int width, int height, std::uint32_t reach_px);
+    bool contains(const glm::dvec3& center, double radius) const;
+};
+
+class FrameScene {
+public:
+    // Bounding sphere of an instance, camera-relative.
+    struct Bound {
+        glm::dvec3 center;
+        double radius;
+    };
+    // One batch: its instances [first, first + count) and its slot map.
+    struct Draw {
+        std::uint32_t mesh, first, count;
+        bool cast_shadow;
+        std::uint32_t slot_offset, slot_count;
+    };
+    // The instances of one batch that passed the last cull, at [first,
+    // first + count) of the remap buffer.
+    struct Culled {
+        const Draw* draw;
+        std::uint32_t first, count;
+    };
+    using Test = std::function<bool(const glm::dvec3&, double)>;
+
+    struct Options {
+        bool motion_blur = false;
+        bool cryptomatte = false;  // pack each instance's object and asset hashes
+        bool light_groups = false; // pack each instance's light group
+    };
+    // Packs the instances and materials of `scene` relative to the camera at
+    // `camera_position` and uploads them (the previous frame's released).
+    void build(const SceneStore& scene, const MaterialModule& materials, const glm::dvec3& camera_position,
+               const Options& options, GLuint empty_vao, GLuint dummy_ssbo);
+    void release();
+
+    std::size_t instance_count() const { return instances_.size(); }
+    const std::vector<Bound>& bounds() const { return bounds_; }
+    const std::vector<std::uint32_t>& crypto_hashes() const { return crypto_; }
+    const gpu::GpuMaterial& material(std::uint32_t id) const { return gpu_materials_[id]; }
+    const Material& scene_material(std::uint32_t id) const { return scene_->materials()[id]; }
+    std::size_t material_count() const { return scene_->materials().size(); }
+    bool any_moving() const { return !moving_.empty(); }
+    // A deforming mesh under motion blur (its vertices move in the vertex stage).
+    bool deforming() const { return deforming_; }
+
+    // The ray scene's casters (every shadow-casting instance with its slots'
+    // alphas: a constant material's mix chain averaged, as
+    // material_alpha_lib.glsl), kept so place_at() can move them.
+    const std::vector<RayScene::Instance>& ray_casters();
+    // Puts the moving instances at shutter position r (-1 open, 1 close) and
+    // uploads them; true when a shadow-ray caster moved (the ray scene must
+    // be rebuilt from ray_casters()).
+    bool place_at(double r);
+
+    // The instance, slot and material tables at their storage bindings.
+    void bind_buffers() const;
+    // A mesh's buffers for vertex pulling (geometry_vert.glsl), and its
+    // per-corner attributes (node materials).
+    void bind_mesh(const GpuMesh& mesh) const;
+    void bind_attributes(const GpuMesh& mesh) const;
+    const GpuMesh& mesh(const Draw& d) const { return scene_->meshes()[d.mesh]; }
+
+    // Keeps the instances whose bounding sphere passes `keep` (casters_only:
+    // without the cast_shadow-off ones), fills the remap buffer and binds
+    // the tables; returns how many were kept.
+    std::uint64_t cull(const Test& keep, bool casters_only);
+    const std::vector<Culled>& visible() const { return visible_; }
+    // The instance index of the j-th kept instance of the last cull.
+    std::uint32_t kept(std::uint32_t j) const { return remap_[j]; }
+    // Triangles [first, first + count) of the kept instances of one batch,
+    // with the bound program.
+    void draw_range(const Culled& c, std::uint32_t first, std::uint32_t count) const;
+    // cull(), then every kept instance whole.
+    std::uint64_t draw_culled(const Test& keep, bool casters_only);
+    // The material drawing slot s of a batch.
+    std::uint32_t slot_material(const Draw& d, std::size_t s) const;
+
+    // The tables' buffers (the emission bake binds them itself).
+    GLuint instance_buffer() const { return instance_buffer_.get(); }
+    GLuint instance_group_buffer() const { return instance_group_buffer_.get(); }
+
+private:
+    struct Moving {
+        std::size_t index;
+        glm::dmat4 steps[3];  // world matrices at the shutter's open, middle, close
+        std::uint32_t mesh;
+    };
+    void place(const glm::dmat4& world, const GpuMesh& mesh, gpu::GpuInstance& g, Bound& bound) const;
+    void upload_instances() const;
+
+    const SceneStore* scene_ = nullptr;
+    glm::dvec3 camera_position_{0.0};
+    GLuint empty_vao_ = 0, dummy_ssbo_ = 0;
+    std::vector<gpu::GpuInstance> instances_;
+    std::vector<Bound> bounds_;
+    std::vector<std::uint32_t> slots_;
+    std::vector<Draw> draws_;
+    std::vector<Moving> moving_;
+    bool deforming_ = false;
+    std::vector<gpu::GpuMaterial> gpu_materials_;
+    std::vector<std::uint32_t> crypto_;  // object and asset hash per instance
+    std::vector<RayScene::Instance> casters_;
+    std::vector<std::int64_t> caster_of_instance_;  // -1: casts nothing
+    bool casters_built_ = false;
+    Buffer instance_buffer_, slot_buffer_, material_buffer_, instance_group_buffer_;
+    std::vector<std::uint32_t> remap_;
+    Buffer remap_buffer_;
+    std::size_t remap_capacity_ = 0;
+    std::vector<Culled> visible_;
+};
+
+}  // namespace deferred

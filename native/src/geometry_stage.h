@@ -1,0 +1,91 @@
+// The geometry stage: every draw of the scene's surfaces with their
+// material programs — the G-buffer (shaders/geometry_frag.glsl for the
+// constant materials, one generated program per node-material graph), the
+// data G-buffer under transparency, shader AOVs, and the shadow casters of
+// node materials that drive alpha (their caster programs evaluate the graph).
+//
+// Programs are compiled before the first sample (prepare*); a graph that
+// does not compile takes the default surface, warned, never a failed frame.
+// With node materials the G-buffer is drawn depth first, so the expensive
+// fragments shade each pixel once: the colour pass then tests for equal
+// depth (gl_Position is invariant across the programs).
+#pragma once
+
+#include "frame_scene.h"
+#include "shader_library.h"
+
+#include <deferred/renderer.h>
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace deferred {
+
+class AovModule;
+class MaterialModule;
+
+class GeometryStage {
+public:
+    // The G-buffer program (SCENE_ALPHA when a constant material is partly
+    // transparent) and every node material's program for `base`.
+    void prepare(ShaderLibrary& shaders, MaterialModule& materials, const FrameScene& scene,
+                 const ShaderVariant& base, bool scene_alpha, std::vector<std::string>& warnings);
+    // Materials drawn by the forward pass instead (forward_module.h): left
+    // out of the G-buffer.
+    void exclude(const std::vector<bool>& forward) { forward_ = forward; }
+
+    GLuint program() const { return geometry_; }
+    // material id -> its graph's program, for the graphs that compiled.
+    const std::vector<std::pair<std::uint32_t, GLuint>>& graph_programs() const { return graph_programs_; }
+    std::size_t distinct_graph_programs() const;
+    // A node material whose graph did not compile (drawn as a constant one).
+    bool failed(std::uint32_t id) const { return failed_[id]; }
+    // A node material whose alpha can be below 1 (its program discards).
+    bool is_alpha_graph(std::uint32_t id) const { return alpha_[id]; }
+    bool alpha_graphs() const { return alpha_graphs_; }
+    // Something in the scene can be partly transparent this sample.
+    bool stochastic_alpha() const { return scene_alpha_ || alpha_graphs_; }
+
+    // Draws the instances that pass `keep` into the bound G-buffer; returns
+    // how many were kept.
+    std::uint64_t draw(FrameScene& scene, const FrameScene::Test& keep);
+    // Draws the slot ranges of the last cull's instances that use node
+    // material `id`, with `program`.
+    void draw_material(const FrameScene& scene, std::uint32_t id, GLuint program) const;
+    // Stochastic coverage (false) or the Alpha Threshold's (true, the data G-buffer).
+    void set_alpha_mode(bool data, float threshold) const;
+
+    // Shader AOVs: the AOV program of every graph that writes one of `aovs`.
+    void prepare_aovs(ShaderLibrary& shaders, MaterialModule& materials, const FrameScene& scene,
+                      const ShaderVariant& base, const std::vector<AovRequest>& aovs,
+                      std::vector<std::string>& warnings);
+    // Each AOV's writers over the G-buffer just drawn (the last cull's instances).
+    void draw_aovs(const FrameScene& scene, const AovModule& aovs, const std::vector<AovRequest>& requests,
+                   int samples) const;
+
+    // The caster programs of the alpha graphs (for the lights' maps, and the
+    // world's when world_map); one that fails casts an opaque shadow, warned.
+    void prepare_casters(ShaderLibrary& shaders, MaterialModule& materials, const FrameScene& scene, bool world_map,
+                         std::vector<std::string>& warnings);
+    // The shadow casters that pass `casts`, with the bound program (the
+    // shadow module's) or their own; `world_map`: the bound program draws a
+    // world occlusion map. Returns how many instances were kept.
+    std::uint64_t draw_casters(FrameScene& scene, const FrameScene::Test& casts, bool world_map) const;
+
+private:
+    bool is_forward(std::uint32_t id) const { return id < forward_.size() && forward_[id]; }
+
+    const MaterialModule* materials_ = nullptr;
+    GLuint geometry_ = 0;
+    bool scene_alpha_ = false, alpha_graphs_ = false;
+    std::vector<std::pair<std::uint32_t, GLuint>> graph_programs_;
+    std::vector<bool> failed_, alpha_, forward_;  // per material id
+    std::map<std::uint32_t, GLuint> aov_programs_;
+    std::vector<std::vector<std::pair<std::uint32_t, int>>> aov_writers_;  // per AOV: (material id, slot)
+    std::map<std::uint32_t, GLuint> light_casters_, world_casters_;
+};
+
+}  // namespace deferred

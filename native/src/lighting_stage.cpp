@@ -1,0 +1,65 @@
+#include "lighting_stage.h"
+
+#include "film_module.h"
+#include "light_culling.h"
+#include "light_module.h"
+#include "world_module.h"
+
+#include "../../shaders/shader_defines.h"
+
+#include <algorithm>
+#include <string>
+
+namespace deferred {
+
+void LightingStage::prepare(ShaderLibrary& shaders, const ShaderVariant& base, const LightModule& lights,
+                            const WorldModule& world, const Config& config, std::vector<std::string>& warnings) {
+    ShaderVariant v = base;
+    lights.add_defines(v);
+    if (config.light_split) v.defines.push_back("OUT_LIGHT_SPLIT");
+    if (config.culled) v.defines.push_back("LIGHT_CULLING");
+    // Selection only where some pixel can have more lights than the budget,
+    // within one lighting dispatch (512 lights, 8 with shadow rays): a budget
+    // of a dispatch's size or more never selects.
+    batch_ = config.shadow_rays ? kRayLightBatch : kLightBatch;
+    const std::uint32_t budget = std::uint32_t(std::max(config.light_samples, 0));
+    light_sampling_ = budget > 0 && lights.count() > budget && budget < batch_;
+    if (light_sampling_) v.defines.push_back("LIGHT_SAMPLING " + std::to_string(budget));
+    if (budget > 0 && !light_sampling_ && lights.count() > budget)
+        warnings.push_back("Light Samples " + std::to_string(budget) + " has no effect: the lighting runs in groups of " +
+                           std::to_string(batch_) + " lights" + (config.shadow_rays ? " with shadow rays" : "") +
+                           ", and a budget that large never selects; every light is shaded");
+    if (config.shadow_maps) v.defines.push_back("HAS_SHADOWS");
+    if (config.shadow_rays) v.defines.push_back("SHADOW_RAYS");
+    if (config.world_occlusion) v.defines.push_back("HAS_WORLD_OCCLUSION");
+    world.add_defines(v);
+    if (config.ao) v.defines.push_back("OUT_AO");
+    if (config.light_groups > 0) v.defines.push_back("LIGHT_GROUPS " + std::to_string(config.light_groups));
+    if (config.shadow_pass) v.defines.push_back("OUT_SHADOW");
+    if (config.catchers) v.defines.push_back("SHADOW_CATCHER");
+    if (config.forward_layer) v.defines.push_back("FORWARD_LAYER");
+    program_ = shaders.compute_program("lighting_comp.glsl", v);
+}
+
+void LightingStage::run(const LightModule& lights, const LightCulling* culling, const FilmModule& film,
+                        GLuint instance_groups, std::uint32_t world_group, int width, int height,
+                        const std::function<void()>& between_batches) const {
+    glUseProgram(program_);
+    if (culling) culling->bind();
+    film.bind_for_lighting();
+    if (instance_groups) {
+        lights.bind_groups();
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_INSTANCE_GROUPS, instance_groups);
+        glUniform1ui(1, world_group);
+    }
+    const GLuint groups_x = GLuint((width + LIGHTING_GROUP_SIZE - 1) / LIGHTING_GROUP_SIZE);
+    const GLuint groups_y = GLuint((height + LIGHTING_GROUP_SIZE - 1) / LIGHTING_GROUP_SIZE);
+    for (std::uint32_t begin = 0; begin == 0 || begin < lights.count(); begin += batch_) {
+        if (begin > 0) between_batches();
+        glUniform2ui(0, begin, begin + batch_);
+        glDispatchCompute(groups_x, groups_y, 1);
+        glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+    }
+}
+
+}  // namespace deferred

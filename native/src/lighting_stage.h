@@ -1,0 +1,68 @@
+// The lighting stage: one compute pass per film sample
+// (shaders/lighting_comp.glsl) that shades the G-buffer with the scene's
+// lights, in dispatches of a batch of lights each, and adds the sample's
+// share to the film (Combined, and the light split, Shadow, AO, catcher and
+// light-group accumulations the frame asks for). Its variant says what the
+// scene holds: light types, culled tile lists, shadows (maps or rays), the
+// world's occlusion, stochastic light selection, a forward layer.
+#pragma once
+
+#include "shader_library.h"
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace deferred {
+
+class FilmModule;
+class LightCulling;
+class LightModule;
+class WorldModule;
+
+// Points per light shape (a 4x4 grid) per sample for the Monte Carlo parts
+// of disk and area lights (shaders/light_lib.glsl).
+constexpr std::uint32_t kLightShapePoints = 16;
+// Lights per lighting dispatch. A light runs at most ~40 loop iterations
+// (quadrature + light points); llvmpipe ends all loops of an invocation after
+// 65535 iterations in total, so 512 lights per dispatch stay well inside.
+constexpr std::uint32_t kLightBatch = 512;
+// ... with shadow rays, whose traversal loops count too (a ray visits tens
+// of nodes, at most RAY_MAX_STEPS; a mesh light traces up to 10 per pixel).
+constexpr std::uint32_t kRayLightBatch = 8;
+
+class LightingStage {
+public:
+    struct Config {
+        bool light_split = false;  // DiffDir / GlossDir
+        bool culled = false;       // tile light lists (light_culling.h)
+        int light_samples = 0;     // the budget of stochastic light selection, 0: every light
+        bool shadow_maps = false;  // some light or the world casts shadows
+        bool shadow_rays = false;  // ... answered by rays (ray_scene.h)
+        bool world_occlusion = false;
+        bool ao = false;
+        int light_groups = 0;
+        bool shadow_pass = false;
+        bool catchers = false;
+        bool forward_layer = false;
+    };
+    // Compiles the program for `config` over the G-buffer's `base` variant.
+    // A light budget no dispatch can use is warned (every light is shaded).
+    void prepare(ShaderLibrary& shaders, const ShaderVariant& base, const LightModule& lights,
+                 const WorldModule& world, const Config& config, std::vector<std::string>& warnings);
+    // Shades one sample: every batch of lights into the film (bound here).
+    // `instance_groups`: each instance's light group (0: no light groups),
+    // `world_group` the world's; `between_batches` runs before each batch
+    // after the first (a cancel).
+    void run(const LightModule& lights, const LightCulling* culling, const FilmModule& film, GLuint instance_groups,
+             std::uint32_t world_group, int width, int height, const std::function<void()>& between_batches) const;
+    bool light_sampling() const { return light_sampling_; }
+
+private:
+    GLuint program_ = 0;
+    std::uint32_t batch_ = kLightBatch;
+    bool light_sampling_ = false;
+};
+
+}  // namespace deferred

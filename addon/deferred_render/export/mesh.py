@@ -128,6 +128,7 @@ def mesh_arrays(mesh, name=None, split_normals=None, attribute_keys=(), warn=Non
     tri_loops = _get(tris, "loops", nt, np.uint32, 3).reshape(-1)
     material_indices = _get(tris, "material_index", nt, np.uint32).view(np.int32)
 
+    poly_index = None  # read when something needs it
     if split_normals is None:
         split_normals = bool(mesh.use_auto_smooth or mesh.has_custom_normals)
     if split_normals:
@@ -138,26 +139,30 @@ def mesh_arrays(mesh, name=None, split_normals=None, attribute_keys=(), warn=Non
         smooth = _get(mesh.polygons, "use_smooth", npoly, bool)
         vertex_normals = _get(mesh.vertex_normals, "vector", nv, np.float32, 3)
         polygon_normals = _get(mesh.polygon_normals, "vector", npoly, np.float32, 3)
-        corner_normals = np.repeat(polygon_normals[poly_index], 3, axis=0)
-        smooth_corners = np.repeat(smooth[poly_index], 3)
+        tri_poly = poly_index.astype(np.intp)  # np.take with intp indices: no conversion per gather
+        corner_normals = np.repeat(np.take(polygon_normals, tri_poly, axis=0), 3, axis=0)
+        smooth_corners = np.repeat(np.take(smooth, tri_poly), 3)
         if smooth_corners.any():
             flat_verts = tri_verts.reshape(-1)
             corner_normals[smooth_corners] = vertex_normals[flat_verts[smooth_corners]]
     corner_normals = _normalized(corner_normals)
 
-    corner_uvs = None
+    gather = None  # per-point/corner/face data -> triangle corners, made on first use
     uv_layer = attribute_export.render_uv_layer(mesh)
+    if uv_layer is not None or attribute_keys:
+        if poly_index is None and attribute_keys:
+            poly_index = _get(tris, "polygon_index", nt, np.uint32)
+        gather = attribute_export.CornerGather(tri_verts, tri_loops, poly_index)
+    corner_uvs = None
     if uv_layer is not None:
         nloops = len(mesh.loops)
         loop_uvs = _get(uv_layer.data, "uv", nloops, np.float32, 2)
-        corner_uvs = np.ascontiguousarray(loop_uvs[tri_loops])
+        corner_uvs = gather(loop_uvs, "CORNER")
         if not np.isfinite(corner_uvs).all():
             corner_uvs = np.nan_to_num(corner_uvs, nan=0.0, posinf=0.0, neginf=0.0)
 
     corner_attributes = []
     if attribute_keys:
-        poly_index = _get(tris, "polygon_index", nt, np.uint32)
-        gather = attribute_export.CornerGather(tri_verts, tri_loops, poly_index)
         corner_attributes = attribute_export.corner_attributes(mesh, attribute_keys, gather,
                                                                warn or (lambda message: None))
     texspace_location = tuple(getattr(mesh, "texspace_location", (0.0, 0.0, 0.0)))

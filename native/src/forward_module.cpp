@@ -46,7 +46,8 @@ std::uint64_t ForwardModule::draw(FrameScene& scene, const ViewVolume& view) {
             if (programs_.count(scene.slot_material(*c.draw, s)) && mesh.slot_ranges[s].second > 0) any = true;
         if (!any) continue;
         for (std::uint32_t j = 0; j < c.count; ++j) {
-            const glm::dvec3 v = view.to_view * scene.bounds()[scene.kept(c.first + j)].center;
+            // Relative to this sample's eye (it moves under camera motion blur).
+            const glm::dvec3 v = view.to_view * (scene.bounds()[scene.kept(c.first + j)].center - view.eye);
             sorted_.push_back({view.orthographic ? -v.z : glm::length(v), {c.draw, c.first + j, 1}});
         }
     }

@@ -6,7 +6,8 @@
 # deferred_bench_lights; the 16 passes' readback and outputs:
 # deferred_bench_outputs; shadows: deferred_bench_shadows). Writes four
 # files to $OUT (the device tool returns at most eight): summary.txt,
-# native_tests.log, robustness.log, benches.md.
+# native_tests.log, robustness.log, benches.md. Each step has a time limit;
+# together they stay under 530 s, inside one device call (600 s).
 #   bash scripts/gpu_check.sh            (on the device, as root)
 #   GPU_CHECK_LOCAL=1 GPU_CHECK_SIZE="320 180" OUT=/tmp/gpu bash scripts/gpu_check.sh   (a dry run here)
 set -u
@@ -37,19 +38,19 @@ run() {  # run NAME SECONDS LOG COMMAND...: time-limited, its exit status and ti
   local rc=$?
   echo "$name: exit $rc in $((SECONDS - t0)) s" >> "$summary"
 }
-run native_tests 240 "$out/native_tests.log" "$stage/bin/deferred_native_tests"
-run robustness_gl_tests 120 "$out/robustness.log" "$stage/bin/robustness_gl_tests"
+run native_tests 170 "$out/native_tests.log" "$stage/bin/deferred_native_tests"
+run robustness_gl_tests 90 "$out/robustness.log" "$stage/bin/robustness_gl_tests"
 for log in native_tests robustness; do
   grep -E '^\[  (PASSED|FAILED) ' "$out/$log.log" >> "$summary"
 done
 benches="$out/benches.md"
 : > "$benches"
 # shellcheck disable=SC2086
-run bench_frame 90 "$benches" "$stage/bin/deferred_bench_frame" $size
+run bench_frame 60 "$benches" "$stage/bin/deferred_bench_frame" $size
 # shellcheck disable=SC2086
-run bench_lights 150 "$benches" "$stage/bin/deferred_bench_lights" $size 1000
+run bench_lights 90 "$benches" "$stage/bin/deferred_bench_lights" $size 1000
 # shellcheck disable=SC2086
-run bench_outputs 90 "$benches" "$stage/bin/deferred_bench_outputs" $size
+run bench_outputs 60 "$benches" "$stage/bin/deferred_bench_outputs" $size
 # shellcheck disable=SC2086
-run bench_shadows 90 "$benches" "$stage/bin/deferred_bench_shadows" $size
+run bench_shadows 60 "$benches" "$stage/bin/deferred_bench_shadows" $size
 cat "$summary"

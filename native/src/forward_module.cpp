@@ -115,6 +115,13 @@ void ForwardModule::end_sample() const {
 
 void ForwardModule::bind_layer() const { glBindTextureUnit(TEX_FORWARD_LAYER, layer_.get()); }
 
+void ForwardModule::end_frame() {
+    programs_.clear();
+    sorted_.clear();
+    materials_ = nullptr;
+    geometry_ = nullptr;
+}
+
 void ForwardModule::release() {
     fbo_.reset();
     layer_.reset();

@@ -40,6 +40,8 @@ public:
                               const GeometryStage& geometry, const ShaderVariant& variant,
                               std::vector<std::string>& warnings);
     bool active() const { return !programs_.empty(); }
+    // Forgets the frame's programs and draws (they point into the frame).
+    void end_frame();
     // One sample's forward pass: the instances `view` keeps that have
     // Blend-mode slots, one draw each, farthest first (by the bounding
     // sphere's centre), over a cleared layer. Returns the instances kept.

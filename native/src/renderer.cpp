@@ -289,6 +289,8 @@ struct Renderer::Impl {
     void place_at_shutter_time(Frame& f, int sample);
     void fit_shadow_maps(Frame& f);
     FrameResult finish(Frame& f);
+    // Drops what the modules kept for this frame only (on every way out of render()).
+    void end_frame();
     // The frame block of the bakes (world, emission): the unjittered
     // camera, for Camera and Window coordinates and the Bump's differential.
     Buffer bake_frame_block(const Frame& f) const;
@@ -349,11 +351,28 @@ FrameResult Renderer::Impl::render(const Camera& camera, const RenderSettings& s
     f.compile_ms_before = shaders->compile_ms();
     f.loads_before = shaders->disk_loads();
     f.load_ms_before = shaders->load_ms();
-    sync(f);
-    prepare_programs(f);
-    preview.begin(settings.width, settings.height, settings.samples, settings.preview_interval_ms);
-    for (int sample = 0; sample < settings.samples; ++sample) render_sample(f, sample);
-    return finish(f);
+    try {
+        sync(f);
+        prepare_programs(f);
+        preview.begin(settings.width, settings.height, settings.samples, settings.preview_interval_ms);
+        for (int sample = 0; sample < settings.samples; ++sample) render_sample(f, sample);
+        FrameResult result = finish(f);
+        end_frame();
+        return result;
+    } catch (...) {
+        // A cancelled or failed frame leaves no per-frame state in the
+        // modules the renderer keeps (the next frame would draw the Vector
+        // pass or AOVs it did not ask for).
+        end_frame();
+        throw;
+    }
+}
+
+void Renderer::Impl::end_frame() {
+    motion.release();
+    aovs.release();
+    cryptomatte.release();
+    forward.end_frame();
 }
 
 Renderer::Impl::FramePlan Renderer::Impl::plan_frame(const RenderSettings& settings) const {
@@ -923,7 +942,6 @@ FrameResult Renderer::Impl::finish(Frame& f) {
     result.passes = f.film.read_passes();
     result.cryptomatte = cryptomatte.finish();
     result.aovs = aovs.finish();
-    motion.release();
     result.light_groups = f.film.read_light_groups();
     check_gl("readback");
     FrameTimings& t = result.timings;

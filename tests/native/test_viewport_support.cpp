@@ -149,6 +149,45 @@ TEST(ProgressivePreview, LastImageIsTheRenderAndVersionsGrowWhileSampling) {
     EXPECT_FALSE(r.preview(last.version, last));
 }
 
+// A cancel (a viewport edit) stops a frame that has begun its Vector pass,
+// AOVs and Cryptomatte; the next frame, which asks for none of them, must
+// neither draw them nor fail, and equals the same frame on a fresh start.
+TEST(ProgressivePreview, ACancelledFrameLeavesNothingForTheNext) {
+    Renderer r;
+    build_scene(r);
+    const Camera cam = top_down_ortho(10.0, 6.0f);
+    RenderSettings plain;
+    plain.width = 40;
+    plain.height = 30;
+    plain.samples = 4;
+    plain.preview_interval_ms = 0;  // its last image marks where the busy frame's begin
+    const FrameResult expected = r.render(cam, plain);
+    PreviewImage before;
+    ASSERT_TRUE(r.preview(0, before));
+
+    RenderSettings busy = plain;
+    busy.samples = 65536;  // far more than the cancel lets run
+    busy.preview_interval_ms = 0;
+    busy.passes.insert(Pass::Vector);
+    busy.aovs.push_back({"unused", false});
+    busy.cryptomatte = {CryptomatteKind::Object};
+    std::thread canceller([&] {
+        PreviewImage image;
+        while (!r.preview(before.version, image)) std::this_thread::yield();  // the busy frame has begun
+        r.cancel();
+    });
+    EXPECT_THROW(r.render(cam, busy), Cancelled);
+    canceller.join();
+
+    const FrameResult after = r.render(cam, plain);
+    EXPECT_TRUE(after.cryptomatte.empty());
+    EXPECT_TRUE(after.aovs.empty());
+    const PassImage& a = *after.find(Pass::Combined);
+    const PassImage& e = *expected.find(Pass::Combined);
+    ASSERT_EQ(a.pixels.size(), e.pixels.size());
+    for (std::size_t i = 0; i < a.pixels.size(); ++i) ASSERT_EQ(a.pixels[i], e.pixels[i]) << i;
+}
+
 class ProgressivePreviewGL : public GLTest {};
 
 TEST_F(ProgressivePreviewGL, PartialImageIsTheAverageOfTheSamplesSoFar) {

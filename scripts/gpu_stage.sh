@@ -14,14 +14,18 @@ set -euo pipefail
 repo="$(cd "$(dirname "$0")/.." && pwd)"
 build="${1:-$repo/build}"
 stage="$repo/.gpu"
-grep -qx '/.gpu/' "$repo/.git/info/exclude" 2>/dev/null || echo '/.gpu/' >> "$repo/.git/info/exclude"
+binaries="tests/deferred_native_tests tests/robustness/robustness_gl_tests bench/deferred_bench_frame
+          bench/deferred_bench_lights bench/deferred_bench_outputs bench/deferred_bench_shadows"
+for b in $binaries; do
+  test -x "$build/$b" || { echo "missing $build/$b: build first (cmake --build $build)" >&2; exit 1; }
+done
+exclude="$(git -C "$repo" rev-parse --git-path info/exclude)"
+case "$exclude" in /*) ;; *) exclude="$repo/$exclude" ;; esac
+mkdir -p "$(dirname "$exclude")"
+grep -qx '/.gpu/' "$exclude" 2>/dev/null || echo '/.gpu/' >> "$exclude"
 rm -rf "$stage"
 mkdir -p "$stage/bin" "$stage/lib" "$stage/debs"
-for b in tests/deferred_native_tests tests/robustness/robustness_gl_tests bench/deferred_bench_frame \
-         bench/deferred_bench_lights bench/deferred_bench_outputs bench/deferred_bench_shadows; do
-  test -x "$build/$b" || { echo "missing $build/$b: build first (cmake --build $build)" >&2; exit 1; }
-  cp "$build/$b" "$stage/bin/"
-done
+for b in $binaries; do cp "$build/$b" "$stage/bin/"; done
 # libepoxy (the GL loader the library links); the rest of the dependencies
 # are libc, libm, libstdc++ and libgcc, which the device's newer system has.
 epoxy="$(ldd "$stage/bin/deferred_native_tests" | awk '/libepoxy/ {print $3}')"
@@ -31,5 +35,6 @@ unexpected="$(ldd "$stage/bin/"* | awk '/=>/ {print $1}' | sort -u |
 if [ -n "$unexpected" ]; then echo "unexpected shared libraries (stage them too): $unexpected" >&2; exit 1; fi
 # The GL loaders (device README): unpacked over / there, not here.
 (cd "$stage/debs" && apt-get download libegl1 libglvnd0 libopengl0 libgl1 libglx0 libgles2 >/dev/null)
-git -C "$repo" rev-parse HEAD > "$stage/commit"
+# The tree the binaries were staged from (build them from it: the script cannot tell).
+git -C "$repo" describe --always --dirty > "$stage/commit"
 du -sh "$stage"

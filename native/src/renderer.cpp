@@ -718,7 +718,10 @@ void Renderer::Impl::prepare_programs(Frame& f) {
         if (shadows.world_index() >= 0) f.geometry.prepare_casters(*shaders, materials, f.scene, true, result.warnings);
     }
     check_gl("preparing the programs");
-    // Compiling stays out of the samples' stages.
+    // The frame's own programs (and the forward, AOV and Vector targets)
+    // count before the first sample; the passes', the tile lists', the
+    // shadow casters' and Cryptomatte's programs still compile at first use,
+    // inside their stage of sample 0 (when not cached).
     result.timings.upload_ms += f.timer.lap_ms();
     // From here to the readback the stages are timed on the GPU's clock:
     // no glFinish inside the sample loop.

@@ -362,8 +362,18 @@ FrameResult Renderer::Impl::render(const Camera& camera, const RenderSettings& s
     } catch (...) {
         // A cancelled or failed frame leaves no per-frame state in the
         // modules the renderer keeps (the next frame would draw the Vector
-        // pass or AOVs it did not ask for).
+        // pass or AOVs it did not ask for), and none of the GL state a stage
+        // changes and restores itself: a stage that threw half-way (a lazy
+        // compile, a GL error) could leave the scissor test or a colour or
+        // depth mask on, which the next frame's G-buffer clear obeys.
         end_frame();
+        glBindFramebuffer(GL_FRAMEBUFFER, 0);
+        glDisable(GL_SCISSOR_TEST);
+        glDisable(GL_BLEND);
+        glBlendEquation(GL_FUNC_ADD);
+        glDisable(GL_DEPTH_CLAMP);
+        glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+        glDepthMask(GL_TRUE);
         throw;
     }
 }

@@ -291,6 +291,7 @@ struct Renderer::Impl {
     FrameResult finish(Frame& f);
     // Drops what the modules kept for this frame only (on every way out of render()).
     void end_frame();
+    void abandon_frame();  // end_frame() after an exception, and the GL state reset
     // The frame block of the bakes (world, emission): the unjittered
     // camera, for Camera and Window coordinates and the Bump's differential.
     Buffer bake_frame_block(const Frame& f) const;
@@ -360,22 +361,26 @@ FrameResult Renderer::Impl::render(const Camera& camera, const RenderSettings& s
         end_frame();
         return result;
     } catch (...) {
-        // A cancelled or failed frame leaves no per-frame state in the
-        // modules the renderer keeps (the next frame would draw the Vector
-        // pass or AOVs it did not ask for), and none of the GL state a stage
-        // changes and restores itself: a stage that threw half-way (a lazy
-        // compile, a GL error) could leave the scissor test or a colour or
-        // depth mask on, which the next frame's G-buffer clear obeys.
-        end_frame();
-        glBindFramebuffer(GL_FRAMEBUFFER, 0);
-        glDisable(GL_SCISSOR_TEST);
-        glDisable(GL_BLEND);
-        glBlendEquation(GL_FUNC_ADD);
-        glDisable(GL_DEPTH_CLAMP);
-        glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
-        glDepthMask(GL_TRUE);
+        abandon_frame();
         throw;
     }
+}
+
+// A cancelled or failed frame leaves no per-frame state in the modules the
+// renderer keeps (the next frame would draw the Vector pass or AOVs it did
+// not ask for), and none of the GL state a stage changes and restores
+// itself: a stage that threw half-way (a lazy compile, a GL error) could
+// leave the scissor test or a colour or depth mask on, which the next
+// frame's G-buffer clear obeys.
+void Renderer::Impl::abandon_frame() {
+    end_frame();
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    glDisable(GL_SCISSOR_TEST);
+    glDisable(GL_BLEND);
+    glBlendEquation(GL_FUNC_ADD);
+    glDisable(GL_DEPTH_CLAMP);
+    glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+    glDepthMask(GL_TRUE);
 }
 
 void Renderer::Impl::end_frame() {

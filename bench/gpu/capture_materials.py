@@ -20,23 +20,15 @@ import numpy as np
 HERE = os.path.dirname(os.path.abspath(__file__))
 OUT = os.path.join(HERE, "captures")
 sys.path.insert(0, os.path.join(os.path.dirname(HERE), "materials"))
+import bench_materials  # noqa: E402
 from bench_materials import constant_material, textured_material  # noqa: E402  (the benchmark's own materials)
 
 
 def clear_scene():
-    for ob in list(bpy.data.objects):
-        bpy.data.objects.remove(ob)
-    scene = bpy.context.scene
+    """The benchmark's scene set-up (camera, sun), small: replayed at 1920x1080."""
+    scene = bench_materials.clear_scene()
     scene.render.engine = "DEFERRED_RENDER"
-    cam = bpy.data.objects.new("cam", bpy.data.cameras.new("cam"))
-    scene.collection.objects.link(cam)
-    scene.camera = cam
-    cam.location = (0, 0, 14)
-    sun = bpy.data.objects.new("sun", bpy.data.lights.new("sun", "SUN"))
-    sun.rotation_euler = (0.5, 0.3, 0)
-    scene.collection.objects.link(sun)
-    scene.render.resolution_x, scene.render.resolution_y = 192, 108  # replayed at 1920x1080
-    scene.render.resolution_percentage = 100
+    scene.render.resolution_x, scene.render.resolution_y = 192, 108
     scene.deferred_render.samples = 1
     return scene
 

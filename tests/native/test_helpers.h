@@ -20,6 +20,23 @@ inline Camera overview_camera() {
     return cam;
 }
 
+// The many-lights tests' scene: a 30 m floor and four unit boxes along x,
+// all with material `mat`, under a black world (the lights are the test's).
+inline void add_floor_and_boxes(Renderer& r, std::uint32_t mat) {
+    tools::MeshArrays floor = tools::make_plane(30.0f);
+    tools::MeshArrays box = tools::make_box(1.0f, 1.0f, 1.0f);
+    const std::uint32_t floor_mesh = r.add_mesh(floor.view()), box_mesh = r.add_mesh(box.view());
+    Mat4d I = identity_matrix();
+    r.add_instances(floor_mesh, I.data(), 1, nullptr, {mat});
+    for (int i = 0; i < 4; ++i) {
+        Mat4d t = tools::translation(-6.0 + 4.0 * i, 2.0 * (i % 2), 1.0);
+        r.add_instances(box_mesh, t.data(), 1, nullptr, {mat});
+    }
+    World black;
+    black.color = {0, 0, 0};
+    r.set_world(black);
+}
+
 // Orthographic camera at height `h` above the origin looking straight down,
 // covering `extent` metres across.
 inline Camera top_down_ortho(double h, float extent) {

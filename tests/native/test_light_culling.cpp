@@ -18,23 +18,11 @@ namespace {
 // Floor plus a few boxes, white Lambertian-bounded material (Burley with
 // roughness 0 and no specular never exceeds Lambert), black world.
 void build_geometry(Renderer& r) {
-    tools::MeshArrays floor = tools::make_plane(30.0f);
-    tools::MeshArrays box = tools::make_box(1.0f, 1.0f, 1.0f);
     Material white;
     white.base_color = {1.0f, 1.0f, 1.0f};
     white.roughness = 0.0f;
     white.specular = 0.0f;
-    const std::uint32_t mat = r.add_material(white);
-    const std::uint32_t floor_mesh = r.add_mesh(floor.view()), box_mesh = r.add_mesh(box.view());
-    Mat4d I = identity_matrix();
-    r.add_instances(floor_mesh, I.data(), 1, nullptr, {mat});
-    for (int i = 0; i < 4; ++i) {
-        Mat4d t = tools::translation(-6.0 + 4.0 * i, 2.0 * (i % 2), 1.0);
-        r.add_instances(box_mesh, t.data(), 1, nullptr, {mat});
-    }
-    World black;
-    black.color = {0, 0, 0};
-    r.set_world(black);
+    deferred::testing::add_floor_and_boxes(r, r.add_material(white));
 }
 
 std::vector<Light> random_point_lights(int n, std::uint32_t seed, float energy_max) {

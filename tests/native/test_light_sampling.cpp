@@ -24,8 +24,6 @@ namespace {
 // (half each), whose choice per pixel and sample must not be correlated with
 // the light selection.
 void build_scene(Renderer& r, bool groups = false, bool mixed = false, bool cast_shadows = false, int light_count = 800) {
-    tools::MeshArrays floor = tools::make_plane(30.0f);
-    tools::MeshArrays box = tools::make_box(1.0f, 1.0f, 1.0f);
     Material grey;
     grey.base_color = {0.7f, 0.7f, 0.7f};
     grey.roughness = 0.4f;
@@ -40,16 +38,7 @@ void build_scene(Renderer& r, bool groups = false, bool mixed = false, bool cast
         white.mix_probability = 0.5f;
         mat = r.add_material(white);
     }
-    const std::uint32_t floor_mesh = r.add_mesh(floor.view()), box_mesh = r.add_mesh(box.view());
-    Mat4d I = identity_matrix();
-    r.add_instances(floor_mesh, I.data(), 1, nullptr, {mat});
-    for (int i = 0; i < 4; ++i) {
-        Mat4d t = tools::translation(-6.0 + 4.0 * i, 2.0 * (i % 2), 1.0);
-        r.add_instances(box_mesh, t.data(), 1, nullptr, {mat});
-    }
-    World black;
-    black.color = {0, 0, 0};
-    r.set_world(black);
+    deferred::testing::add_floor_and_boxes(r, mat);
     std::mt19937 rng(11);
     std::uniform_real_distribution<double> u(0.0, 1.0);
     for (int i = 0; i < light_count; ++i) {

@@ -55,7 +55,7 @@ layout(location = 0) out vec4 out_forward;
 layout(location = OUT_EMISSION) out vec4 out_emission;
 layout(location = OUT_BASE) out vec4 out_base;
 layout(location = OUT_PARAMS0) out vec4 out_params0;
-layout(location = OUT_NORMAL) out vec2 out_normal;
+layout(location = OUT_NORMAL) out uint out_normal; /* packUnorm2x16 (gbuffer.cpp) */
 #endif
 #if !defined(FORWARD_PASS) && !defined(AOV_PASS) && !defined(EMISSION_BAKE)
 #ifdef GBUF_PARAMS1
@@ -414,7 +414,7 @@ void main() {
     out_emission = surf_emission;
     out_base = surf_base;
     out_params0 = surf_params0;
-    out_normal = octahedral_encode(shading_normal);
+    out_normal = packUnorm2x16(octahedral_encode(shading_normal));
 #ifdef GBUF_PARAMS1
     out_params1 = surf_params1;
 #endif

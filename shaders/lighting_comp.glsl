@@ -95,7 +95,7 @@ uint light_entry(uint k, bool from_list, uint first) {
 layout(binding = TEX_GBUF_EMISSION) uniform sampler2D gbuf_emission;
 layout(binding = TEX_GBUF_BASE) uniform sampler2D gbuf_base;
 layout(binding = TEX_GBUF_PARAMS0) uniform sampler2D gbuf_params0;
-layout(binding = TEX_GBUF_NORMAL) uniform sampler2D gbuf_normal;
+layout(binding = TEX_GBUF_NORMAL) uniform usampler2D gbuf_normal; /* packUnorm2x16 of the octahedral normal */
 #ifdef GBUF_PARAMS1
 layout(binding = TEX_GBUF_PARAMS1) uniform sampler2D gbuf_params1;
 #endif
@@ -220,7 +220,7 @@ void main() {
     params1 = texelFetch(gbuf_params1, pixel, 0);
 #endif
     SurfaceParams s = gbuffer_unpack(texelFetch(gbuf_base, pixel, 0), texelFetch(gbuf_params0, pixel, 0), params1,
-                                     texelFetch(gbuf_normal, pixel, 0).rg);
+                                     unpackUnorm2x16(texelFetch(gbuf_normal, pixel, 0).r));
 #ifdef GBUF_GEOMETRY
     gbuffer_unpack_geometry(s, texelFetch(gbuf_geometry, pixel, 0));
 #endif

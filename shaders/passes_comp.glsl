@@ -29,7 +29,7 @@ layout(binding = TEX_DEPTH) uniform sampler2D gbuf_depth;
 layout(binding = TEX_GBUF_EMISSION) uniform sampler2D gbuf_emission;
 layout(binding = TEX_GBUF_BASE) uniform sampler2D gbuf_base;
 layout(binding = TEX_GBUF_PARAMS0) uniform sampler2D gbuf_params0;
-layout(binding = TEX_GBUF_NORMAL) uniform sampler2D gbuf_normal;
+layout(binding = TEX_GBUF_NORMAL) uniform usampler2D gbuf_normal; /* packUnorm2x16 of the octahedral normal */
 #ifdef GBUF_PARAMS1
 layout(binding = TEX_GBUF_PARAMS1) uniform sampler2D gbuf_params1;
 #endif
@@ -78,7 +78,7 @@ SurfaceParams load_surface(ivec2 pixel) {
     params1 = texelFetch(gbuf_params1, pixel, 0);
 #endif
     return gbuffer_unpack(texelFetch(gbuf_base, pixel, 0), texelFetch(gbuf_params0, pixel, 0), params1,
-                          texelFetch(gbuf_normal, pixel, 0).rg);
+                          unpackUnorm2x16(texelFetch(gbuf_normal, pixel, 0).r));
 }
 
 vec3 safe_divide(vec3 a, vec3 b) {
@@ -152,7 +152,7 @@ void main() {
 #elif PASS_ID == PASS_POSITION
     value = background ? vec4(0.0) : vec4(P + frame.camera_position.xyz, 0.0);
 #elif PASS_ID == PASS_NORMAL
-    value = background ? vec4(0.0) : vec4(octahedral_decode(texelFetch(gbuf_normal, pixel, 0).rg), 0.0);
+    value = background ? vec4(0.0) : vec4(octahedral_decode(unpackUnorm2x16(texelFetch(gbuf_normal, pixel, 0).r)), 0.0);
 #elif PASS_ID == PASS_UV
     value = background ? vec4(0.0) : vec4(texelFetch(gbuf_uv, pixel, 0).rg, 1.0, 0.0);
 #elif PASS_ID == PASS_INDEX_OB

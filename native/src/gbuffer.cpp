@@ -22,7 +22,12 @@ void GBuffer::ensure(int width, int height, const GBufferFeatures& f) {
     make(emission_, GL_RGBA32F, "gbuffer emission");
     make(base_, GL_RGBA16F, "gbuffer base");
     make(params0_, GL_RGBA16F, "gbuffer params0");
-    make(normal_, GL_RG16, "gbuffer normal");
+    // The octahedral normal as packUnorm2x16's bits in an integer target, not
+    // an RG16 unorm one: the GL spec lets a driver convert a float written to
+    // a unorm target to either of the two nearest integers (NVIDIA's choice
+    // differs from packUnorm2x16's rounding), and the forward pass quantises
+    // its normals with packUnorm2x16 to light them as this pass does.
+    make(normal_, GL_R32UI, "gbuffer normal");
     if (f.params1) make(params1_, GL_RGBA16F, "gbuffer params1");
     if (f.ids || f.instance_ids) make(ids_, f.instance_ids ? GL_RGBA32UI : GL_RG32UI, "gbuffer ids");
     if (f.uv) make(uv_, GL_RG32F, "gbuffer uv");
@@ -61,8 +66,9 @@ void GBuffer::bind_for_geometry() const {
     const GLuint uzero[4] = {0, 0, 0, 0};
     const float depth_far = 0.0f;  // reversed Z: far plane is 0
     glClearNamedFramebufferfv(fbo_.get(), GL_DEPTH, 0, &depth_far);
-    for (int slot : {OUT_EMISSION, OUT_BASE, OUT_PARAMS0, OUT_NORMAL, OUT_PARAMS1, OUT_UV})
+    for (int slot : {OUT_EMISSION, OUT_BASE, OUT_PARAMS0, OUT_PARAMS1, OUT_UV})
         glClearNamedFramebufferfv(fbo_.get(), GL_COLOR, slot, zero);
+    glClearNamedFramebufferuiv(fbo_.get(), GL_COLOR, OUT_NORMAL, uzero);
     if (ids_) glClearNamedFramebufferuiv(fbo_.get(), GL_COLOR, OUT_IDS, uzero);
     if (geometry_) glClearNamedFramebufferuiv(fbo_.get(), GL_COLOR, OUT_GEOMETRY, uzero);
 }

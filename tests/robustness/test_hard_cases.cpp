@@ -12,6 +12,8 @@
 #include <cstdio>
 #include <functional>
 #include <limits>
+#include <sstream>
+#include <string>
 #include <vector>
 
 using namespace deferred;
@@ -44,6 +46,7 @@ std::uint32_t add_plane(Renderer& r, float half, const Mat4d& m, const Material&
 // brightest value, and the brightest values of both.
 struct OracleComparison {
     double max_relative = 0, oracle_max = 0, gpu_max = 0;
+    std::string worst_at;  // the pixel of max_relative: where, what, what the oracle says
 };
 OracleComparison compare_with_oracle(const FrameResult& f, const std::vector<Light>& lights, const Material& m,
                                      const glm::dvec3& cam_pos) {
@@ -53,6 +56,7 @@ OracleComparison compare_with_oracle(const FrameResult& f, const std::vector<Lig
     const PassImage* D = f.find(Pass::Depth);
     OracleComparison out;
     std::vector<std::pair<double, double>> values;
+    std::vector<std::string> where;  // per value: the pixel and its inputs
     for (int y = 0; y < C.height; ++y)
         for (int x = 0; x < C.width; ++x) {
             if (D && *pixel(*D, x, y) > 1e9f) continue;  // background
@@ -66,13 +70,20 @@ OracleComparison compare_with_oracle(const FrameResult& f, const std::vector<Lig
             const glm::dvec3 got = pixel3(C, x, y);
             for (int k = 0; k < 3; ++k) {
                 values.emplace_back(got[k], expect[k]);
+                char buf[256];
+                std::snprintf(buf, sizeof buf, "pixel (%d, %d) channel %d: %.6g vs oracle %.6g at P (%.4g %.4g %.4g) N (%.6f %.6f %.6f)",
+                              x, y, k, got[k], expect[k], p.x, p.y, p.z, n.x, n.y, n.z);
+                where.emplace_back(buf);
                 out.oracle_max = std::max(out.oracle_max, expect[k]);
                 out.gpu_max = std::max(out.gpu_max, got[k]);
             }
         }
-    for (auto [g, o] : values)
-        out.max_relative = std::max(out.max_relative,
-                                    std::abs(g - o) / std::max(std::abs(o), 0.01 * std::max(out.oracle_max, 1e-3)));
+    for (std::size_t i = 0; i < values.size(); ++i) {
+        const auto [g, o] = values[i];
+        const double rel = std::abs(g - o) / std::max(std::abs(o), 0.01 * std::max(out.oracle_max, 1e-3));
+        if (rel > out.max_relative) out.worst_at = where[i];
+        out.max_relative = std::max(out.max_relative, rel);
+    }
     return out;
 }
 
@@ -295,6 +306,7 @@ TEST(HardCases, GrazingViewAndLight) {
     s.filter_width = 0.01f;
     s.passes = all_passes();
     double worst = 0, worst_firefly = 0;
+    std::string worst_at;
     int nonfinite = 0;
     for (double view_deg : {1.0, 0.1, 0.01})
         for (double light_deg : {1.0, 0.01, 0.0}) {
@@ -326,13 +338,18 @@ TEST(HardCases, GrazingViewAndLight) {
             nonfinite += int(fin.bad);
             EXPECT_TRUE(fin.ok()) << "view " << view_deg << " deg, light " << light_deg << " deg: " << fin.first;
             const OracleComparison c = compare_with_oracle(f, {sun, point}, m, cam_pos);
+            if (c.max_relative > worst) {
+                std::ostringstream os;
+                os << "view " << view_deg << " deg, light " << light_deg << " deg, " << c.worst_at;
+                worst_at = os.str();
+            }
             worst = std::max(worst, c.max_relative);
             if (c.oracle_max > 0) worst_firefly = std::max(worst_firefly, c.gpu_max / c.oracle_max - 1.0);
         }
     std::printf("grazing view 1..0.01 deg x light 1..0 deg: non-finite %d, max relative error vs oracle (at the "
                 "rendered P, N) %.3g, brightest pixel above the oracle's brightest by %.2e\n",
                 nonfinite, worst, worst_firefly);
-    EXPECT_LT(worst, 1e-2);
+    EXPECT_LT(worst, 1e-2) << "worst: " << worst_at;
     EXPECT_LT(worst_firefly, 1e-2);
 }
 
@@ -679,13 +696,30 @@ TEST(HardCases, MirroredAndNonUniformScale) {
     tools::MeshArrays sphere = tools::make_uv_sphere(1.0f, 32, 16);
     const FrameResult ref = render_mesh(r, sphere.view(), {identity_matrix()});
     double mirror_diff = 0, worst_inward = 1;
+    std::string mirror_at;
     for (const glm::dvec3 sc : {glm::dvec3(-1, 1, 1), glm::dvec3(1, -1, 1), glm::dvec3(-1, -1, -1)}) {
         Mat4d m = identity_matrix();
         m[0] = sc.x; m[5] = sc.y; m[10] = sc.z;
         const FrameResult f = render_mesh(r, sphere.view(), {m});
         EXPECT_TRUE(check_finite(f).ok());
-        for (Pass p : {Pass::Combined, Pass::Normal, Pass::Depth, Pass::DiffDir})
-            mirror_diff = std::max(mirror_diff, max_abs_diff(*f.find(p), *ref.find(p)));
+        for (Pass p : {Pass::Combined, Pass::Normal, Pass::Depth, Pass::DiffDir}) {
+            const PassImage &a = *f.find(p), &b = *ref.find(p);
+            for (std::size_t i = 0; i < a.pixels.size(); ++i) {
+                const double d = std::abs(double(a.pixels[i]) - double(b.pixels[i]));
+                if (d > mirror_diff) {
+                    // Where, so a driver that differs says whether it is the
+                    // silhouette (coverage) or the interior (interpolation).
+                    const std::size_t px = i / std::size_t(a.channels);
+                    const int x = int(px % std::size_t(a.width)), y = int(px / std::size_t(a.width));
+                    std::ostringstream os;
+                    os << "scale (" << sc.x << ", " << sc.y << ", " << sc.z << ") pass " << int(p) << " pixel (" << x
+                       << ", " << y << ") channel " << i % std::size_t(a.channels) << ": " << a.pixels[i] << " vs "
+                       << b.pixels[i] << ", IndexOB there " << *pixel(*f.find(Pass::IndexOB), x, y);
+                    mirror_at = os.str();
+                    mirror_diff = d;
+                }
+            }
+        }
         const PassImage& N = *f.find(Pass::Normal);
         const PassImage& P = *f.find(Pass::Position);
         for (int y = 0; y < 32; ++y)
@@ -717,7 +751,7 @@ TEST(HardCases, MirroredAndNonUniformScale) {
     std::printf("mirrored spheres (-1,1,1), (1,-1,1), (-1,-1,-1): max diff vs unmirrored %.3g, min N.outward %.4f; "
                 "non-uniform scale (3,1,0.5): normal max error %.4f deg\n",
                 mirror_diff, worst_inward, worst_deg);
-    EXPECT_LT(mirror_diff, 1e-4);
+    EXPECT_LT(mirror_diff, 1e-4) << "largest at " << mirror_at;
     EXPECT_GT(worst_inward, 0.0);
     EXPECT_LT(worst_deg, 0.01);
 }

@@ -3,15 +3,21 @@
 // render-target memory; then the GPU issue's frame targets on it: 64
 // samples end to end with Combined read back, and one sample with the 16
 // passes Combined..AO read back (wall time around render()), and the time
-// a render of the unchanged scene spends before its first sample. Prints
-// markdown tables.
+// a render of the unchanged scene spends before its first sample; each of
+// those frames split into the engine's stages (GPU clock) beside the
+// process's CPU time, which says whether a frame waits on the GPU or on the
+// CPU issuing it. Prints markdown tables. With DEFERRED_BENCH_PROFILE=1 in
+// the environment, also a sampling CPU profile of each of those frames
+// (cpu_profile.h): where a CPU-bound frame's time goes.
 // Usage: deferred_bench_frame [width height] [repeats]
 #include "builtin_scenes.h"
+#include "cpu_profile.h"
 
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <string>
 #include <vector>
 
 int main(int argc, char** argv) {
@@ -66,6 +72,15 @@ int main(int argc, char** argv) {
         };
         PassSet sixteen;
         for (std::uint32_t p = 0; p <= static_cast<std::uint32_t>(Pass::AO); ++p) sixteen.insert(Pass(p));
+        const bool profile = std::getenv("DEFERRED_BENCH_PROFILE") != nullptr;
+        struct Split {
+            const char* label;
+            int samples;
+            FrameTimings t;
+            double wall, cpu;
+        };
+        std::vector<Split> splits;
+        std::vector<std::pair<std::string, std::string>> profiles;  // title, report
         for (const Case& c : {Case{"64 samples, Combined read back", 64, PassSet{Pass::Combined}},
                               Case{"1 sample, 16 passes (Combined..AO) read back", 1, sixteen}}) {
             RenderSettings s;
@@ -75,12 +90,15 @@ int main(int argc, char** argv) {
             s.passes = c.passes;
             renderer.render(cam, s);  // warm-up
             std::vector<double> wall, readback, before;
+            Split median_split{c.label, c.samples, {}, 0, 0};
             for (int i = 0; i < repeats; ++i) {
+                const double cpu0 = deferred::bench::process_cpu_ms();
                 const auto t0 = std::chrono::steady_clock::now();
                 const FrameResult r = renderer.render(cam, s);
                 wall.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
                 readback.push_back(r.timings.readback_ms);
                 before.push_back(r.timings.upload_ms);
+                if (i == repeats / 2) median_split = {c.label, c.samples, r.timings, wall.back(), deferred::bench::process_cpu_ms() - cpu0};
             }
             std::sort(wall.begin(), wall.end());
             std::sort(readback.begin(), readback.end());
@@ -88,7 +106,34 @@ int main(int argc, char** argv) {
             const double w = wall[wall.size() / 2];
             std::printf("| %s | %.1f | %.2f | %.1f | %.1f |\n", c.label, w, w / c.samples, readback[readback.size() / 2],
                         before[before.size() / 2]);
+            splits.push_back(median_split);
+            if (profile) {
+                deferred::bench::CpuProfile p;
+                p.start();
+                for (int i = 0; i < repeats; ++i) renderer.render(cam, s);
+                p.stop();
+                char* buf = nullptr;
+                std::size_t len = 0;
+                std::FILE* mem = open_memstream(&buf, &len);
+                p.report(c.label, mem);
+                std::fclose(mem);
+                profiles.emplace_back(c.label, std::string(buf, len));
+                std::free(buf);
+            }
         }
+        // The same frames by stage (GPU clock: a stage's time also counts the
+        // GPU waiting for the CPU to issue it) beside the process's CPU time.
+        std::printf("\nthe frames above by stage (ms, one frame; GPU timestamps) and the process's CPU time\n\n");
+        std::printf("| frame | wall | CPU (all threads) | before the first sample | shadows | geometry | culling | lighting | "
+                    "passes | forward | readback | total | shadow layers | instances drawn (camera, shadows) |\n");
+        std::printf("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|\n");
+        for (const Split& x : splits)
+            std::printf("| %s | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %zu | %llu, %llu |\n",
+                        x.label, x.wall, x.cpu, x.t.upload_ms, x.t.shadow_ms, x.t.geometry_ms, x.t.culling_ms,
+                        x.t.lighting_ms, x.t.passes_ms, x.t.forward_ms, x.t.readback_ms, x.t.total_ms,
+                        x.t.shadow_layers_rendered, static_cast<unsigned long long>(x.t.camera_instances_drawn),
+                        static_cast<unsigned long long>(x.t.shadow_instances_drawn));
+        for (const auto& pr : profiles) std::fputs(pr.second.c_str(), stdout);
     } catch (const std::exception& e) {
         std::fprintf(stderr, "error: %s\n", e.what());
         return 1;

@@ -7,6 +7,7 @@
 // compilation). Prints a markdown table.
 // Usage: deferred_bench_outputs [width height] [samples] [repeats]
 #include "builtin_scenes.h"
+#include "cpu_profile.h"
 
 #include <deferred/material_graph.h>
 
@@ -79,6 +80,7 @@ Camera build_scene(Renderer& r) {
 
 struct Measure {
     double ms = 0;        // median total frame time
+    double cpu_ms = 0;    // median CPU time of the process over the frame
     std::size_t bytes = 0;  // frame targets
 };
 
@@ -105,24 +107,47 @@ int main(int argc, char** argv) {
         base.shadows = false;
         auto measure = [&](const RenderSettings& s) {
             renderer.render(cam, s);  // warm-up: programs, targets
-            std::vector<double> ms;
+            std::vector<double> ms, cpu;
             Measure m;
             for (int i = 0; i < repeats; ++i) {
+                const double cpu0 = deferred::bench::process_cpu_ms();
                 const FrameResult f = renderer.render(cam, s);
+                cpu.push_back(deferred::bench::process_cpu_ms() - cpu0);
                 ms.push_back(f.timings.total_ms);
                 m.bytes = f.timings.gbuffer_bytes;
             }
             std::sort(ms.begin(), ms.end());
+            std::sort(cpu.begin(), cpu.end());
             m.ms = ms[ms.size() / 2];
+            m.cpu_ms = cpu[cpu.size() / 2];
             return m;
+        };
+        // DEFERRED_BENCH_PROFILE=1: where the CPU time of a frame goes (cpu_profile.h).
+        const bool profile = std::getenv("DEFERRED_BENCH_PROFILE") != nullptr;
+        std::string profiles;
+        auto profile_frames = [&](const RenderSettings& s, const std::string& title) {
+            if (!profile) return;
+            deferred::bench::CpuProfile p;
+            p.start();
+            for (int i = 0; i < repeats; ++i) renderer.render(cam, s);
+            p.stop();
+            char* buf = nullptr;
+            std::size_t len = 0;
+            std::FILE* mem = open_memstream(&buf, &len);
+            p.report(title.c_str(), mem);
+            std::fclose(mem);
+            profiles.append(buf, len);
+            std::free(buf);
         };
         std::printf("%dx%d, %d film samples, showcase + AOV overlay + 4 grouped lights, no shadows, median of %d "
                     "frames\n\n",
                     width, height, samples, repeats);
         const Measure none = measure(base);
-        std::printf("Combined only: %.1f ms per frame, %.2f ms per sample\n\n", none.ms, none.ms / samples);
-        std::printf("| output | frame ms | added per sample ms | added per sample %% |\n");
-        std::printf("|---|---:|---:|---:|\n");
+        std::printf("Combined only: %.1f ms per frame, %.2f ms per sample (process CPU time %.1f ms per frame)\n\n",
+                    none.ms, none.ms / samples, none.cpu_ms);
+        profile_frames(base, "Combined only");
+        std::printf("| output | frame ms | added per sample ms | added per sample %% | CPU ms per frame |\n");
+        std::printf("|---|---:|---:|---:|---:|\n");
         struct Row { std::string name; std::function<void(RenderSettings&)> set; };
         const std::vector<Row> rows = {
             {"Depth + Normal + IndexOB (data passes)",
@@ -145,9 +170,11 @@ int main(int argc, char** argv) {
             row.set(s);
             const Measure m = measure(s);
             const double added = (m.ms - none.ms) / samples;
-            std::printf("| %s | %.1f | %.2f | %.0f %% |\n", row.name.c_str(), m.ms, added,
-                        100.0 * added / (none.ms / samples));
+            std::printf("| %s | %.1f | %.2f | %.0f %% | %.1f |\n", row.name.c_str(), m.ms, added,
+                        100.0 * added / (none.ms / samples), m.cpu_ms);
+            if (!s.cryptomatte.empty() || s.light_groups > 0) profile_frames(s, row.name);
         }
+        std::fputs(profiles.c_str(), stdout);
     } catch (const std::exception& e) {
         std::fprintf(stderr, "error: %s\n", e.what());
         return 1;

@@ -8,9 +8,15 @@
 # deferred_bench_outputs; shadows: deferred_bench_shadows). Writes four
 # files to $OUT (the device tool returns at most eight): summary.txt,
 # native_tests.log, robustness.log, benches.md. Each step has a time limit
-# (killed 5 s after it); the limits add up to 500 s, inside one device call
-# (600 s). Exits non-zero when a step failed or ran out of time.
+# (killed 5 s after it): 150 s for the tests (in parallel), 270 s for the
+# benchmarks, inside one device call (600 s) and a session's 15 minutes of
+# device time. Exits non-zero when a step failed or ran out of time.
+# Parts of it, for a rerun inside what is left of the device time:
+# GPU_CHECK_FILTER (a gtest filter for both test binaries, "-" for no
+# tests), GPU_CHECK_TEST_LIMIT (seconds, 150), GPU_CHECK_BENCHES (any of
+# "frame lights outputs shadows", all by default).
 #   bash scripts/gpu_check.sh            (on the device, as root)
+#   GPU_CHECK_FILTER='HardCases.*' GPU_CHECK_BENCHES=frame bash scripts/gpu_check.sh
 #   GPU_CHECK_LOCAL=1 GPU_CHECK_SIZE="320 180" OUT=/tmp/gpu bash scripts/gpu_check.sh   (a dry run here)
 set -u
 cd "$(dirname "$0")/.." || exit 1
@@ -49,17 +55,56 @@ run() {  # run NAME SECONDS LOG COMMAND...: time-limited; its exit status and ti
   case "$rc" in 0) ;; 124|137) failed=1; note=" (time limit)" ;; *) failed=1 ;; esac
   echo "$name: exit $rc$note in $((SECONDS - t0)) s" >> "$summary"
 }
-run native_tests 160 "$out/native_tests.log" "$stage/bin/deferred_native_tests"
-run robustness_gl_tests 80 "$out/robustness.log" "$stage/bin/robustness_gl_tests"
+# The tests in parallel: 8 shards of the native tests beside the robustness
+# tests (their first NVIDIA run, serial, ran out of its limit: most of a
+# test's time there is the driver compiling programs, on the CPU).
+# Line-buffered, so a test stopped at the limit leaves its last lines.
+filter="${GPU_CHECK_FILTER:-*}"
+test_limit="${GPU_CHECK_TEST_LIMIT:-150}"
+benches_to_run=" ${GPU_CHECK_BENCHES:-frame lights outputs shadows} "
+if [ "$filter" != "-" ]; then
+t0=$SECONDS
+shards=8
+pids=()
+for i in $(seq 0 $((shards - 1))); do
+  GTEST_TOTAL_SHARDS=$shards GTEST_SHARD_INDEX=$i timeout -k 5 "$test_limit" stdbuf -oL -eL \
+    "$stage/bin/deferred_native_tests" --gtest_filter="$filter" > "$out/native_shard_$i.tmp" 2>&1 &
+  pids+=($!)
+done
+timeout -k 5 "$test_limit" stdbuf -oL -eL "$stage/bin/robustness_gl_tests" --gtest_filter="$filter" \
+  > "$out/robustness.log" 2>&1 &
+rpid=$!
+for i in $(seq 0 $((shards - 1))); do
+  wait "${pids[$i]}"
+  rc=$?
+  [ "$rc" = 0 ] || failed=1
+  echo "native_tests shard $i: exit $rc$(case $rc in 124|137) echo ' (time limit)';; esac)" >> "$summary"
+  { echo "=== shard $i of $shards: exit $rc"; cat "$out/native_shard_$i.tmp"; } >> "$out/native_tests.log"
+  rm -f "$out/native_shard_$i.tmp"
+done
+wait "$rpid"
+rc=$?
+[ "$rc" = 0 ] || failed=1
+echo "robustness_gl_tests: exit $rc; the tests took $((SECONDS - t0)) s" >> "$summary"
 grep -h -E '^\[  (PASSED|FAILED) ' "$out/native_tests.log" "$out/robustness.log" >> "$summary"
+# A test still running when its shard was stopped: the shard's last RUN line.
+for i in $(seq 0 $((shards - 1))); do
+  awk -v s="$i" '/^=== shard/ {n=$3} n==s && /^\[ RUN/ {r=$0} n==s && /^\[ *(OK|FAILED) / {r=""} END {if (r != "") print "unfinished in shard " s ": " r}' \
+    "$out/native_tests.log" >> "$summary"
+done
+fi
+# The benchmarks one at a time (timings), with a CPU profile of the frames
+# (DEFERRED_BENCH_PROFILE: bench/cpu_profile.h) where the engine's GPU
+# timestamps cannot tell GPU work from the CPU issuing it.
+export DEFERRED_BENCH_PROFILE=1
 # shellcheck disable=SC2086
-run bench_frame 60 "$benches" "$stage/bin/deferred_bench_frame" $size
+[[ "$benches_to_run" == *" frame "* ]] && run bench_frame 70 "$benches" "$stage/bin/deferred_bench_frame" $size
 # Brute force (every light at every pixel) up to 1000 lights, beside the culled rows up to 65 536.
 # shellcheck disable=SC2086
-run bench_lights 90 "$benches" "$stage/bin/deferred_bench_lights" $size 1000
+[[ "$benches_to_run" == *" lights "* ]] && run bench_lights 40 "$benches" "$stage/bin/deferred_bench_lights" $size 1000
 # shellcheck disable=SC2086
-run bench_outputs 55 "$benches" "$stage/bin/deferred_bench_outputs" $size
+[[ "$benches_to_run" == *" outputs "* ]] && run bench_outputs 70 "$benches" "$stage/bin/deferred_bench_outputs" $size
 # shellcheck disable=SC2086
-run bench_shadows 55 "$benches" "$stage/bin/deferred_bench_shadows" $size
+[[ "$benches_to_run" == *" shadows "* ]] && run bench_shadows 90 "$benches" stdbuf -oL "$stage/bin/deferred_bench_shadows" $size
 cat "$summary"
 exit "$failed"

@@ -31,10 +31,15 @@ float schlick_fresnel(float u) {
     return m2 * m2 * m;
 }
 
-/* Exact dielectric Fresnel (Cycles fresnel_dielectric_cos). */
+/* Exact dielectric Fresnel (Cycles fresnel_dielectric_cos). g is
+ * (eta^2 - 1) + c^2 in that order, `precise`: a compiler free to reassociate
+ * may form (eta^2 + c^2) - 1, which at eta = 1 (Specular 0: F0 = 0) rounds
+ * c^2 < 6e-8 away, takes g <= 0 for total reflection and returns 1 instead of
+ * 0 (NVIDIA 580 did: a metallic surface's glossy light at N.V = N.L = 1e-4 was
+ * 0.008 where Cycles' is 0; BsdfExtremes.GrazingAnglesAreFiniteAndBounded). */
 float fresnel_dielectric_cos(float cosi, float eta) {
     float c = abs(cosi);
-    float g = eta * eta - 1.0 + c * c;
+    precise float g = (eta * eta - 1.0) + c * c;
     if (g > 0.0) {
         g = sqrt(g);
         float A = (g - c) / (g + c);

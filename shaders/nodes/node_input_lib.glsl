@@ -77,10 +77,11 @@ void node_geometry(out vec3 position, out vec3 normal, out vec3 tangent, out vec
     backfacing = g_sd.backfacing;
 }
 
-/* Cycles' fresnel_dielectric_cos (kernel/closure/bsdf_util.h). */
+/* Cycles' fresnel_dielectric_cos (kernel/closure/bsdf_util.h); g in
+ * Cycles' order, `precise` (see bsdf_lib.glsl's fresnel_dielectric_cos). */
 float node_fresnel_dielectric_cos(float cosi, float eta) {
     float c = abs(cosi);
-    float g = eta * eta - 1.0 + c * c;
+    precise float g = (eta * eta - 1.0) + c * c;
     if (g > 0.0) {
         g = sqrt(g);
         float A = (g - c) / (g + c);

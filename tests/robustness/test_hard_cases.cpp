@@ -714,7 +714,10 @@ TEST(HardCases, MirroredAndNonUniformScale) {
                     std::ostringstream os;
                     os << "scale (" << sc.x << ", " << sc.y << ", " << sc.z << ") pass " << int(p) << " pixel (" << x
                        << ", " << y << ") channel " << i % std::size_t(a.channels) << ": " << a.pixels[i] << " vs "
-                       << b.pixels[i] << ", IndexOB there " << *pixel(*f.find(Pass::IndexOB), x, y);
+                       << b.pixels[i] << ", IndexOB there " << *pixel(*f.find(Pass::IndexOB), x, y)
+                       << ", depth " << *pixel(*f.find(Pass::Depth), x, y) << " vs "
+                       << *pixel(*ref.find(Pass::Depth), x, y) << ", position z " << pixel3(*f.find(Pass::Position), x, y).z
+                       << " vs " << pixel3(*ref.find(Pass::Position), x, y).z;
                     mirror_at = os.str();
                     mirror_diff = d;
                 }

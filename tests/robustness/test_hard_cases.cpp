@@ -692,10 +692,21 @@ TEST(HardCases, DegenerateTrianglesAndNormals) {
 TEST(HardCases, MirroredAndNonUniformScale) {
     Renderer r;
     // A sphere is symmetric: mirrored instances (negative determinant) must
-    // give the same image, with outward normals.
+    // give the same image, with outward normals, up to where the rasteriser
+    // puts the mirrored vertices: GL snaps window positions to its subpixel
+    // grid (GL 4.5 section 14.5, GL_SUBPIXEL_BITS; 8 bits on llvmpipe and
+    // NVIDIA), and a vertex and its mirror image may snap to grid points one
+    // step (1/256 pixel) apart. So a pixel may differ by its value's change
+    // over 1/256 pixel (its largest difference to a neighbour in the
+    // unmirrored image, over 256); more than that and 1e-4 is an error. An
+    // H200 differed by 1.6e-3 (Normal z at a pixel by the silhouette, depth
+    // 4.92519 vs 4.92366: the same surface met 1.5 mm further along, where it
+    // is nearly parallel to the view) against the old bound of 1e-4 on the
+    // raw difference; llvmpipe differs by 1e-5. This bound is not yet run there.
     tools::MeshArrays sphere = tools::make_uv_sphere(1.0f, 32, 16);
     const FrameResult ref = render_mesh(r, sphere.view(), {identity_matrix()});
-    double mirror_diff = 0, worst_inward = 1;
+    constexpr double kSubpixelStep = 1.0 / 256.0;
+    double mirror_diff = 0, mirror_excess = 0, worst_inward = 1;
     std::string mirror_at;
     for (const glm::dvec3 sc : {glm::dvec3(-1, 1, 1), glm::dvec3(1, -1, 1), glm::dvec3(-1, -1, -1)}) {
         Mat4d m = identity_matrix();
@@ -704,20 +715,28 @@ TEST(HardCases, MirroredAndNonUniformScale) {
         EXPECT_TRUE(check_finite(f).ok());
         for (Pass p : {Pass::Combined, Pass::Normal, Pass::Depth, Pass::DiffDir}) {
             const PassImage &a = *f.find(p), &b = *ref.find(p);
+            const std::size_t ch = std::size_t(a.channels), w = std::size_t(a.width), h = std::size_t(a.height);
             for (std::size_t i = 0; i < a.pixels.size(); ++i) {
                 const double d = std::abs(double(a.pixels[i]) - double(b.pixels[i]));
+                const std::size_t px = i / ch, x = px % w, y = px / w;
+                double slope = 0;  // largest change to a neighbour, per pixel
+                for (const auto& [dx, dy] : {std::pair{-1, 0}, {1, 0}, {0, -1}, {0, 1}}) {
+                    const long nx = long(x) + dx, ny = long(y) + dy;
+                    if (nx < 0 || ny < 0 || nx >= long(w) || ny >= long(h)) continue;
+                    const std::size_t j = (std::size_t(ny) * w + std::size_t(nx)) * ch + i % ch;
+                    slope = std::max(slope, std::abs(double(b.pixels[j]) - double(b.pixels[i])));
+                }
+                mirror_excess = std::max(mirror_excess, d - slope * kSubpixelStep);
                 if (d > mirror_diff) {
                     // Where, so a driver that differs says whether it is the
                     // silhouette (coverage) or the interior (interpolation).
-                    const std::size_t px = i / std::size_t(a.channels);
-                    const int x = int(px % std::size_t(a.width)), y = int(px / std::size_t(a.width));
                     std::ostringstream os;
                     os << "scale (" << sc.x << ", " << sc.y << ", " << sc.z << ") pass " << int(p) << " pixel (" << x
                        << ", " << y << ") channel " << i % std::size_t(a.channels) << ": " << a.pixels[i] << " vs "
                        << b.pixels[i] << ", IndexOB there " << *pixel(*f.find(Pass::IndexOB), x, y)
                        << ", depth " << *pixel(*f.find(Pass::Depth), x, y) << " vs "
                        << *pixel(*ref.find(Pass::Depth), x, y) << ", position z " << pixel3(*f.find(Pass::Position), x, y).z
-                       << " vs " << pixel3(*ref.find(Pass::Position), x, y).z;
+                       << " vs " << pixel3(*ref.find(Pass::Position), x, y).z << ", slope there " << slope;
                     mirror_at = os.str();
                     mirror_diff = d;
                 }
@@ -751,10 +770,10 @@ TEST(HardCases, MirroredAndNonUniformScale) {
                 const double c = std::clamp(glm::dot(glm::normalize(pixel3(*fs.find(Pass::Normal), x, y)), expect), -1.0, 1.0);
                 worst_deg = std::max(worst_deg, std::acos(c) * 180 / M_PI);
             }
-    std::printf("mirrored spheres (-1,1,1), (1,-1,1), (-1,-1,-1): max diff vs unmirrored %.3g, min N.outward %.4f; "
-                "non-uniform scale (3,1,0.5): normal max error %.4f deg\n",
-                mirror_diff, worst_inward, worst_deg);
-    EXPECT_LT(mirror_diff, 1e-4) << "largest at " << mirror_at;
+    std::printf("mirrored spheres (-1,1,1), (1,-1,1), (-1,-1,-1): max diff vs unmirrored %.3g, beyond a 1/256-pixel "
+                "shift %.3g, min N.outward %.4f; non-uniform scale (3,1,0.5): normal max error %.4f deg\n",
+                mirror_diff, mirror_excess, worst_inward, worst_deg);
+    EXPECT_LT(mirror_excess, 1e-4) << "largest difference at " << mirror_at;
     EXPECT_GT(worst_inward, 0.0);
     EXPECT_LT(worst_deg, 0.01);
 }

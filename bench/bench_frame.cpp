@@ -69,6 +69,7 @@ int main(int argc, char** argv) {
             const char* label;
             int samples;
             PassSet passes;
+            bool rays = false;  // shadow rays instead of maps
         };
         PassSet sixteen;
         for (std::uint32_t p = 0; p <= static_cast<std::uint32_t>(Pass::AO); ++p) sixteen.insert(Pass(p));
@@ -79,16 +80,25 @@ int main(int argc, char** argv) {
             FrameTimings t;
             double wall, cpu;
         };
-        std::vector<Split> splits;
+        std::vector<Split> splits, warmups;  // warmups: each case's first render (programs compiled)
         std::vector<std::pair<std::string, std::string>> profiles;  // title, report
+        // Shadow rays too: on an H200 tests with rays took minutes where
+        // llvmpipe takes seconds (bench/gpu/results/nvidia_h200_2026-11-26).
         for (const Case& c : {Case{"64 samples, Combined read back", 64, PassSet{Pass::Combined}},
-                              Case{"1 sample, 16 passes (Combined..AO) read back", 1, sixteen}}) {
+                              Case{"1 sample, 16 passes (Combined..AO) read back", 1, sixteen},
+                              Case{"64 samples, shadow rays, Combined read back", 64, PassSet{Pass::Combined}, true}}) {
             RenderSettings s;
             s.width = width;
             s.height = height;
             s.samples = c.samples;
             s.passes = c.passes;
-            renderer.render(cam, s);  // warm-up
+            s.shadow_rays = c.rays;
+            const double warm_cpu0 = deferred::bench::process_cpu_ms();
+            const auto warm0 = std::chrono::steady_clock::now();
+            const FrameTimings warm = renderer.render(cam, s).timings;  // warm-up
+            const double warm_wall =
+                std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - warm0).count();
+            warmups.push_back({c.label, c.samples, warm, warm_wall, deferred::bench::process_cpu_ms() - warm_cpu0});
             std::vector<double> wall, readback, before;
             Split median_split{c.label, c.samples, {}, 0, 0};
             for (int i = 0; i < repeats; ++i) {
@@ -133,6 +143,12 @@ int main(int argc, char** argv) {
                         x.t.lighting_ms, x.t.passes_ms, x.t.forward_ms, x.t.readback_ms, x.t.total_ms,
                         x.t.shadow_layers_rendered, static_cast<unsigned long long>(x.t.camera_instances_drawn),
                         static_cast<unsigned long long>(x.t.shadow_instances_drawn));
+        std::printf("\neach case's first render (its programs compiled or loaded from the disk cache)\n\n");
+        std::printf("| frame | wall | CPU (all threads) | programs compiled | compile ms | programs loaded | load ms |\n");
+        std::printf("|---|---:|---:|---:|---:|---:|---:|\n");
+        for (const Split& x : warmups)
+            std::printf("| %s | %.1f | %.1f | %zu | %.1f | %zu | %.1f |\n", x.label, x.wall, x.cpu, x.t.programs_compiled,
+                        x.t.compile_ms, x.t.programs_loaded, x.t.load_ms);
         for (const auto& pr : profiles) std::fputs(pr.second.c_str(), stdout);
     } catch (const std::exception& e) {
         std::fprintf(stderr, "error: %s\n", e.what());

@@ -8,7 +8,7 @@
 # deferred_bench_outputs; shadows: deferred_bench_shadows). Writes four
 # files to $OUT (the device tool returns at most eight): summary.txt,
 # native_tests.log, robustness.log, benches.md. Each step has a time limit
-# (killed 5 s after it): 150 s for the tests (in parallel), 270 s for the
+# (killed 5 s after it): 150 s for the tests (in parallel), 290 s for the
 # benchmarks, inside one device call (600 s) and a session's 15 minutes of
 # device time. Exits non-zero when a step failed or ran out of time.
 # Parts of it, for a rerun inside what is left of the device time:
@@ -98,13 +98,13 @@ fi
 # timestamps cannot tell GPU work from the CPU issuing it.
 export DEFERRED_BENCH_PROFILE=1
 # shellcheck disable=SC2086
-[[ "$benches_to_run" == *" frame "* ]] && run bench_frame 70 "$benches" "$stage/bin/deferred_bench_frame" $size
+[[ "$benches_to_run" == *" frame "* ]] && run bench_frame 100 "$benches" "$stage/bin/deferred_bench_frame" $size
 # Brute force (every light at every pixel) up to 1000 lights, beside the culled rows up to 65 536.
 # shellcheck disable=SC2086
 [[ "$benches_to_run" == *" lights "* ]] && run bench_lights 40 "$benches" "$stage/bin/deferred_bench_lights" $size 1000
 # shellcheck disable=SC2086
 [[ "$benches_to_run" == *" outputs "* ]] && run bench_outputs 70 "$benches" "$stage/bin/deferred_bench_outputs" $size
 # shellcheck disable=SC2086
-[[ "$benches_to_run" == *" shadows "* ]] && run bench_shadows 90 "$benches" stdbuf -oL "$stage/bin/deferred_bench_shadows" $size
+[[ "$benches_to_run" == *" shadows "* ]] && run bench_shadows 80 "$benches" stdbuf -oL "$stage/bin/deferred_bench_shadows" $size
 cat "$summary"
 exit "$failed"

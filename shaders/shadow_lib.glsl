@@ -71,13 +71,18 @@ float shadow_ray(SurfaceParams s, vec3 P, vec3 L, float dist) {
     vec3 O = shadow_ray_origin(s, P, L);
     vec3 Ng = dot(s.Ng, L) < 0.0 ? -s.Ng : s.Ng;
     O += Ng * shadow_ray_epsilon(O);
-    if (dist < 0.0) return ray_transmittance(O, L, 1e30);
-    vec3 X = P + L * dist;
-    vec3 D = X - O;
-    float len = length(D);
-    float tmax = len - shadow_ray_epsilon(X);
-    if (!(tmax > 0.0)) return 1.0;
-    return ray_transmittance(O, D / len, tmax);
+    vec3 dir = L;
+    float tmax = 1e30;
+    if (dist >= 0.0) {
+        vec3 X = P + L * dist;
+        vec3 D = X - O;
+        float len = length(D);
+        tmax = len - shadow_ray_epsilon(X);
+        if (!(tmax > 0.0)) return 1.0;
+        dir = D / len;
+    }
+    /* One call site: the traversal is inlined wherever this is. */
+    return ray_transmittance(O, dir, tmax);
 }
 
 #ifdef HAS_WORLD_OCCLUSION

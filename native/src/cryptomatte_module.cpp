@@ -1,5 +1,6 @@
 #include "cryptomatte_module.h"
 
+#include "parallel.h"
 #include "shader_library.h"
 
 #include "../../shaders/shader_defines.h"
@@ -99,7 +100,6 @@ std::vector<CryptomatteImage> CryptomatteModule::finish() {
     check_gl("reading the cryptomatte slots");
     if (!slots) throw Error("mapping the cryptomatte slots failed");
     struct Entry { std::uint32_t id; float coverage; };
-    std::vector<Entry> entries(levels);
     for (std::size_t layer = 0; layer < layers; ++layer) {
         CryptomatteImage img;
         img.kind = kinds_[layer];
@@ -107,30 +107,36 @@ std::vector<CryptomatteImage> CryptomatteModule::finish() {
         img.height = height_;
         img.levels = levels_;
         img.pixels.assign(pixels * levels * 2, 0.0f);
-        for (std::size_t p = 0; p < pixels; ++p) {
-            const std::uint32_t* s = &slots[((p * layers) + layer) * levels * 2];
-            for (std::size_t k = 0; k < levels; ++k) {
-                float coverage;
-                std::memcpy(&coverage, &s[2 * k + 1], sizeof coverage);
-                entries[k] = {s[2 * k], coverage};
+        // Rows of pixels ranked in parallel (parallel.h), each its own entries.
+        const std::size_t chunk = 16384, chunks = (pixels + chunk - 1) / chunk;
+        parallel_for(chunks, [&](std::size_t c) {
+            Entry entries[kMaxLevels];
+            for (std::size_t p = c * chunk; p < std::min(pixels, (c + 1) * chunk); ++p) {
+                const std::uint32_t* s = &slots[((p * layers) + layer) * levels * 2];
+                for (std::size_t k = 0; k < levels; ++k) {
+                    float coverage;
+                    std::memcpy(&coverage, &s[2 * k + 1], sizeof coverage);
+                    entries[k] = {s[2 * k], coverage};
+                }
+                // Most coverage first (Cycles' cryptomatte_post sorts the same
+                // way), ties in slot order: an insertion sort of the few
+                // levels, which std::stable_sort matched but with a buffer
+                // allocated per pixel (malloc and free were a tenth of an
+                // H200's 1.3 s per 1080p frame).
+                for (std::size_t k = 1; k < levels; ++k) {
+                    const Entry e = entries[k];
+                    std::size_t j = k;
+                    for (; j > 0 && entries[j - 1].coverage < e.coverage; --j) entries[j] = entries[j - 1];
+                    entries[j] = e;
+                }
+                float* o = &img.pixels[p * levels * 2];
+                for (std::size_t k = 0; k < levels; ++k) {
+                    if (!(entries[k].coverage > 0.0f)) break;  // empty slots stay (0, 0)
+                    o[2 * k] = cryptomatte_hash_to_float(entries[k].id);
+                    o[2 * k + 1] = entries[k].coverage;
+                }
             }
-            // Most coverage first (Cycles' cryptomatte_post sorts the same way),
-            // ties in slot order: an insertion sort of the few levels, which
-            // std::stable_sort matched but with a buffer allocated per pixel
-            // (malloc and free were a tenth of an H200's 1.3 s per 1080p frame).
-            for (std::size_t k = 1; k < levels; ++k) {
-                const Entry e = entries[k];
-                std::size_t j = k;
-                for (; j > 0 && entries[j - 1].coverage < e.coverage; --j) entries[j] = entries[j - 1];
-                entries[j] = e;
-            }
-            float* o = &img.pixels[p * levels * 2];
-            for (std::size_t k = 0; k < levels; ++k) {
-                if (!(entries[k].coverage > 0.0f)) break;  // empty slots stay (0, 0)
-                o[2 * k] = cryptomatte_hash_to_float(entries[k].id);
-                o[2 * k + 1] = entries[k].coverage;
-            }
-        }
+        });
         out.push_back(std::move(img));
     }
     glUnmapNamedBuffer(staging_id);

@@ -1,5 +1,7 @@
 #include "film_module.h"
 
+#include "parallel.h"
+
 #include "../../shaders/shader_defines.h"
 
 namespace deferred {
@@ -114,17 +116,18 @@ std::vector<PassImage> FilmModule::read_passes() const {
     const auto* mapped = static_cast<const float*>(glMapNamedBufferRange(id, 0, GLsizeiptr(bytes), GL_MAP_READ_BIT));
     check_gl("mapping the readback buffer");
     if (!mapped) throw Error("mapping the readback buffer failed");
-    std::vector<PassImage> out;
-    for (std::size_t k = 0; k < reads.size(); ++k) {
-        PassImage img;
+    // The copies into new images in parallel: their cost is mostly the
+    // first-touch page faults of the new memory (parallel.h).
+    std::vector<PassImage> out(reads.size());
+    parallel_for(reads.size(), [&](std::size_t k) {
+        PassImage& img = out[k];
         img.pass = reads[k].first;
         img.width = layout_.width;
         img.height = layout_.height;
         img.channels = pass_info(img.pass).channels;
         const float* from = mapped + offsets[k] / sizeof(float);
         img.pixels.assign(from, from + pixels * std::size_t(img.channels));
-        out.push_back(std::move(img));
-    }
+    });
     glUnmapNamedBuffer(id);
     return out;
 }

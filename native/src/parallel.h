@@ -17,13 +17,16 @@
 namespace deferred {
 
 // work(i) for each i in [0, count), on up to hardware_concurrency threads
-// (this one included) taking the next index as they finish; rethrows the
-// first exception after all have ended. Where no thread can be started,
-// this one does it all.
+// and at most kMaxThreads (memory-bound copies gain little beyond; a
+// 128-core server would start a thread per chunk), this one included,
+// each taking the next index as it finishes; rethrows the first exception
+// after all have ended. Where no thread can be started, this one does it all.
+constexpr std::size_t kMaxThreads = 16;
+
 template <typename Work>
 void parallel_for(std::size_t count, const Work& work) {
-    const std::size_t threads =
-        std::min<std::size_t>(count, std::max(1u, std::thread::hardware_concurrency()));
+    const std::size_t threads = std::min<std::size_t>(
+        {count, std::size_t(std::max(1u, std::thread::hardware_concurrency())), kMaxThreads});
     std::atomic<std::size_t> next{0};
     std::mutex error_lock;
     std::exception_ptr error;

@@ -6,7 +6,8 @@
 // a render of the unchanged scene spends before its first sample; each of
 // those frames split into the engine's stages (GPU clock) beside the
 // process's CPU time, which says whether a frame waits on the GPU or on the
-// CPU issuing it. Prints markdown tables. With DEFERRED_BENCH_PROFILE=1 in
+// CPU issuing it, and each case's first render with its program compiles;
+// then 64 samples with shadow rays, the same tables. Prints markdown tables. With DEFERRED_BENCH_PROFILE=1 in
 // the environment, also a sampling CPU profile of each of those frames
 // (cpu_profile.h): where a CPU-bound frame's time goes.
 // Usage: deferred_bench_frame [width height] [repeats]
@@ -57,12 +58,6 @@ int main(int argc, char** argv) {
                         median(&FrameTimings::passes_ms), median(&FrameTimings::readback_ms),
                         median(&FrameTimings::total_ms), double(runs[0].gbuffer_bytes) / (1 << 20));
         }
-        std::printf("\nshowcase, 4 lights, shadow maps: wall time around render(), median of %d frames (ms)\n\n",
-                    repeats);
-        // "before the first sample": the frame's sync and programs (upload_ms) in a
-        // render of the unchanged scene on the same renderer (the GPU issue's
-        // warm-render target: under 50 ms on a GPU).
-        std::printf("| frame | wall | per sample | readback | before the first sample |\n|---|---:|---:|---:|---:|\n");
         renderer.clear_scene();
         const Camera cam = tools::build_showcase(renderer, 0);
         struct Case {
@@ -71,85 +66,92 @@ int main(int argc, char** argv) {
             PassSet passes;
             bool rays = false;  // shadow rays instead of maps
         };
+        struct Split {  // one frame of a case: its timings, wall and CPU time
+            const char* label;
+            FrameTimings t;
+            double wall = 0, cpu = 0;
+        };
+        const bool profile = deferred::bench::profile_requested();
+        // One block of tables per call, printed when its cases are done, so a
+        // later block that runs out of time loses only itself.
+        auto run_cases = [&](const char* title, const std::vector<Case>& cases) {
+            // "before the first sample": the frame's sync and programs
+            // (upload_ms) in a render of the unchanged scene on the same
+            // renderer (the GPU issue's warm-render target: under 50 ms on a GPU).
+            std::printf("\nshowcase, 4 lights, %s: wall time around render(), median of %d frames (ms)\n\n", title,
+                        repeats);
+            std::printf("| frame | wall | per sample | readback | before the first sample |\n|---|---:|---:|---:|---:|\n");
+            std::vector<Split> medians, warmups;  // warmups: each case's first render (programs compiled)
+            std::string profiles;
+            for (const Case& c : cases) {
+                RenderSettings s;
+                s.width = width;
+                s.height = height;
+                s.samples = c.samples;
+                s.passes = c.passes;
+                s.shadow_rays = c.rays;
+                auto timed = [&] {
+                    Split x{c.label, {}, 0, 0};
+                    const double cpu0 = deferred::bench::process_cpu_ms();
+                    const auto t0 = std::chrono::steady_clock::now();
+                    x.t = renderer.render(cam, s).timings;
+                    x.wall = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+                    x.cpu = deferred::bench::process_cpu_ms() - cpu0;
+                    return x;
+                };
+                warmups.push_back(timed());
+                std::vector<Split> runs;
+                for (int i = 0; i < repeats; ++i) runs.push_back(timed());
+                std::sort(runs.begin(), runs.end(), [](const Split& a, const Split& b) { return a.wall < b.wall; });
+                const Split& m = runs[runs.size() / 2];  // the median frame by wall time
+                std::vector<double> readback, before;
+                for (const Split& x : runs) {
+                    readback.push_back(x.t.readback_ms);
+                    before.push_back(x.t.upload_ms);
+                }
+                std::sort(readback.begin(), readback.end());
+                std::sort(before.begin(), before.end());
+                std::printf("| %s | %.1f | %.2f | %.1f | %.1f |\n", c.label, m.wall, m.wall / c.samples,
+                            readback[readback.size() / 2], before[before.size() / 2]);
+                medians.push_back(m);
+                if (profile) {
+                    deferred::bench::CpuProfile p;
+                    p.start();
+                    for (int i = 0; i < repeats; ++i) renderer.render(cam, s);
+                    p.stop();
+                    profiles += p.report_string(c.label);
+                }
+            }
+            // The median frames by stage (GPU clock: a stage's time also counts
+            // the GPU waiting for the CPU to issue it) beside the process's CPU time.
+            std::printf("\nthe median frames above by stage (ms; GPU timestamps) and the process's CPU time\n\n");
+            std::printf("| frame | wall | CPU (all threads) | before the first sample | shadows | geometry | culling | "
+                        "lighting | passes | forward | readback | total | shadow layers | instances drawn (camera, "
+                        "shadows) |\n");
+            std::printf("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|\n");
+            for (const Split& x : medians)
+                std::printf("| %s | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %zu | "
+                            "%llu, %llu |\n",
+                            x.label, x.wall, x.cpu, x.t.upload_ms, x.t.shadow_ms, x.t.geometry_ms, x.t.culling_ms,
+                            x.t.lighting_ms, x.t.passes_ms, x.t.forward_ms, x.t.readback_ms, x.t.total_ms,
+                            x.t.shadow_layers_rendered, static_cast<unsigned long long>(x.t.camera_instances_drawn),
+                            static_cast<unsigned long long>(x.t.shadow_instances_drawn));
+            std::printf("\neach case's first render (its programs compiled or loaded from the disk cache)\n\n");
+            std::printf("| frame | wall | CPU (all threads) | programs compiled | compile ms | programs loaded | load ms |\n");
+            std::printf("|---|---:|---:|---:|---:|---:|---:|\n");
+            for (const Split& x : warmups)
+                std::printf("| %s | %.1f | %.1f | %zu | %.1f | %zu | %.1f |\n", x.label, x.wall, x.cpu,
+                            x.t.programs_compiled, x.t.compile_ms, x.t.programs_loaded, x.t.load_ms);
+            std::fputs(profiles.c_str(), stdout);
+            std::fflush(stdout);
+        };
         PassSet sixteen;
         for (std::uint32_t p = 0; p <= static_cast<std::uint32_t>(Pass::AO); ++p) sixteen.insert(Pass(p));
-        const bool profile = std::getenv("DEFERRED_BENCH_PROFILE") != nullptr;
-        struct Split {
-            const char* label;
-            int samples;
-            FrameTimings t;
-            double wall, cpu;
-        };
-        std::vector<Split> splits, warmups;  // warmups: each case's first render (programs compiled)
-        std::vector<std::pair<std::string, std::string>> profiles;  // title, report
-        // Shadow rays too: on an H200 tests with rays took minutes where
-        // llvmpipe takes seconds (bench/gpu/results/nvidia_h200_2026-11-26).
-        for (const Case& c : {Case{"64 samples, Combined read back", 64, PassSet{Pass::Combined}},
-                              Case{"1 sample, 16 passes (Combined..AO) read back", 1, sixteen},
-                              Case{"64 samples, shadow rays, Combined read back", 64, PassSet{Pass::Combined}, true}}) {
-            RenderSettings s;
-            s.width = width;
-            s.height = height;
-            s.samples = c.samples;
-            s.passes = c.passes;
-            s.shadow_rays = c.rays;
-            const double warm_cpu0 = deferred::bench::process_cpu_ms();
-            const auto warm0 = std::chrono::steady_clock::now();
-            const FrameTimings warm = renderer.render(cam, s).timings;  // warm-up
-            const double warm_wall =
-                std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - warm0).count();
-            warmups.push_back({c.label, c.samples, warm, warm_wall, deferred::bench::process_cpu_ms() - warm_cpu0});
-            std::vector<double> wall, readback, before;
-            Split median_split{c.label, c.samples, {}, 0, 0};
-            for (int i = 0; i < repeats; ++i) {
-                const double cpu0 = deferred::bench::process_cpu_ms();
-                const auto t0 = std::chrono::steady_clock::now();
-                const FrameResult r = renderer.render(cam, s);
-                wall.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
-                readback.push_back(r.timings.readback_ms);
-                before.push_back(r.timings.upload_ms);
-                if (i == repeats / 2) median_split = {c.label, c.samples, r.timings, wall.back(), deferred::bench::process_cpu_ms() - cpu0};
-            }
-            std::sort(wall.begin(), wall.end());
-            std::sort(readback.begin(), readback.end());
-            std::sort(before.begin(), before.end());
-            const double w = wall[wall.size() / 2];
-            std::printf("| %s | %.1f | %.2f | %.1f | %.1f |\n", c.label, w, w / c.samples, readback[readback.size() / 2],
-                        before[before.size() / 2]);
-            splits.push_back(median_split);
-            if (profile) {
-                deferred::bench::CpuProfile p;
-                p.start();
-                for (int i = 0; i < repeats; ++i) renderer.render(cam, s);
-                p.stop();
-                char* buf = nullptr;
-                std::size_t len = 0;
-                std::FILE* mem = open_memstream(&buf, &len);
-                p.report(c.label, mem);
-                std::fclose(mem);
-                profiles.emplace_back(c.label, std::string(buf, len));
-                std::free(buf);
-            }
-        }
-        // The same frames by stage (GPU clock: a stage's time also counts the
-        // GPU waiting for the CPU to issue it) beside the process's CPU time.
-        std::printf("\nthe frames above by stage (ms, one frame; GPU timestamps) and the process's CPU time\n\n");
-        std::printf("| frame | wall | CPU (all threads) | before the first sample | shadows | geometry | culling | lighting | "
-                    "passes | forward | readback | total | shadow layers | instances drawn (camera, shadows) |\n");
-        std::printf("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|\n");
-        for (const Split& x : splits)
-            std::printf("| %s | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %zu | %llu, %llu |\n",
-                        x.label, x.wall, x.cpu, x.t.upload_ms, x.t.shadow_ms, x.t.geometry_ms, x.t.culling_ms,
-                        x.t.lighting_ms, x.t.passes_ms, x.t.forward_ms, x.t.readback_ms, x.t.total_ms,
-                        x.t.shadow_layers_rendered, static_cast<unsigned long long>(x.t.camera_instances_drawn),
-                        static_cast<unsigned long long>(x.t.shadow_instances_drawn));
-        std::printf("\neach case's first render (its programs compiled or loaded from the disk cache)\n\n");
-        std::printf("| frame | wall | CPU (all threads) | programs compiled | compile ms | programs loaded | load ms |\n");
-        std::printf("|---|---:|---:|---:|---:|---:|---:|\n");
-        for (const Split& x : warmups)
-            std::printf("| %s | %.1f | %.1f | %zu | %.1f | %zu | %.1f |\n", x.label, x.wall, x.cpu, x.t.programs_compiled,
-                        x.t.compile_ms, x.t.programs_loaded, x.t.load_ms);
-        for (const auto& pr : profiles) std::fputs(pr.second.c_str(), stdout);
+        run_cases("shadow maps", {Case{"64 samples, Combined read back", 64, PassSet{Pass::Combined}},
+                                  Case{"1 sample, 16 passes (Combined..AO) read back", 1, sixteen}});
+        // Shadow rays apart and last: on an H200 tests with rays took minutes
+        // where llvmpipe takes seconds (bench/gpu/results/nvidia_h200_2026-11-26).
+        run_cases("shadow rays", {Case{"64 samples, shadow rays, Combined read back", 64, PassSet{Pass::Combined}, true}});
     } catch (const std::exception& e) {
         std::fprintf(stderr, "error: %s\n", e.what());
         return 1;

@@ -123,7 +123,7 @@ int main(int argc, char** argv) {
             return m;
         };
         // DEFERRED_BENCH_PROFILE=1: where the CPU time of a frame goes (cpu_profile.h).
-        const bool profile = std::getenv("DEFERRED_BENCH_PROFILE") != nullptr;
+        const bool profile = deferred::bench::profile_requested();
         std::string profiles;
         auto profile_frames = [&](const RenderSettings& s, const std::string& title) {
             if (!profile) return;
@@ -131,13 +131,7 @@ int main(int argc, char** argv) {
             p.start();
             for (int i = 0; i < repeats; ++i) renderer.render(cam, s);
             p.stop();
-            char* buf = nullptr;
-            std::size_t len = 0;
-            std::FILE* mem = open_memstream(&buf, &len);
-            p.report(title.c_str(), mem);
-            std::fclose(mem);
-            profiles.append(buf, len);
-            std::free(buf);
+            profiles += p.report_string(title.c_str());
         };
         std::printf("%dx%d, %d film samples, showcase + AOV overlay + 4 grouped lights, no shadows, median of %d "
                     "frames\n\n",

@@ -1,21 +1,28 @@
 // A sampling CPU profiler for the benchmarks, for machines with no perf
 // (the lent GPU machine has neither perf nor gdb). While started, each
-// thread that exists at start() gets SIGPROF every millisecond of its own
-// CPU time (a POSIX timer on the thread's CPU clock, sent to that thread:
-// a process-wide ITIMER_PROF would interrupt whichever thread takes the
-// signal, often one asleep, since Mesa's and drivers' threads block
-// signals), and the handler stores the thread's call stack (backtrace())
-// in a fixed buffer; report() names the frames with dladdr. Threads that
-// block SIGPROF are not sampled. The benchmarks link with
-// ENABLE_EXPORTS (-rdynamic), so the engine's functions have names; a
-// driver's code shows as its library and nearest exported symbol.
+// thread that exists at start() has a POSIX timer on its own CPU clock,
+// set to 1 ms and sent to that thread as SIGPROF: a process-wide
+// ITIMER_PROF would interrupt whichever thread takes the signal, often one
+// asleep, since Mesa's and drivers' threads block signals. The kernel
+// checks these timers once per scheduler tick (4 ms at HZ=250), so a
+// signal stands for 1 + si_overrun expiries and is weighted so. The handler
+// stores the thread's call stack (backtrace()) in a fixed buffer; report()
+// names the frames with dladdr. Threads that block SIGPROF or start after
+// start() (parallel_for's, native/src/parallel.h) are not sampled: their
+// time shows in process_cpu_ms() but not in the shares. backtrace() is not
+// async-signal-safe (a sample inside the unwinder or the loader could
+// deadlock); the first call loads libgcc before any signal, and this is a
+// benchmark's tool, not the engine's.
 //
-// Two views, each the share of the CPU samples:
+// Two views, each the share of the CPU time sampled:
 //  - where the time is spent: the innermost frame (library: function);
 //  - which engine function spent it, itself or in the calls it made into
 //    the driver or libc: the innermost frame inside the benchmark binary.
 // A frame time that the engine's GPU timestamps show as stage time while
 // the GPU should be idle is CPU time spent issuing it: this says where.
+// The benchmarks link with ENABLE_EXPORTS (-rdynamic), so the engine's
+// functions have names; a driver's code shows as its library and nearest
+// exported symbol.
 //
 //   CpuProfile p; p.start(); ...; p.stop(); p.report("title", stdout);
 #pragma once
@@ -42,6 +49,12 @@
 
 namespace deferred::bench {
 
+// DEFERRED_BENCH_PROFILE set and not "0" or empty.
+inline bool profile_requested() {
+    const char* v = std::getenv("DEFERRED_BENCH_PROFILE");
+    return v && *v && std::strcmp(v, "0") != 0;
+}
+
 // User + system time of every thread of the process so far (ms).
 inline double process_cpu_ms() {
     rusage u{};
@@ -54,7 +67,7 @@ public:
     static constexpr int kDepth = 48;
     static constexpr std::size_t kMaxSamples = 1 << 16;
 
-    CpuProfile() : frames_(kMaxSamples * kDepth), depths_(kMaxSamples) {}
+    CpuProfile() : frames_(kMaxSamples * kDepth), depths_(kMaxSamples), weights_(kMaxSamples) {}
     ~CpuProfile() { stop(); }
 
     // Only one profile runs at a time (one SIGPROF handler per process).
@@ -65,10 +78,10 @@ public:
         count_.store(0);
         threads_ = 0;
         struct sigaction sa {};
-        sa.sa_handler = &CpuProfile::on_signal;
-        sa.sa_flags = SA_RESTART;
+        sa.sa_sigaction = &CpuProfile::on_signal;
+        sa.sa_flags = SA_RESTART | SA_SIGINFO;
         sigemptyset(&sa.sa_mask);
-        sigaction(SIGPROF, &sa, nullptr);
+        sigaction(SIGPROF, &sa, &previous_);
         // One timer per thread, on the thread's CPU clock (Linux's clock id
         // of thread tid: (~tid << 3) | CPUCLOCK_PERTHREAD | CPUCLOCK_SCHED).
         if (DIR* d = opendir("/proc/self/task")) {
@@ -98,14 +111,34 @@ public:
         if (!running_) return;
         for (timer_t t : timers_) timer_delete(t);
         timers_.clear();
-        signal(SIGPROF, SIG_IGN);
+        sigaction(SIGPROF, &previous_, nullptr);
+        active() = nullptr;
         running_ = false;
     }
 
+    // report() into a string (the benchmarks print their profiles after
+    // their tables).
+    std::string report_string(const char* title) const {
+        char* buf = nullptr;
+        std::size_t len = 0;
+        std::FILE* mem = open_memstream(&buf, &len);
+        if (!mem) return std::string("\nCPU profile: ") + title + ": no memory stream\n";
+        report(title, mem);
+        std::fclose(mem);
+        std::string s(buf, len);
+        std::free(buf);
+        return s;
+    }
+
+    // After stop().
     void report(const char* title, std::FILE* out, std::size_t rows = 20) const {
         const std::size_t n = std::min(count_.load(), kMaxSamples);
-        std::fprintf(out, "\nCPU profile: %s (%zu samples of 1 ms CPU time, over %zu threads)\n\n", title, n,
-                     threads_);
+        std::size_t total = 0;  // ms of CPU time the samples stand for
+        for (std::size_t s = 0; s < n; ++s) total += weights_[s];
+        std::fprintf(out,
+                     "\nCPU profile: %s (%zu samples standing for %zu ms of CPU time, over the %zu threads that "
+                     "existed at its start)\n\n",
+                     title, n, total, threads_);
         if (n == 0) return;
         Dl self_base;
         dladdr(reinterpret_cast<void*>(&CpuProfile::on_signal), &self_base.info);
@@ -122,9 +155,10 @@ public:
                     break;
                 }
             }
-            if (first >= d) continue;
+            if (first == 0 || first >= d) continue;  // the handler's frame not found
+            const std::size_t w = weights_[s];
             const std::string where = name(f[first]);
-            ++innermost[where];
+            innermost[where] += w;
             std::string caller = "(no engine frame)";
             for (int i = first; i < d; ++i) {
                 Dl dl;
@@ -133,12 +167,12 @@ public:
                     break;
                 }
             }
-            ++engine[caller];
-            ++pairs[caller + "  ->  " + library(f[first])];
+            engine[caller] += w;
+            pairs[caller + "  ->  " + library(f[first])] += w;
         }
-        print_top(out, "innermost frame (library: function)", innermost, n, rows);
-        print_top(out, "engine function (itself and what it called)", engine, n, rows);
-        print_top(out, "engine function -> library it was in", pairs, n, rows);
+        print_top(out, "innermost frame (library: function)", innermost, total, rows);
+        print_top(out, "engine function (itself and what it called)", engine, total, rows);
+        print_top(out, "engine function -> library it was in", pairs, total, rows);
     }
 
 private:
@@ -151,12 +185,15 @@ private:
         return p;
     }
 
-    static void on_signal(int) {
+    static void on_signal(int, siginfo_t* info, void*) {
         const int saved = errno;
         CpuProfile* p = active();
         if (p) {
             const std::size_t slot = p->count_.fetch_add(1);
-            if (slot < kMaxSamples) p->depths_[slot] = backtrace(&p->frames_[slot * kDepth], kDepth);
+            if (slot < kMaxSamples) {
+                p->weights_[slot] = 1 + std::size_t(std::max(info ? info->si_overrun : 0, 0));
+                p->depths_[slot] = backtrace(&p->frames_[slot * kDepth], kDepth);
+            }
         }
         errno = saved;
     }
@@ -199,7 +236,7 @@ private:
     }
 
     static void print_top(std::FILE* out, const char* what, const std::map<std::string, std::size_t>& m,
-                          std::size_t n, std::size_t rows) {
+                          std::size_t n, std::size_t rows) {  // n: the total weight
         std::vector<std::pair<std::size_t, std::string>> v;
         for (const auto& [k, c] : m) v.emplace_back(c, k);
         std::sort(v.rbegin(), v.rend());
@@ -211,6 +248,8 @@ private:
 
     std::vector<void*> frames_;
     std::vector<int> depths_;
+    std::vector<std::size_t> weights_;  // expiries a signal stands for
+    struct sigaction previous_ {};
     std::atomic<std::size_t> count_{0};
     std::vector<timer_t> timers_;
     std::size_t threads_ = 0;

@@ -17,7 +17,7 @@
 # "frame lights outputs shadows", all by default).
 #   bash scripts/gpu_check.sh            (on the device, as root)
 #   GPU_CHECK_FILTER='HardCases.*' GPU_CHECK_BENCHES=frame bash scripts/gpu_check.sh
-#   GPU_CHECK_LOCAL=1 GPU_CHECK_SIZE="320 180" OUT=/tmp/gpu bash scripts/gpu_check.sh   (a dry run here)
+#   GPU_CHECK_LOCAL=1 GPU_CHECK_SIZE="160 90" OUT=/tmp/gpu bash scripts/gpu_check.sh   (a dry run here)
 set -u
 cd "$(dirname "$0")/.." || exit 1
 out="${OUT:-/tmp/gpu_check}"
@@ -87,9 +87,10 @@ rc=$?
 [ "$rc" = 0 ] || failed=1
 echo "robustness_gl_tests: exit $rc; the tests took $((SECONDS - t0)) s" >> "$summary"
 grep -h -E '^\[  (PASSED|FAILED) ' "$out/native_tests.log" "$out/robustness.log" >> "$summary"
-# A test still running when its shard was stopped: the shard's last RUN line.
+# A test still running when its shard was stopped: the shard's last RUN line
+# (the robustness tests' log is not read: it is one process, stopped or not).
 for i in $(seq 0 $((shards - 1))); do
-  awk -v s="$i" '/^=== shard/ {n=$3} n==s && /^\[ RUN/ {r=$0} n==s && /^\[ *(OK|FAILED) / {r=""} END {if (r != "") print "unfinished in shard " s ": " r}' \
+  awk -v s="$i" '/^=== shard/ {n=$3} n==s && /^\[ RUN/ {r=$0} n==s && /^\[ *(OK|FAILED|SKIPPED) / {r=""} END {if (r != "") print "unfinished in shard " s ": " r}' \
     "$out/native_tests.log" >> "$summary"
 done
 fi
@@ -98,7 +99,7 @@ fi
 # timestamps cannot tell GPU work from the CPU issuing it.
 export DEFERRED_BENCH_PROFILE=1
 # shellcheck disable=SC2086
-[[ "$benches_to_run" == *" frame "* ]] && run bench_frame 100 "$benches" "$stage/bin/deferred_bench_frame" $size
+[[ "$benches_to_run" == *" frame "* ]] && run bench_frame 100 "$benches" stdbuf -oL "$stage/bin/deferred_bench_frame" $size
 # Brute force (every light at every pixel) up to 1000 lights, beside the culled rows up to 65 536.
 # shellcheck disable=SC2086
 [[ "$benches_to_run" == *" lights "* ]] && run bench_lights 40 "$benches" "$stage/bin/deferred_bench_lights" $size 1000

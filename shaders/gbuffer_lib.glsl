@@ -13,8 +13,9 @@
  *                              sigma, 0 = Lambert); 2 a Glossy BSDF, GGX; 3 a
  *                              Glossy BSDF, Beckmann
  *  params0       RGBA16F       metallic, roughness, specular, specular tint       always
- *  normal        RG16 unorm    world shading normal, octahedral (32 bits,        always
- *                              0.0037 deg max error), facing the viewer
+ *  normal        R32UI         world shading normal, octahedral, the two 16-bit  always
+ *                              unorms of packUnorm2x16 (0.0037 deg max error),
+ *                              facing the viewer
  *  params1       RGBA16F       sheen, sheen tint, clearcoat, clearcoat rough.     scene has sheen/clearcoat (GBUF_PARAMS1)
  *  ids           RG32UI        object pass index, material pass index             IndexOB/IndexMA (GBUF_IDS)
  *                (RGBA32UI)    ... z instance, w material id                      Cryptomatte (GBUF_INSTANCE_IDS)

@@ -98,10 +98,12 @@ std::vector<PassImage> FilmModule::read_passes() const {
     GLuint id = 0;
     glCreateBuffers(1, &id);
     Buffer pack(id);
-    // GL_CLIENT_STORAGE_BIT: system memory the CPU reads through its cache.
-    // Without it NVIDIA's driver placed the buffer where the copy out of the
-    // mapping ran at a fraction of memcpy speed: an H200 spent 70 % of a
-    // 16-pass frame's 204 ms readback in that copy (bench/cpu_profile.h).
+    // GL_CLIENT_STORAGE_BIT: a hint for system memory the CPU reads through
+    // its cache. On an H200 the copy out of this mapping was 70 % of a
+    // 16-pass frame's CPU time with the bit and without (readback 100-204
+    // ms on three machines, bench/gpu/results/nvidia_h200_2026-11-26): the
+    // copy's cost is the new images' first-touch page faults, hence the
+    // parallel copy below.
     glNamedBufferStorage(id, GLsizeiptr(bytes), nullptr, GL_MAP_READ_BIT | GL_CLIENT_STORAGE_BIT);
     check_gl("allocating the readback buffer");
     glBindBuffer(GL_PIXEL_PACK_BUFFER, id);
@@ -137,13 +139,14 @@ std::vector<std::vector<float>> FilmModule::read_light_groups() const {
     if (!group_light_) return out;
     const std::size_t layer = std::size_t(layout_.width) * std::size_t(layout_.height) * 4;
     const std::size_t bytes = layer * std::size_t(layout_.light_groups) * sizeof(float);
-    // As read_passes: through cached system memory, copied out in parallel
+    // As read_passes: one pack buffer, each group copied out in parallel
     // (an H200 spent 69 % of a 4-group frame's CPU time in the old path's
     // read into one vector and its copy into the groups').
     GLuint id = 0;
     glCreateBuffers(1, &id);
     Buffer pack(id);
     glNamedBufferStorage(id, GLsizeiptr(bytes), nullptr, GL_MAP_READ_BIT | GL_CLIENT_STORAGE_BIT);
+    check_gl("allocating the light groups' readback buffer");
     glBindBuffer(GL_PIXEL_PACK_BUFFER, id);
     glPixelStorei(GL_PACK_ALIGNMENT, 1);
     glGetTextureImage(group_light_.get(), 0, GL_RGBA, GL_FLOAT, GLsizei(bytes), nullptr);

@@ -135,10 +135,13 @@ void UniformRing::push(const void* block) {
     if (GLsync& f = fences_[current_]) {  // the GPU may still read this slot
         // Polled with short sleeps rather than one long wait: NVIDIA's driver
         // spins in a waiting glClientWaitSync (an H200 frame spent 93-96 % of
-        // its CPU time there, on clock_gettime), which takes a core from the
-        // other renders and exports a GPU server runs beside this one. The
-        // GPU is then 4 samples behind; 50 us is nothing beside a sample.
-        GLenum state = glClientWaitSync(f, GL_SYNC_FLUSH_COMMANDS_BIT, 0);
+        // its CPU time there, on clock_gettime; its __GL_YIELD setting is the
+        // driver's own switch), which takes a core from the other renders and
+        // exports a GPU server runs beside this one. The GPU then has 3
+        // samples queued; a sleep (50 us, more with timer slack) is nothing
+        // beside a sample. Flushed first: a zero-timeout wait need not flush.
+        glFlush();
+        GLenum state = glClientWaitSync(f, 0, 0);
         while (state == GL_TIMEOUT_EXPIRED) {
             std::this_thread::sleep_for(std::chrono::microseconds(50));
             state = glClientWaitSync(f, 0, 0);

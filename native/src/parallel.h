@@ -16,17 +16,18 @@
 
 namespace deferred {
 
-// work(i) for each i in [0, count), on up to hardware_concurrency threads
-// and at most kMaxThreads (memory-bound copies gain little beyond; a
-// 128-core server would start a thread per chunk), this one included,
-// each taking the next index as it finishes; rethrows the first exception
-// after all have ended. Where no thread can be started, this one does it all.
-constexpr std::size_t kMaxThreads = 16;
+// Memory-bound copies gain little beyond this many threads, and a 128-core
+// server would otherwise start a thread per Cryptomatte chunk.
+constexpr std::size_t kMaxParallelThreads = 16;
 
+// work(i) for each i in [0, count), on up to hardware_concurrency threads
+// (at most kMaxParallelThreads, this one included), each taking the next
+// index as it finishes; rethrows the first exception after all have ended.
+// Where no thread can be started, this one does it all.
 template <typename Work>
 void parallel_for(std::size_t count, const Work& work) {
     const std::size_t threads = std::min<std::size_t>(
-        {count, std::size_t(std::max(1u, std::thread::hardware_concurrency())), kMaxThreads});
+        {count, std::size_t(std::max(1u, std::thread::hardware_concurrency())), kMaxParallelThreads});
     std::atomic<std::size_t> next{0};
     std::mutex error_lock;
     std::exception_ptr error;
@@ -41,6 +42,7 @@ void parallel_for(std::size_t count, const Work& work) {
         }
     };
     std::vector<std::thread> pool;
+    pool.reserve(threads);  // emplace_back below cannot throw bad_alloc with threads running
     try {
         for (std::size_t t = 1; t < threads; ++t) pool.emplace_back(run);
     } catch (const std::system_error&) {

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstring>
 
 using namespace deferred;
@@ -76,6 +77,52 @@ TEST(Cryptomatte, CoverageSplitsAtEdgesAndIsRankedPerPixel) {
     // Beyond the planes (the outermost column sees background only).
     EXPECT_EQ(at(obj, 0, y, 0).second, 0.0f);
     EXPECT_EQ(at(obj, 0, y, 0).first, 0u);
+}
+
+TEST(Cryptomatte, EveryPixelOfAFrameLargerThanOneRankingChunkIsRanked) {
+    // The ranking runs in chunks of 16384 pixels on several threads
+    // (CryptomatteModule::finish): 257 x 80 = 20560 pixels span two. The
+    // two planes of the test above, seen whole: every pixel inside a plane
+    // (3 pixels from its edges) has its id first with coverage 1, every
+    // pixel beyond both has nothing, and every pixel's levels are ranked.
+    Renderer r;
+    set_world_color(r, 0, 0, 0);
+    tools::MeshArrays plane = tools::make_plane(1.0f, 1);
+    const std::uint32_t mesh = r.add_mesh(plane.view());
+    const std::uint32_t mat = r.add_material(Material{});
+    const Mat4d left = tools::translation(-1.0, 0, 0), right = tools::translation(1.0, 0, 0);
+    const std::uint32_t ids_a[2] = {11, 111}, ids_b[2] = {22, 222};
+    r.add_instances(mesh, left.data(), 1, nullptr, {mat}, true, nullptr, nullptr, ids_a);
+    r.add_instances(mesh, right.data(), 1, nullptr, {mat}, true, nullptr, nullptr, ids_b);
+    RenderSettings s;
+    s.width = 257;
+    s.height = 80;  // 1.37 m of the planes' 2 m: every row crosses both
+    s.samples = 4;
+    s.cryptomatte = {CryptomatteKind::Object};
+    s.cryptomatte_levels = 2;
+    const FrameResult f = r.render(top_down_ortho(5.0, 4.4f), s);
+    ASSERT_EQ(f.cryptomatte.size(), 1u);
+    const CryptomatteImage& obj = f.cryptomatte[0];
+    const float id_a = cryptomatte_hash_to_float(11), id_b = cryptomatte_hash_to_float(22);
+    const double pixel_m = 4.4 / s.width, margin = 3 * pixel_m;
+    int inside = 0, outside = 0, unranked = 0, wrong = 0;
+    for (int y = 0; y < s.height; ++y)
+        for (int x = 0; x < s.width; ++x) {
+            const float* p = &obj.pixels[(std::size_t(y) * std::size_t(s.width) + std::size_t(x)) * 4];
+            if (p[1] < p[3]) ++unranked;
+            const double cx = -2.2 + (x + 0.5) * pixel_m;  // the pixel centre's x in metres
+            if (std::abs(cx) > 2.0 + margin) {
+                ++outside;
+                if (p[0] != 0.0f || p[1] != 0.0f) ++wrong;
+            } else if (std::abs(cx) < 2.0 - margin && std::abs(cx) > margin) {
+                ++inside;
+                if (bits(p[0]) != bits(cx < 0 ? id_a : id_b) || std::abs(p[1] - 1.0f) > 1e-5f || p[3] != 0.0f) ++wrong;
+            }
+        }
+    EXPECT_GT(inside, 15000);
+    EXPECT_GT(outside, 500);
+    EXPECT_EQ(unranked, 0);
+    EXPECT_EQ(wrong, 0);
 }
 
 TEST(Cryptomatte, NothingAskedNothingMade) {

@@ -149,7 +149,12 @@ std::vector<std::vector<float>> FilmModule::read_light_groups() const {
     check_gl("allocating the light groups' readback buffer");
     glBindBuffer(GL_PIXEL_PACK_BUFFER, id);
     glPixelStorei(GL_PACK_ALIGNMENT, 1);
-    glGetTextureImage(group_light_.get(), 0, GL_RGBA, GL_FLOAT, GLsizei(bytes), nullptr);
+    // One layer per call: the call's size is a GLsizei, which all groups
+    // together outgrow at 4K from 17 groups (2 GiB).
+    const std::size_t layer_bytes = layer * sizeof(float);
+    for (int g = 0; g < layout_.light_groups; ++g)
+        glGetTextureSubImage(group_light_.get(), 0, 0, 0, g, layout_.width, layout_.height, 1, GL_RGBA, GL_FLOAT,
+                             GLsizei(layer_bytes), reinterpret_cast<void*>(layer_bytes * std::size_t(g)));
     glBindBuffer(GL_PIXEL_PACK_BUFFER, 0);
     const auto* mapped = static_cast<const float*>(glMapNamedBufferRange(id, 0, GLsizeiptr(bytes), GL_MAP_READ_BIT));
     check_gl("reading the light groups");

@@ -86,19 +86,13 @@ std::vector<CryptomatteImage> CryptomatteModule::finish() {
     if (!active()) return out;
     const std::size_t pixels = std::size_t(width_) * std::size_t(height_);
     const std::size_t layers = kinds_.size(), levels = std::size_t(levels_);
-    // Copied on the GPU into a buffer the CPU maps (GL_CLIENT_STORAGE_BIT, as
-    // FilmModule::read_passes) and ranked straight from the mapping, without
-    // a copy into a vector first.
+    // Copied on the GPU into a readback buffer and ranked straight from its
+    // mapping, without a copy into a vector first.
     const std::size_t slot_bytes = pixels * layers * levels * 2 * sizeof(std::uint32_t);
-    GLuint staging_id = 0;
-    glCreateBuffers(1, &staging_id);
-    Buffer staging(staging_id);
-    glNamedBufferStorage(staging_id, GLsizeiptr(slot_bytes), nullptr, GL_MAP_READ_BIT | GL_CLIENT_STORAGE_BIT);
-    glCopyNamedBufferSubData(slots_.get(), staging_id, 0, 0, GLsizeiptr(slot_bytes));
-    const auto* slots =
-        static_cast<const std::uint32_t*>(glMapNamedBufferRange(staging_id, 0, GLsizeiptr(slot_bytes), GL_MAP_READ_BIT));
+    const Buffer staging = make_readback_buffer(slot_bytes, "cryptomatte slots");
+    glCopyNamedBufferSubData(slots_.get(), staging.get(), 0, 0, GLsizeiptr(slot_bytes));
     check_gl("reading the cryptomatte slots");
-    if (!slots) throw Error("mapping the cryptomatte slots failed");
+    const auto* slots = static_cast<const std::uint32_t*>(map_for_reading(staging, slot_bytes, "cryptomatte slots"));
     struct Entry { std::uint32_t id; float coverage; };
     for (std::size_t layer = 0; layer < layers; ++layer) {
         CryptomatteImage img;
@@ -140,7 +134,7 @@ std::vector<CryptomatteImage> CryptomatteModule::finish() {
         });
         out.push_back(std::move(img));
     }
-    glUnmapNamedBuffer(staging_id);
+    glUnmapNamedBuffer(staging.get());
     release();
     return out;
 }

@@ -95,17 +95,13 @@ std::vector<PassImage> FilmModule::read_passes() const {
         offsets.push_back(bytes);
         bytes += pixels * std::size_t(pass_info(p).channels) * sizeof(float);
     }
-    GLuint id = 0;
-    glCreateBuffers(1, &id);
-    Buffer pack(id);
-    // GL_CLIENT_STORAGE_BIT: a hint for system memory the CPU reads through
-    // its cache. On an H200 the copy out of this mapping was 70 % of a
-    // 16-pass frame's CPU time with the bit and without (readback 100-204
-    // ms on three machines, bench/gpu/results/nvidia_h200_2026-11-26): the
+    // On an H200 the copy out of this mapping was 70 % of a 16-pass frame's
+    // CPU time with GL_CLIENT_STORAGE_BIT and without (readback 100-204 ms
+    // on three machines, bench/gpu/results/nvidia_h200_2026-11-26): the
     // copy's cost is the new images' first-touch page faults, hence the
     // parallel copy below.
-    glNamedBufferStorage(id, GLsizeiptr(bytes), nullptr, GL_MAP_READ_BIT | GL_CLIENT_STORAGE_BIT);
-    check_gl("allocating the readback buffer");
+    const Buffer pack = make_readback_buffer(bytes, "passes");
+    const GLuint id = pack.get();
     glBindBuffer(GL_PIXEL_PACK_BUFFER, id);
     glPixelStorei(GL_PACK_ALIGNMENT, 1);
     for (std::size_t k = 0; k < reads.size(); ++k) {
@@ -115,9 +111,7 @@ std::vector<PassImage> FilmModule::read_passes() const {
                           reinterpret_cast<void*>(offsets[k]));
     }
     glBindBuffer(GL_PIXEL_PACK_BUFFER, 0);
-    const auto* mapped = static_cast<const float*>(glMapNamedBufferRange(id, 0, GLsizeiptr(bytes), GL_MAP_READ_BIT));
-    check_gl("mapping the readback buffer");
-    if (!mapped) throw Error("mapping the readback buffer failed");
+    const auto* mapped = static_cast<const float*>(map_for_reading(pack, bytes, "passes"));
     // The copies into new images in parallel: their cost is mostly the
     // first-touch page faults of the new memory (parallel.h).
     std::vector<PassImage> out(reads.size());
@@ -142,11 +136,8 @@ std::vector<std::vector<float>> FilmModule::read_light_groups() const {
     // As read_passes: one pack buffer, each group copied out in parallel
     // (an H200 spent 69 % of a 4-group frame's CPU time in the old path's
     // read into one vector and its copy into the groups').
-    GLuint id = 0;
-    glCreateBuffers(1, &id);
-    Buffer pack(id);
-    glNamedBufferStorage(id, GLsizeiptr(bytes), nullptr, GL_MAP_READ_BIT | GL_CLIENT_STORAGE_BIT);
-    check_gl("allocating the light groups' readback buffer");
+    const Buffer pack = make_readback_buffer(bytes, "light groups");
+    const GLuint id = pack.get();
     glBindBuffer(GL_PIXEL_PACK_BUFFER, id);
     glPixelStorei(GL_PACK_ALIGNMENT, 1);
     // One layer per call: the call's size is a GLsizei, which all groups
@@ -156,9 +147,8 @@ std::vector<std::vector<float>> FilmModule::read_light_groups() const {
         glGetTextureSubImage(group_light_.get(), 0, 0, 0, g, layout_.width, layout_.height, 1, GL_RGBA, GL_FLOAT,
                              GLsizei(layer_bytes), reinterpret_cast<void*>(layer_bytes * std::size_t(g)));
     glBindBuffer(GL_PIXEL_PACK_BUFFER, 0);
-    const auto* mapped = static_cast<const float*>(glMapNamedBufferRange(id, 0, GLsizeiptr(bytes), GL_MAP_READ_BIT));
     check_gl("reading the light groups");
-    if (!mapped) throw Error("mapping the light groups failed");
+    const auto* mapped = static_cast<const float*>(map_for_reading(pack, bytes, "light groups"));
     out.resize(std::size_t(layout_.light_groups));
     parallel_for(out.size(), [&](std::size_t g) { out[g].assign(mapped + layer * g, mapped + layer * (g + 1)); });
     glUnmapNamedBuffer(id);

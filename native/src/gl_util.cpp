@@ -53,6 +53,23 @@ Buffer make_storage_buffer(const void* data, std::size_t bytes, const char* what
     return buffer;
 }
 
+Buffer make_readback_buffer(std::size_t bytes, const char* what) {
+    GLuint id = 0;
+    glCreateBuffers(1, &id);
+    Buffer buffer(id);
+    glNamedBufferStorage(id, static_cast<GLsizeiptr>(std::max<std::size_t>(bytes, 16)), nullptr,
+                         GL_MAP_READ_BIT | GL_CLIENT_STORAGE_BIT);
+    check_gl((std::string("allocating the readback buffer '") + what + "'").c_str());
+    return buffer;
+}
+
+const void* map_for_reading(const Buffer& buffer, std::size_t bytes, const char* what) {
+    const void* mapped = glMapNamedBufferRange(buffer.get(), 0, static_cast<GLsizeiptr>(bytes), GL_MAP_READ_BIT);
+    check_gl((std::string("mapping the readback buffer '") + what + "'").c_str());
+    if (!mapped) throw Error(std::string("mapping the readback buffer '") + what + "' failed");
+    return mapped;
+}
+
 Texture make_texture_2d(GLenum internal_format, int width, int height, const char* what) {
     GLuint id = 0;
     glCreateTextures(GL_TEXTURE_2D, 1, &id);

@@ -50,6 +50,11 @@ using VertexArray = GLHandle<delete_vertex_array>;
 
 // Immutable storage buffer holding `bytes` (at least 16 so empty arrays bind).
 Buffer make_storage_buffer(const void* data, std::size_t bytes, const char* what);
+// A buffer for results the CPU reads back (a pixel pack buffer, or the target
+// of a buffer copy), GL_CLIENT_STORAGE_BIT: a hint for system memory the CPU
+// reads through its cache. map_for_reading() maps it whole, or throws.
+Buffer make_readback_buffer(std::size_t bytes, const char* what);
+const void* map_for_reading(const Buffer& buffer, std::size_t bytes, const char* what);
 Texture make_texture_2d(GLenum internal_format, int width, int height, const char* what);
 
 // Bytes per texel of the internal formats this library allocates.

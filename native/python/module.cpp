@@ -6,4 +6,5 @@ PYBIND11_MODULE(deferred_native, m) {
     m.doc() = "Native headless deferred renderer (EGL + OpenGL 4.5) for the Blender add-on";
     deferred::python::declare_scene(m);
     deferred::python::declare_renderer(m);
+    deferred::python::declare_geometry(m);
 }

@@ -155,24 +155,24 @@ def mesh_arrays(mesh, name=None, split_normals=None, attribute_keys=(), warn=Non
         gather = attribute_export.CornerGather(tri_verts, tri_loops, poly_index)
     corner_uvs = None
     if uv_layer is not None:
-        nloops = len(mesh.loops)
-        loop_uvs = _get(uv_layer.data, "uv", nloops, np.float32, 2)
-        corner_uvs = gather(loop_uvs, "CORNER")
-        if not np.isfinite(corner_uvs).all():
-            corner_uvs = np.nan_to_num(corner_uvs, nan=0.0, posinf=0.0, neginf=0.0)
+        corner_uvs = gather.uv_map(uv_layer, len(mesh.loops))
 
+    corner_normals = np.ascontiguousarray(corner_normals, dtype=np.float32)
+    positions = np.ascontiguousarray(positions)
+    tri_verts = np.ascontiguousarray(tri_verts)
     corner_attributes = []
     if attribute_keys:
-        corner_attributes = attribute_export.corner_attributes(mesh, attribute_keys, gather,
-                                                               warn or (lambda message: None))
+        corner_attributes = attribute_export.corner_attributes(
+            mesh, attribute_keys, gather, warn or (lambda message: None),
+            attribute_export.TangentInputs(positions, tri_verts, corner_normals))
     texspace_location = tuple(getattr(mesh, "texspace_location", (0.0, 0.0, 0.0)))
     texspace_size = tuple(getattr(mesh, "texspace_size", (1.0, 1.0, 1.0)))
 
     return MeshArrays(
         name,
-        np.ascontiguousarray(positions),
-        np.ascontiguousarray(tri_verts),
-        np.ascontiguousarray(corner_normals, dtype=np.float32),
+        positions,
+        tri_verts,
+        corner_normals,
         corner_uvs,
         material_indices,
         corner_attributes,
@@ -190,9 +190,7 @@ def object_mesh_arrays(ob, attribute_keys=(), warn=None):
     """
     data = ob.data
     is_mesh = ob.type == "MESH" and data is not None and hasattr(data, "loop_triangles")
-    # Tangents are computed on the mesh (calc_tangents): only on a temporary copy.
-    needs_copy = any(k.startswith("tangent:") for k in attribute_keys)
-    if is_mesh and not needs_copy and not (data.use_auto_smooth or data.has_custom_normals):
+    if is_mesh and not (data.use_auto_smooth or data.has_custom_normals):
         return mesh_arrays(data, name=data.name, split_normals=False, attribute_keys=attribute_keys, warn=warn)
 
     try:

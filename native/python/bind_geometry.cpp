@@ -1,0 +1,42 @@
+// Mesh computations the add-on's export hands to native code: MikkTSpace
+// tangents (deferred/tangent_space.h), where Blender's Mesh.calc_tangents
+// needs a temporary mesh copy and refuses n-gons.
+#include "bindings.h"
+
+#include <deferred/tangent_space.h>
+
+#include <stdexcept>
+
+namespace deferred::python {
+
+void declare_geometry(py::module_& m) {
+    m.def(
+        "compute_tangents",
+        [](const py::handle& positions, const py::handle& indices, const py::handle& corner_normals,
+           const py::handle& corner_uvs) {
+            py::ssize_t vertex_count = 0, triangle_count = 0, normal_count = 0, uv_count = 0;
+            const float* p = borrow<float>(positions, "positions", {-1, 3}, &vertex_count);
+            const std::uint32_t* idx = borrow<std::uint32_t>(indices, "indices", {-1, 3}, &triangle_count);
+            const float* n = borrow<float>(corner_normals, "corner_normals", {-1, 3}, &normal_count);
+            const float* uv = borrow<float>(corner_uvs, "corner_uvs", {-1, 2}, &uv_count);
+            if (normal_count != 3 * triangle_count || uv_count != 3 * triangle_count)
+                throw py::value_error("compute_tangents: corner_normals and corner_uvs need 3 rows per triangle (" +
+                                      std::to_string(3 * triangle_count) + "), got " + std::to_string(normal_count) +
+                                      " and " + std::to_string(uv_count));
+            py::array_t<float> out({py::ssize_t(3 * triangle_count), py::ssize_t(4)});
+            float* o = out.mutable_data();
+            try {
+                py::gil_scoped_release release;  // the arrays stay referenced by the caller's frame
+                compute_tangents(p, std::size_t(vertex_count), idx, std::size_t(triangle_count), n, uv, o);
+            } catch (const std::invalid_argument& ex) {
+                throw py::value_error(ex.what());
+            }
+            return out;
+        },
+        py::arg("positions"), py::arg("indices"), py::arg("corner_normals"), py::arg("corner_uvs"),
+        "MikkTSpace tangents over triangles, as Cycles computes them for a UV map: float32 (V,3) "
+        "positions, uint32 (T,3) indices, float32 (3T,3) unit corner normals and (3T,2) corner UVs -> "
+        "float32 (3T,4): tangent xyz and bitangent sign per corner (Blender's Mesh.calc_tangents layout).");
+}
+
+}  // namespace deferred::python

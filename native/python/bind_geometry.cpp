@@ -13,7 +13,7 @@ void declare_geometry(py::module_& m) {
     m.def(
         "compute_tangents",
         [](const py::handle& positions, const py::handle& indices, const py::handle& corner_normals,
-           const py::handle& corner_uvs) {
+           const py::handle& corner_uvs, const py::handle& flat_triangles) {
             py::ssize_t vertex_count = 0, triangle_count = 0, normal_count = 0, uv_count = 0;
             const float* p = borrow<float>(positions, "positions", {-1, 3}, &vertex_count);
             const std::uint32_t* idx = borrow<std::uint32_t>(indices, "indices", {-1, 3}, &triangle_count);
@@ -23,19 +23,29 @@ void declare_geometry(py::module_& m) {
                 throw py::value_error("compute_tangents: corner_normals and corner_uvs need 3 rows per triangle (" +
                                       std::to_string(3 * triangle_count) + "), got " + std::to_string(normal_count) +
                                       " and " + std::to_string(uv_count));
+            const bool* flat = nullptr;
+            if (!flat_triangles.is_none()) {
+                py::ssize_t flat_count = 0;
+                flat = borrow<bool>(flat_triangles, "flat_triangles", {-1}, &flat_count);
+                if (flat_count != triangle_count)
+                    throw py::value_error("compute_tangents: flat_triangles needs one entry per triangle (" +
+                                          std::to_string(triangle_count) + "), got " + std::to_string(flat_count));
+            }
             py::array_t<float> out({py::ssize_t(3 * triangle_count), py::ssize_t(4)});
             float* o = out.mutable_data();
             try {
                 py::gil_scoped_release release;  // the arrays stay referenced by the caller's frame
-                compute_tangents(p, std::size_t(vertex_count), idx, std::size_t(triangle_count), n, uv, o);
+                compute_tangents(p, std::size_t(vertex_count), idx, std::size_t(triangle_count), n, uv, flat, o);
             } catch (const std::invalid_argument& ex) {
                 throw py::value_error(ex.what());
             }
             return out;
         },
         py::arg("positions"), py::arg("indices"), py::arg("corner_normals"), py::arg("corner_uvs"),
+        py::arg("flat_triangles") = py::none(),
         "MikkTSpace tangents over triangles, as Cycles computes them for a UV map: float32 (V,3) "
-        "positions, uint32 (T,3) indices, float32 (3T,3) unit corner normals and (3T,2) corner UVs -> "
+        "positions, uint32 (T,3) indices, float32 (3T,3) unit corner normals and (3T,2) corner UVs, optional bool (T,) "
+        "flat-shaded triangles (MikkTSpace reads their own normal, as in Cycles) -> "
         "float32 (3T,4): tangent xyz and bitangent sign per corner (Blender's Mesh.calc_tangents layout).");
 }
 

@@ -1,32 +1,34 @@
 // MikkTSpace over triangles (see deferred/tangent_space.h), written from the
-// algorithm of Mikkelsen's reference implementation (mikktspace.c, zlib
-// licence; the steps below carry its function names) so that a corner gets
-// the tangent Blender and Cycles compute, up to float summation order:
+// algorithm Blender 3.4 runs: its C++ port of Mikkelsen's reference
+// implementation (intern/mikktspace/mikktspace.hh, Apache-2.0), which both
+// Mesh.calc_tangents and Cycles call. The steps carry the port's names:
 //
-//  1. Weld: corners equal in position, normal and UV are one vertex
-//     (GenerateSharedVerticesIndexList).
-//  2. A triangle with two corners at one position is degenerate
-//     (DegenPrologue); the others get their tangent and bitangent from the
-//     UV gradient (InitTriInfo, the paper's eq. 18/19), normalised and
-//     flipped on UV-mirrored triangles, and "group with any" when their UV
-//     area or gradient is zero.
-//  3. Neighbours across each edge of welded vertices, wound oppositely
-//     (BuildNeighborsFast: edges ordered by (min, max, edge number)).
-//  4. Groups: around each welded vertex, the triangles reachable over shared
-//     edges with the same UV orientation (Build4RuleGroups / AssignRecur; a
-//     "group with any" triangle takes the orientation of the first group
-//     that reaches it, the algorithm's one order dependency).
-//  5. Within a group, subgroups of compatible tangents (the default angular
-//     threshold of 180 degrees separates only exactly opposite ones), and a
-//     subgroup's tangent is the corner-angle-weighted sum of its triangles'
-//     tangents projected into the normal's plane (GenerateTSpaces,
-//     EvalTspace).
-//  6. A degenerate triangle's corner copies the tangent of the first good
-//     corner at its welded vertex, or keeps (1, 0, 0) with sign -1
-//     (DegenEpilogue, genTangSpace's initial value).
+//  1. Weld (generateSharedVerticesIndexList): corners equal in position,
+//     normal and UV are one vertex. The port finds them by a hash of the
+//     values' bits and then compares them with ==, so -0 and +0 are
+//     different vertices (the normals Cycles computes for a flat triangle
+//     carry either sign of zero, which splits an n-gon's tangents) and NaN
+//     never welds.
+//  2. A triangle with two corners at one position (==) is degenerate
+//     (degenPrologue); the others get their tangent from the UV gradient
+//     (initTriangle, the paper's eq. 18), flipped on UV-mirrored triangles;
+//     one with no UV area or a zero gradient "groups with any".
+//  3. Neighbours across each edge of welded vertices, wound oppositely, the
+//     first later unpaired edge in (triangle, edge) order (buildNeighbors).
+//  4. Groups (build4RuleGroups / assignRecur): around each welded vertex,
+//     the triangles reachable over shared edges with the same UV
+//     orientation. Only good triangles seed a group; a "group with any"
+//     triangle takes the orientation of the first group that reaches it (the
+//     algorithm's one order dependency).
+//  5. A group's tangent (accumulateTSpaces): the sum, in triangle order, of
+//     its good triangles' tangents projected into the corner normal's plane
+//     and weighted by the corner's angle in that plane (fast_acosf),
+//     normalised. A corner no group reached keeps (1, 0, 0) and sign -1.
+//  6. A degenerate triangle's corner copies the first good corner at its
+//     welded vertex (degenEpilogue).
 //
-// The corner welding and steps 2, 3 and 5 run on parallel_for's threads;
-// the rest, the grouping among it, on one.
+// Welding, steps 2, 3 and 5 run on parallel_for's threads; the grouping,
+// the port's order dependency, on one.
 #include <deferred/tangent_space.h>
 
 #include "parallel.h"
@@ -49,16 +51,27 @@ struct V3 {
 
 V3 operator-(V3 a, V3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
 V3 operator+(V3 a, V3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
-V3 scale(float s, V3 v) { return {s * v.x, s * v.y, s * v.z}; }
+V3 operator*(V3 v, float s) { return {v.x * s, v.y * s, v.z * s}; }
+bool operator==(V3 a, V3 b) { return a.x == b.x && a.y == b.y && a.z == b.z; }
 float dot(V3 a, V3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-float length(V3 v) { return std::sqrt(v.x * v.x + v.y * v.y + v.z * v.z); }
 bool not_zero(float x) { return std::fabs(x) > FLT_MIN; }
-bool not_zero(V3 v) { return not_zero(v.x) || not_zero(v.y) || not_zero(v.z); }
-V3 normalize(V3 v) { return scale(1.0f / length(v), v); }
-// v without its component along the unit n, normalised unless zero.
-V3 project(V3 v, V3 n) {
-    const V3 p = v - scale(dot(n, v), n);
-    return not_zero(p) ? normalize(p) : p;
+// The port's float3::normalize: a zero vector stays zero.
+V3 normalize(V3 v) {
+    const float len = std::sqrt(v.x * v.x + v.y * v.y + v.z * v.z);
+    return len != 0.0f ? v * (1.0f / len) : v;
+}
+// v without its component along the unit n, normalised (the port's project).
+V3 project(V3 n, V3 v) { return normalize(v - n * dot(n, v)); }
+
+// The port's corner-angle weight: Cycles' fast_acosf (util/math_fast.h), a
+// polynomial in sqrt(1 - |x|) with at most 4.5e-5 rad of error; acos itself
+// would move a tangent by about that much.
+float fast_acosf(float x) {
+    const float f = std::fabs(x);
+    const float m = (f < 1.0f) ? 1.0f - (1.0f - f) : 1.0f;  // clamp and crush denormals
+    const float a =
+        std::sqrt(1.0f - m) * (1.5707963267f + m * (-0.213300989f + m * (0.077980478f + m * -0.02164095f)));
+    return x < 0 ? 3.1415926535897932f - a : a;
 }
 
 // Work items per parallel_for index: big enough that the atomic counter is noise.
@@ -72,44 +85,40 @@ void parallel_chunks(std::size_t count, const Work& work) {
     });
 }
 
-// Bits of a float with -0 read as +0, so that equal values (MikkTSpace
-// compares with ==) have equal keys.
-std::uint32_t key_bits(float f) {
-    if (f == 0.0f) f = 0.0f;
+std::uint32_t bits(float f) {
     std::uint32_t u;
     std::memcpy(&u, &f, sizeof u);
     return u;
 }
 
-enum : std::uint8_t {
-    kOrientPreserving = 1,
-    kGroupWithAny = 2,
-    kDegenerate = 4,
-};
+constexpr std::uint32_t kNone = UINT32_MAX;
 
-struct TriangleInfo {
-    V3 os{0, 0, 0}, ot{0, 0, 0};  // unit tangent and bitangent from the UV gradient (or zero)
-    std::int32_t neighbour[3] = {-1, -1, -1};  // across edge (corner i, corner i+1)
-    std::int32_t group[3] = {-1, -1, -1};      // the group of corner i
-    std::uint8_t flags = kGroupWithAny;
+struct Triangle {
+    V3 tangent{0, 0, 0};  // unit dP/du (zero where the gradient is)
+    std::uint32_t neighbour[3] = {kNone, kNone, kNone};  // across edge (corner i, corner i + 1)
+    std::uint32_t group[3] = {kNone, kNone, kNone};      // the group of corner i
+    bool degenerate = false;
+    bool group_with_any = true;
+    bool orient_preserving = false;
 };
 
 struct Group {
     std::uint32_t vertex;  // welded vertex (a representative corner)
     bool orient_preserving;
-    std::uint32_t first, count;  // triangles: members[first .. first + count)
+    std::uint32_t first, count;  // its triangles: members[first .. first + count)
 };
 
 class TangentSolver {
 public:
     TangentSolver(const float* positions, std::size_t vertex_count, const std::uint32_t* indices,
-                  std::size_t triangle_count, const float* normals, const float* uvs)
+                  std::size_t triangle_count, const float* normals, const float* uvs, const bool* flat)
         : positions_(positions), vertex_count_(vertex_count), indices_(indices), tri_count_(triangle_count),
-          normals_(normals), uvs_(uvs), corner_count_(3 * triangle_count) {}
+          normals_(normals), uvs_(uvs), corner_count_(3 * triangle_count) {
+        if (flat && std::any_of(flat, flat + triangle_count, [](bool f) { return f; })) use_flat_normals(flat);
+    }
 
     void run(float* out) {
-        weld_positions();
-        weld_corners();
+        weld();
         init_triangles();
         build_neighbours();
         build_groups();
@@ -118,128 +127,140 @@ public:
     }
 
 private:
-    V3 position(std::uint32_t corner) const {
+    V3 position(std::size_t corner) const {
         const float* p = positions_ + 3 * std::size_t(indices_[corner]);
         return {p[0], p[1], p[2]};
     }
-    V3 normal(std::uint32_t corner) const {
-        const float* n = normals_ + 3 * std::size_t(corner);
+    V3 normal(std::size_t corner) const {
+        const float* n = normals_ + 3 * corner;
         return {n[0], n[1], n[2]};
     }
-    float u(std::uint32_t corner) const { return uvs_[2 * std::size_t(corner)]; }
-    float v(std::uint32_t corner) const { return uvs_[2 * std::size_t(corner) + 1]; }
+    float u(std::size_t corner) const { return uvs_[2 * corner]; }
+    float v(std::size_t corner) const { return uvs_[2 * corner + 1]; }
     std::uint32_t weld(std::size_t tri, int i) const { return welded_[3 * tri + std::size_t(i)]; }
 
-    // position_id_[vertex]: the first vertex at the same position (== on all
-    // three coordinates), by an open-addressing hash over the vertices.
-    void weld_positions() {
-        position_id_.resize(vertex_count_);
-        std::size_t size = 16;
-        while (size < 2 * vertex_count_) size *= 2;
-        std::vector<std::uint32_t> table(size, UINT32_MAX);
-        for (std::uint32_t vert = 0; vert < vertex_count_; ++vert) {
-            const float* p = positions_ + 3 * std::size_t(vert);
-            std::uint64_t h = key_bits(p[0]) * 0x9E3779B97F4A7C15ull;
-            h ^= key_bits(p[1]) * 0xC2B2AE3D27D4EB4Full;
-            h ^= key_bits(p[2]) * 0x165667B19E3779F9ull;
-            std::size_t slot = std::size_t(h ^ (h >> 29)) & (size - 1);
-            for (;; slot = (slot + 1) & (size - 1)) {
-                const std::uint32_t other = table[slot];
-                if (other == UINT32_MAX) {
-                    table[slot] = vert;
-                    position_id_[vert] = vert;
-                    break;
-                }
-                const float* q = positions_ + 3 * std::size_t(other);
-                if (p[0] == q[0] && p[1] == q[1] && p[2] == q[2]) {
-                    position_id_[vert] = other;
-                    break;
+    // The normals MikkTSpace reads, a flat triangle's corners replaced by
+    // its normal as Cycles computes it: cross(v1 - v0, v2 - v0) divided by
+    // its length sqrt((x x + y y) + z z) component by component, (1, 0, 0)
+    // for a zero-area triangle (Triangle::compute_normal; Cycles' SSE float3
+    // is plain products and a true division, so the signs of zero match).
+    void use_flat_normals(const bool* flat) {
+        flat_normals_.assign(normals_, normals_ + 3 * corner_count_);
+        parallel_chunks(tri_count_, [&](std::size_t t) {
+            if (!flat[t]) return;
+            const V3 v0 = position(3 * t), a = position(3 * t + 1) - v0, b = position(3 * t + 2) - v0;
+            const V3 n{a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+            const float len = std::sqrt((n.x * n.x + n.y * n.y) + n.z * n.z);
+            const V3 unit = len == 0.0f ? V3{1.0f, 0.0f, 0.0f} : V3{n.x / len, n.y / len, n.z / len};
+            for (std::size_t k = 0; k < 3; ++k) {
+                float* o = &flat_normals_[3 * (3 * t + k)];
+                o[0] = unit.x;
+                o[1] = unit.y;
+                o[2] = unit.z;
+            }
+        });
+        normals_ = flat_normals_.data();
+    }
+
+    // welded_[corner]: the first corner with the same bits of position,
+    // normal and UV that also compares equal (the port's hash of the bits,
+    // then its VertexEqual: NaN is never equal). First the vertices: each
+    // gets the first vertex at the same position (an open-addressing hash);
+    // then the corners, bucketed by that vertex (a counting sort, which
+    // keeps a bucket in corner order), join the first earlier representative
+    // in their bucket with the same normal and UV.
+    void weld() {
+        std::vector<std::uint32_t> position_id(vertex_count_);
+        {
+            std::size_t size = 16;
+            while (size < 2 * vertex_count_) size *= 2;
+            std::vector<std::uint32_t> table(size, kNone);
+            for (std::uint32_t vert = 0; vert < vertex_count_; ++vert) {
+                const float* p = positions_ + 3 * std::size_t(vert);
+                std::uint64_t h = bits(p[0]) * 0x9E3779B97F4A7C15ull;
+                h ^= bits(p[1]) * 0xC2B2AE3D27D4EB4Full;
+                h ^= bits(p[2]) * 0x165667B19E3779F9ull;
+                std::size_t slot = std::size_t(h ^ (h >> 29)) & (size - 1);
+                for (;; slot = (slot + 1) & (size - 1)) {
+                    const std::uint32_t other = table[slot];
+                    if (other == kNone) {
+                        table[slot] = vert;
+                        position_id[vert] = vert;
+                        break;
+                    }
+                    const float* q = positions_ + 3 * std::size_t(other);
+                    if (bits(p[0]) == bits(q[0]) && bits(p[1]) == bits(q[1]) && bits(p[2]) == bits(q[2]) &&
+                        p[0] == q[0] && p[1] == q[1] && p[2] == q[2]) {
+                        position_id[vert] = other;
+                        break;
+                    }
                 }
             }
         }
-    }
-
-    // welded_[corner]: the first corner equal in position, normal and UV.
-    // Corners are bucketed by position (counting sort), then each bucket is
-    // sorted by (normal, UV, corner) so equal corners are adjacent.
-    void weld_corners() {
         std::vector<std::uint32_t> start(vertex_count_ + 1, 0);
-        for (std::size_t c = 0; c < corner_count_; ++c) ++start[position_id_[indices_[c]] + 1];
+        for (std::size_t c = 0; c < corner_count_; ++c) ++start[position_id[indices_[c]] + 1];
         for (std::size_t i = 0; i < vertex_count_; ++i) start[i + 1] += start[i];
         std::vector<std::uint32_t> bucket(corner_count_);
         {
             std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
-            for (std::uint32_t c = 0; c < corner_count_; ++c) bucket[fill[position_id_[indices_[c]]]++] = c;
+            for (std::uint32_t c = 0; c < corner_count_; ++c) bucket[fill[position_id[indices_[c]]]++] = c;
         }
         welded_.resize(corner_count_);
-        auto key = [&](std::uint32_t c, int k) {
-            return k < 3 ? key_bits(normals_[3 * std::size_t(c) + std::size_t(k)])
-                         : key_bits(uvs_[2 * std::size_t(c) + std::size_t(k - 3)]);
-        };
-        auto less = [&](std::uint32_t a, std::uint32_t b) {
-            for (int k = 0; k < 5; ++k) {
-                const std::uint32_t ka = key(a, k), kb = key(b, k);
-                if (ka != kb) return ka < kb;
-            }
-            return a < b;
-        };
         auto same = [&](std::uint32_t a, std::uint32_t b) {
             const float* na = normals_ + 3 * std::size_t(a);
             const float* nb = normals_ + 3 * std::size_t(b);
-            return na[0] == nb[0] && na[1] == nb[1] && na[2] == nb[2] && u(a) == u(b) && v(a) == v(b);
+            for (int k = 0; k < 3; ++k)
+                if (bits(na[k]) != bits(nb[k]) || !(na[k] == nb[k])) return false;
+            return bits(u(a)) == bits(u(b)) && bits(v(a)) == bits(v(b)) && u(a) == u(b) && v(a) == v(b);
         };
         parallel_chunks(vertex_count_, [&](std::size_t vert) {
-            std::uint32_t* first = bucket.data() + start[vert];
-            std::uint32_t* last = bucket.data() + start[vert + 1];
-            if (first == last) return;
-            std::sort(first, last, less);
-            std::uint32_t rep = *first;
-            for (std::uint32_t* it = first; it != last; ++it) {
-                if (it != first && !same(rep, *it)) rep = *it;
-                welded_[*it] = rep;
+            const std::uint32_t* first = bucket.data() + start[vert];
+            const std::uint32_t* last = bucket.data() + start[vert + 1];
+            for (const std::uint32_t* it = first; it != last; ++it) {
+                welded_[*it] = *it;
+                for (const std::uint32_t* rep = first; rep != it; ++rep)
+                    if (welded_[*rep] == *rep && same(*rep, *it)) {
+                        welded_[*it] = *rep;
+                        break;
+                    }
             }
         });
     }
 
-    // InitTriInfo (triangles only) and DegenPrologue's marking.
+    // degenPrologue's marking and initTriangle (triangles only).
     void init_triangles() {
-        tris_.assign(tri_count_, TriangleInfo{});
+        tris_.resize(tri_count_);
         parallel_chunks(tri_count_, [&](std::size_t t) {
-            TriangleInfo& tri = tris_[t];
-            const std::uint32_t c0 = std::uint32_t(3 * t), c1 = c0 + 1, c2 = c0 + 2;
-            const std::uint32_t p0 = position_id_[indices_[c0]], p1 = position_id_[indices_[c1]],
-                                p2 = position_id_[indices_[c2]];
-            if (p0 == p1 || p0 == p2 || p1 == p2) {
-                tri.flags |= kDegenerate;
+            Triangle& tri = tris_[t];
+            const std::size_t c0 = 3 * t, c1 = c0 + 1, c2 = c0 + 2;
+            const V3 v1 = position(c0), v2 = position(c1), v3 = position(c2);
+            if (v1 == v2 || v1 == v3 || v2 == v3) {
+                tri.degenerate = true;
                 return;
             }
-            const V3 v1 = position(c0), v2 = position(c1), v3 = position(c2);
             const float t21x = u(c1) - u(c0), t21y = v(c1) - v(c0);
             const float t31x = u(c2) - u(c0), t31y = v(c2) - v(c0);
             const V3 d1 = v2 - v1, d2 = v3 - v1;
             const float signed_area_x2 = t21x * t31y - t21y * t31x;
-            const V3 os = scale(t31y, d1) - scale(t21y, d2);   // eq. 18
-            const V3 ot = scale(-t31x, d1) + scale(t21x, d2);  // eq. 19
-            if (signed_area_x2 > 0) tri.flags |= kOrientPreserving;
+            const V3 os = d1 * t31y - d2 * t21y;   // eq. 18
+            const V3 ot = d1 * -t31x + d2 * t21x;  // eq. 19
+            tri.orient_preserving = signed_area_x2 > 0;
             if (not_zero(signed_area_x2)) {
-                const float abs_area = std::fabs(signed_area_x2);
-                const float len_os = length(os), len_ot = length(ot);
-                const float s = (tri.flags & kOrientPreserving) ? 1.0f : -1.0f;
-                if (not_zero(len_os)) tri.os = scale(s / len_os, os);
-                if (not_zero(len_ot)) tri.ot = scale(s / len_ot, ot);
-                // The magnitudes before normalisation decide whether the triangle is good.
-                if (not_zero(len_os / abs_area) && not_zero(len_ot / abs_area)) tri.flags &= ~kGroupWithAny;
+                const float len_os2 = dot(os, os), len_ot2 = dot(ot, ot);
+                const float s = tri.orient_preserving ? 1.0f : -1.0f;
+                if (not_zero(len_os2)) tri.tangent = os * (s / std::sqrt(len_os2));
+                if (not_zero(len_os2) && not_zero(len_ot2)) tri.group_with_any = false;
             }
         });
     }
 
-    // BuildNeighborsFast: edges bucketed by their smaller welded vertex, a
+    // buildNeighbors: edges bucketed by their smaller welded vertex, a
     // bucket ordered by (larger vertex, edge number); an edge pairs with the
     // first later unpaired edge of the same two vertices wound the other way.
     void build_neighbours() {
         std::vector<std::uint32_t> start(corner_count_ + 1, 0);
         for (std::size_t t = 0; t < tri_count_; ++t) {
-            if (tris_[t].flags & kDegenerate) continue;
+            if (tris_[t].degenerate) continue;
             for (int i = 0; i < 3; ++i) ++start[std::min(weld(t, i), weld(t, (i + 1) % 3)) + 1];
         }
         for (std::size_t i = 0; i < corner_count_; ++i) start[i + 1] += start[i];
@@ -251,7 +272,7 @@ private:
         {
             std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
             for (std::size_t t = 0; t < tri_count_; ++t) {
-                if (tris_[t].flags & kDegenerate) continue;
+                if (tris_[t].degenerate) continue;
                 for (int i = 0; i < 3; ++i) {
                     const std::uint32_t a = weld(t, i), b = weld(t, (i + 1) % 3);
                     edges[fill[std::min(a, b)]++] = {std::max(a, b), std::uint32_t(3 * t + std::size_t(i))};
@@ -259,7 +280,8 @@ private:
             }
         }
         // Filled in ascending edge number, so a stable sort by the larger
-        // vertex gives MikkTSpace's (min, max, number) order.
+        // vertex gives (min, max, number) order. An edge's neighbour slot is
+        // written only from its own bucket.
         parallel_chunks(corner_count_, [&](std::size_t vert) {
             Edge* first = edges.data() + start[vert];
             Edge* last = edges.data() + start[vert + 1];
@@ -267,14 +289,14 @@ private:
             std::stable_sort(first, last, [](const Edge& a, const Edge& b) { return a.other < b.other; });
             for (Edge* a = first; a != last; ++a) {
                 const std::uint32_t ta = a->number / 3, ia = a->number % 3;
-                if (tris_[ta].neighbour[ia] >= 0) continue;
+                if (tris_[ta].neighbour[ia] != kNone) continue;
                 const std::uint32_t a0 = weld(ta, int(ia)), a1 = weld(ta, int(ia + 1) % 3);
                 for (Edge* b = a + 1; b != last && b->other == a->other; ++b) {
                     const std::uint32_t tb = b->number / 3, ib = b->number % 3;
-                    if (tris_[tb].neighbour[ib] >= 0) continue;
+                    if (tris_[tb].neighbour[ib] != kNone) continue;
                     if (weld(tb, int(ib)) == a1 && weld(tb, int(ib + 1) % 3) == a0) {
-                        tris_[ta].neighbour[ia] = std::int32_t(tb);
-                        tris_[tb].neighbour[ib] = std::int32_t(ta);
+                        tris_[ta].neighbour[ia] = tb;
+                        tris_[tb].neighbour[ib] = ta;
                         break;
                     }
                 }
@@ -282,152 +304,89 @@ private:
         });
     }
 
-    // Build4RuleGroups with AssignRecur's recursion as an explicit stack
-    // (left neighbour's subtree before the right one's, as the recursion).
+    // build4RuleGroups with assignRecur's recursion as an explicit stack
+    // (the left neighbour's whole subtree before the right one, as the
+    // recursion visits them).
     void build_groups() {
         members_.reserve(corner_count_);
-        std::vector<std::int32_t> stack;
+        std::vector<std::uint32_t> stack;
         for (std::size_t t = 0; t < tri_count_; ++t) {
-            if (tris_[t].flags & kDegenerate) continue;
+            const Triangle& seed = tris_[t];
+            if (seed.degenerate || seed.group_with_any) continue;
             for (int i = 0; i < 3; ++i) {
-                if (tris_[t].group[i] >= 0) continue;
-                const std::int32_t g = std::int32_t(groups_.size());
-                groups_.push_back({weld(t, i), (tris_[t].flags & kOrientPreserving) != 0,
-                                   std::uint32_t(members_.size()), 0});
+                if (tris_[t].group[i] != kNone) continue;
+                const std::uint32_t g = std::uint32_t(groups_.size());
+                groups_.push_back({weld(t, i), seed.orient_preserving, std::uint32_t(members_.size()), 0});
                 tris_[t].group[i] = g;
                 members_.push_back(std::uint32_t(t));
                 stack.clear();
                 push_neighbours(stack, tris_[t], i);
                 while (!stack.empty()) {
-                    const std::int32_t n = stack.back();
+                    const std::uint32_t n = stack.back();
                     stack.pop_back();
-                    assign(stack, std::size_t(n), g);
+                    assign(stack, n, g);
                 }
-                groups_[std::size_t(g)].count = std::uint32_t(members_.size()) - groups_[std::size_t(g)].first;
+                groups_[g].count = std::uint32_t(members_.size()) - groups_[g].first;
             }
         }
     }
 
-    static void push_neighbours(std::vector<std::int32_t>& stack, const TriangleInfo& tri, int i) {
-        const std::int32_t left = tri.neighbour[i], right = tri.neighbour[i > 0 ? i - 1 : 2];
-        if (right >= 0) stack.push_back(right);
-        if (left >= 0) stack.push_back(left);
+    static void push_neighbours(std::vector<std::uint32_t>& stack, const Triangle& tri, int i) {
+        const std::uint32_t left = tri.neighbour[i], right = tri.neighbour[i > 0 ? i - 1 : 2];
+        if (right != kNone) stack.push_back(right);
+        if (left != kNone) stack.push_back(left);
     }
 
-    void assign(std::vector<std::int32_t>& stack, std::size_t t, std::int32_t g) {
-        Group& group = groups_[std::size_t(g)];
-        TriangleInfo& tri = tris_[t];
+    void assign(std::vector<std::uint32_t>& stack, std::uint32_t t, std::uint32_t g) {
+        const Group& group = groups_[g];
+        Triangle& tri = tris_[t];
         int i = 0;
         while (i < 3 && weld(t, i) != group.vertex) ++i;
-        if (i == 3 || tri.group[i] >= 0) return;  // not around this vertex (cannot happen), or grouped
-        if (tri.flags & kGroupWithAny) {
-            // The first group to reach a "group with any" triangle sets its orientation.
-            if (tri.group[0] < 0 && tri.group[1] < 0 && tri.group[2] < 0) {
-                tri.flags = std::uint8_t((tri.flags & ~kOrientPreserving) |
-                                         (group.orient_preserving ? kOrientPreserving : 0));
-            }
-        }
-        if (((tri.flags & kOrientPreserving) != 0) != group.orient_preserving) return;
-        members_.push_back(std::uint32_t(t));
+        if (i == 3 || tri.group[i] != kNone) return;  // not around this vertex (cannot happen), or grouped
+        // The first group to reach a "group with any" triangle sets its orientation.
+        if (tri.group_with_any && tri.group[0] == kNone && tri.group[1] == kNone && tri.group[2] == kNone)
+            tri.orient_preserving = group.orient_preserving;
+        if (tri.orient_preserving != group.orient_preserving) return;
         tri.group[i] = g;
+        members_.push_back(t);
         push_neighbours(stack, tri, i);
     }
 
-    // GenerateTSpaces + EvalTspace, groups in chunks over parallel_for.
+    // accumulateTSpaces + generateTSpaces, by group: a group's good
+    // triangles in ascending order (the port's serial order), each corner's
+    // tangent weighted by its angle.
     void write_tangents(float* out) {
+        parallel_chunks(corner_count_, [&](std::size_t c) {  // a corner no group reaches
+            float* o = out + 4 * c;
+            o[0] = 1.0f;
+            o[1] = o[2] = 0.0f;
+            o[3] = -1.0f;
+        });
         const std::size_t chunks = (groups_.size() + kChunk - 1) / kChunk;
         parallel_for(chunks, [&](std::size_t chunk) {
-            GroupScratch scratch;
+            std::vector<std::uint32_t> faces;
             const std::size_t end = std::min(groups_.size(), (chunk + 1) * kChunk);
-            for (std::size_t g = chunk * kChunk; g < end; ++g) write_group(groups_[g], scratch, out);
-        });
-    }
-
-    // A group member's part in GenerateTSpaces / EvalTspace, computed once.
-    struct Member {
-        std::uint32_t face;
-        int corner;       // the group's vertex in the face (0..2)
-        V3 os, ot;        // the face's tangent and bitangent in the normal's plane
-        V3 weighted_os;   // os times the corner's angle in that plane; zero for "group with any"
-        bool any;         // kGroupWithAny
-    };
-
-    struct GroupScratch {
-        std::vector<Member> members;               // sorted by face
-        std::vector<std::uint32_t> candidate;      // indices into members
-        std::vector<std::vector<std::uint32_t>> subgroups;
-        std::vector<V3> subgroup_tangent;
-    };
-
-    // Groups larger than this (a fan of thousands of triangles around one
-    // vertex) skip the quadratic subgroup search and form one subgroup,
-    // which is the search's result unless two of their tangents are exactly
-    // opposite.
-    static constexpr std::size_t kExactSubgroupLimit = 64;
-
-    void write_group(const Group& group, GroupScratch& scratch, float* out) const {
-        const V3 n = normal(group.vertex);
-        const float sign = group.orient_preserving ? 1.0f : -1.0f;
-        auto& members = scratch.members;
-        members.resize(group.count);
-        for (std::size_t k = 0; k < group.count; ++k) {
-            Member& m = members[k];
-            m.face = members_[group.first + k];
-            m.corner = corner_of(m.face, group.vertex);
-            const TriangleInfo& tri = tris_[m.face];
-            m.os = project(tri.os, n);
-            m.ot = project(tri.ot, n);
-            m.any = (tri.flags & kGroupWithAny) != 0;
-            m.weighted_os = m.any ? V3{0, 0, 0} : scale(corner_angle(m.face, m.corner, n), m.os);
-        }
-        // EvalTspace sums a subgroup in ascending face order.
-        std::sort(members.begin(), members.end(), [](const Member& a, const Member& b) { return a.face < b.face; });
-        auto emit = [&](const Member& m, V3 tangent) {
-            float* o = out + 4 * (3 * std::size_t(m.face) + std::size_t(m.corner));
-            o[0] = tangent.x;
-            o[1] = tangent.y;
-            o[2] = tangent.z;
-            o[3] = sign;
-        };
-        // cos(180 degrees), the default threshold: only exactly opposite tangents are incompatible.
-        const float threshold = -1.0f;
-        auto compatible = [&](std::size_t k, std::size_t j) {
-            const Member &a = members[k], &b = members[j];
-            return a.any || b.any || k == j || (dot(a.os, b.os) > threshold && dot(a.ot, b.ot) > threshold);
-        };
-        const std::size_t count = members.size();
-        bool one_subgroup = true;  // the common case: every member's subgroup is the whole group
-        if (count <= kExactSubgroupLimit)
-            for (std::size_t k = 0; k < count && one_subgroup; ++k)
-                for (std::size_t j = k + 1; j < count && one_subgroup; ++j) one_subgroup = compatible(k, j);
-        if (one_subgroup) {
-            V3 sum{0, 0, 0};
-            for (const Member& m : members) sum = sum + m.weighted_os;
-            const V3 tangent = not_zero(sum) ? normalize(sum) : sum;
-            for (const Member& m : members) emit(m, tangent);
-            return;
-        }
-        std::size_t subgroup_count = 0;
-        for (std::size_t k = 0; k < count; ++k) {
-            auto& candidate = scratch.candidate;
-            candidate.clear();
-            for (std::size_t j = 0; j < count; ++j)
-                if (compatible(k, j)) candidate.push_back(std::uint32_t(j));  // ascending face order
-            std::size_t s = 0;
-            while (s < subgroup_count && scratch.subgroups[s] != candidate) ++s;
-            if (s == subgroup_count) {
-                if (scratch.subgroups.size() <= s) {
-                    scratch.subgroups.resize(s + 1);
-                    scratch.subgroup_tangent.resize(s + 1);
-                }
-                scratch.subgroups[s] = candidate;
+            for (std::size_t g = chunk * kChunk; g < end; ++g) {
+                const Group& group = groups_[g];
+                faces.assign(members_.begin() + group.first, members_.begin() + group.first + group.count);
+                std::sort(faces.begin(), faces.end());
                 V3 sum{0, 0, 0};
-                for (const std::uint32_t j : candidate) sum = sum + members[j].weighted_os;
-                scratch.subgroup_tangent[s] = not_zero(sum) ? normalize(sum) : sum;
-                ++subgroup_count;
+                for (const std::uint32_t f : faces) {
+                    if (tris_[f].group_with_any) continue;
+                    const int i = corner_of(f, group.vertex);
+                    const V3 n = normal(3 * std::size_t(f) + std::size_t(i));
+                    sum = sum + project(n, tris_[f].tangent) * fast_acosf(std::clamp(corner_cos(f, i, n), -1.0f, 1.0f));
+                }
+                const V3 tangent = normalize(sum);
+                for (const std::uint32_t f : faces) {
+                    float* o = out + 4 * (3 * std::size_t(f) + std::size_t(corner_of(f, group.vertex)));
+                    o[0] = tangent.x;
+                    o[1] = tangent.y;
+                    o[2] = tangent.z;
+                    o[3] = group.orient_preserving ? 1.0f : -1.0f;
+                }
             }
-            emit(members[k], scratch.subgroup_tangent[s]);
-        }
+        });
     }
 
     int corner_of(std::size_t t, std::uint32_t vertex) const {
@@ -436,48 +395,38 @@ private:
         return i;
     }
 
-    // EvalTspace's weight: the face's angle at corner i, between its two
-    // edges projected into the plane of the normal n.
-    float corner_angle(std::uint32_t f, int i, V3 n) const {
-        const std::uint32_t c = 3 * f;
-        const V3 p0 = position(c + std::uint32_t(i > 0 ? i - 1 : 2));
-        const V3 p1 = position(c + std::uint32_t(i));
-        const V3 p2 = position(c + std::uint32_t(i < 2 ? i + 1 : 0));
-        const V3 v1 = project(p0 - p1, n), v2 = project(p2 - p1, n);
-        const float cos_angle = std::clamp(dot(v1, v2), -1.0f, 1.0f);
-        return float(std::acos(double(cos_angle)));
+    // The cosine of triangle f's angle at corner i, its edges projected
+    // into the plane of n (accumulateTSpaces' fCos).
+    float corner_cos(std::uint32_t f, int i, V3 n) const {
+        const std::size_t c = 3 * std::size_t(f);
+        const V3 p = position(c + std::size_t(i));
+        const V3 next = position(c + std::size_t(i < 2 ? i + 1 : 0));
+        const V3 prev = position(c + std::size_t(i > 0 ? i - 1 : 2));
+        return dot(project(n, next - p), project(n, prev - p));
     }
 
-    // DegenEpilogue: a degenerate triangle's corner copies the first good
+    // degenEpilogue: a degenerate triangle's corner copies the first good
     // corner (in triangle order) at its welded vertex.
     void write_degenerate(float* out) {
         std::vector<std::uint32_t> degenerate;
         for (std::size_t t = 0; t < tri_count_; ++t)
-            if (tris_[t].flags & kDegenerate) degenerate.push_back(std::uint32_t(t));
+            if (tris_[t].degenerate) degenerate.push_back(std::uint32_t(t));
         if (degenerate.empty()) return;
-        std::vector<std::uint32_t> first_good(corner_count_, UINT32_MAX);
+        std::vector<std::uint32_t> first_good(corner_count_, kNone);
         for (std::size_t t = 0; t < tri_count_; ++t) {
-            if (tris_[t].flags & kDegenerate) continue;
+            if (tris_[t].degenerate) continue;
             for (int i = 0; i < 3; ++i) {
                 std::uint32_t& slot = first_good[weld(t, i)];
-                if (slot == UINT32_MAX) slot = std::uint32_t(3 * t + std::size_t(i));
+                if (slot == kNone) slot = std::uint32_t(3 * t + std::size_t(i));
             }
         }
-        for (const std::uint32_t t : degenerate) {
+        for (const std::uint32_t t : degenerate)
             for (int i = 0; i < 3; ++i) {
-                const std::size_t corner = 3 * std::size_t(t) + std::size_t(i);
                 const std::uint32_t source = first_good[weld(t, i)];
-                float* o = out + 4 * corner;
-                if (source != UINT32_MAX) {
-                    std::memcpy(o, out + 4 * std::size_t(source), 4 * sizeof(float));
-                } else {
-                    o[0] = 1.0f;
-                    o[1] = 0.0f;
-                    o[2] = 0.0f;
-                    o[3] = -1.0f;
-                }
+                if (source != kNone)
+                    std::memcpy(out + 4 * (3 * std::size_t(t) + std::size_t(i)), out + 4 * std::size_t(source),
+                                4 * sizeof(float));
             }
-        }
     }
 
     const float* positions_;
@@ -488,9 +437,9 @@ private:
     const float* uvs_;
     std::size_t corner_count_;
 
-    std::vector<std::uint32_t> position_id_;
+    std::vector<float> flat_normals_;  // what normals_ points to when some triangles are flat
     std::vector<std::uint32_t> welded_;
-    std::vector<TriangleInfo> tris_;
+    std::vector<Triangle> tris_;
     std::vector<Group> groups_;
     std::vector<std::uint32_t> members_;
 };
@@ -499,7 +448,7 @@ private:
 
 void compute_tangents(const float* positions, std::size_t vertex_count, const std::uint32_t* indices,
                       std::size_t triangle_count, const float* corner_normals, const float* corner_uvs,
-                      float* tangents) {
+                      const bool* flat_triangles, float* tangents) {
     if (triangle_count >= std::size_t(INT32_MAX) / 3)
         throw std::invalid_argument("compute_tangents: " + std::to_string(triangle_count) +
                                     " triangles; at most " + std::to_string(INT32_MAX / 3 - 1) + " are supported");
@@ -511,7 +460,8 @@ void compute_tangents(const float* positions, std::size_t vertex_count, const st
                                         std::to_string(c) + " is out of range (" + std::to_string(vertex_count) +
                                         " vertices)");
     if (triangle_count == 0) return;
-    TangentSolver(positions, vertex_count, indices, triangle_count, corner_normals, corner_uvs).run(tangents);
+    TangentSolver(positions, vertex_count, indices, triangle_count, corner_normals, corner_uvs, flat_triangles)
+        .run(tangents);
 }
 
 }  // namespace deferred

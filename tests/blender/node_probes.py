@@ -80,7 +80,8 @@ class Case(NamedTuple):
     name: str
     node: str                       # bl_idname of the node under test
     build: Callable                 # build(t: Tree) -> output socket shown by the emission
-    shape: str = "plane"            # "plane", "sphere" or "grid" (a 4x4 plane with attributes)
+    shape: str = "plane"            # "plane", "sphere", "grid" (a 4x4 plane with attributes)
+    #                                 or "ngon" (the plane as one 12-gon, warped UVs)
     setup: Optional[Callable] = None  # setup(object) for object-level properties
     kind: Optional[str] = None      # EXACT / STATISTICAL; None: from the node
 
@@ -863,7 +864,8 @@ def _vector_cases():
             Case("tangent_radial_z", "ShaderNodeTangent", tangent('RADIAL'), shape="sphere"),
             Case("tangent_uv_map", "ShaderNodeTangent", tangent('UV_MAP'), shape="sphere"),
             Case("tangent_uv_map_turned", "ShaderNodeTangent", tangent('UV_MAP'), shape="sphere",
-                 setup=_turn_and_squash)]
+                 setup=_turn_and_squash),
+            Case("tangent_uv_map_ngon", "ShaderNodeTangent", tangent('UV_MAP'), shape="ngon")]
 
 
 def _normal_cases():
@@ -891,6 +893,7 @@ def _normal_cases():
     return [Case("normal_map_tangent", nm, normal_map('TANGENT'), shape="sphere"),
             Case("normal_map_tangent_turned", nm, normal_map('TANGENT'), shape="sphere", setup=_turn_and_squash),
             Case("normal_map_tangent_strength_2", nm, normal_map('TANGENT', 2.0), shape="sphere"),
+            Case("normal_map_tangent_ngon", nm, normal_map('TANGENT'), shape="ngon"),
             Case("normal_map_object", nm, normal_map('OBJECT'), shape="sphere", setup=_turn_and_squash),
             Case("normal_map_world", nm, normal_map('WORLD'), shape="sphere"),
             Case("normal_map_blender_object", nm, normal_map('BLENDER_OBJECT'), shape="sphere",
@@ -1008,6 +1011,22 @@ def _plane_mesh():
     return me
 
 
+def _ngon_mesh():
+    """The 1 m square as ONE 12-gon (three vertices a side), its UV map warped
+    so the triangles Blender splits it into (its loop triangles, which both
+    engines render) have different UV gradients: tangents on an n-gon, which
+    Blender's Mesh.calc_tangents refuses."""
+    s = (-0.5, -1 / 6, 1 / 6)
+    ring = [(x, -0.5) for x in s] + [(0.5, y) for y in s] + [(-x, 0.5) for x in s] + [(-0.5, -y) for y in s]
+    me = bpy.data.meshes.new("probe_ngon")
+    me.from_pydata([(x, y, 0.0) for x, y in ring], [], [tuple(range(len(ring)))])
+    _add_uv_maps(me)
+    co = np.array([me.vertices[loop.vertex_index].co[:2] for loop in me.loops]) + 0.5
+    warped = np.stack([co[:, 0] + 0.12 * np.sin(3.0 * co[:, 1]), co[:, 1] + 0.15 * co[:, 0] ** 2], -1)
+    me.uv_layers["UVMap"].data.foreach_set("uv", warped.ravel())
+    return me
+
+
 def _add_uv_maps(me):
     co = np.array([me.vertices[loop.vertex_index].co[:2] for loop in me.loops]) + 0.5
     main, alt = me.uv_layers.new(name="UVMap"), me.uv_layers.new(name="UVAlt")
@@ -1082,7 +1101,7 @@ class ProbeScene:
         self.reference_object.rotation_euler = (0.2, -0.3, 0.8)
         self.reference_object.scale = (1.5, 0.8, 1.2)
         self.scene.collection.objects.link(self.reference_object)
-        meshes = {"plane": _plane_mesh(), "sphere": _sphere_mesh(), "grid": _grid_mesh()}
+        meshes = {"plane": _plane_mesh(), "sphere": _sphere_mesh(), "grid": _grid_mesh(), "ngon": _ngon_mesh()}
         self.tiles = []             # (x0, y0): the tile's bottom-left pixel, rows from the bottom
         self.masks = {}
         for index, case in enumerate(self.cases):

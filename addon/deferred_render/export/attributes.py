@@ -122,12 +122,15 @@ def _generic(mesh, name, gather):
 class TangentInputs:
     """What MikkTSpace reads besides the UV map: the exported triangles."""
 
-    __slots__ = ("positions", "indices", "corner_normals")
+    __slots__ = ("positions", "indices", "corner_normals", "flat_triangles")
 
-    def __init__(self, positions, indices, corner_normals):
+    def __init__(self, positions, indices, corner_normals, flat_triangles=None):
         self.positions = positions            # (V, 3) float32
         self.indices = indices                # (T, 3) uint32
         self.corner_normals = corner_normals  # (3T, 3) float32, unit
+        # (T,) bool or None: flat-shaded triangles, whose own normal Cycles
+        # hands MikkTSpace (native/include/deferred/tangent_space.h)
+        self.flat_triangles = flat_triangles
 
 
 def _tangents(mesh, name, gather, inputs):
@@ -136,7 +139,7 @@ def _tangents(mesh, name, gather, inputs):
         return None
     from .. import native  # the compiled module; NativeUnavailable is a RuntimeError
     return native.load().compute_tangents(inputs.positions, inputs.indices, inputs.corner_normals,
-                                          np.ascontiguousarray(uvs, dtype=np.float32))
+                                          np.ascontiguousarray(uvs, dtype=np.float32), inputs.flat_triangles)
 
 
 def corner_attributes(mesh, keys, gather, warn, tangent_inputs=None):

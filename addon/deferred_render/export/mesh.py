@@ -129,6 +129,7 @@ def mesh_arrays(mesh, name=None, split_normals=None, attribute_keys=(), warn=Non
     material_indices = _get(tris, "material_index", nt, np.uint32).view(np.int32)
 
     poly_index = None  # read when something needs it
+    flat_triangles = None  # (T,) bool where Cycles shades a triangle flat (no split normals)
     if split_normals is None:
         split_normals = bool(mesh.use_auto_smooth or mesh.has_custom_normals)
     if split_normals:
@@ -141,7 +142,9 @@ def mesh_arrays(mesh, name=None, split_normals=None, attribute_keys=(), warn=Non
         polygon_normals = _get(mesh.polygon_normals, "vector", npoly, np.float32, 3)
         tri_poly = poly_index.astype(np.intp)  # np.take with intp indices: no conversion per gather
         corner_normals = np.repeat(np.take(polygon_normals, tri_poly, axis=0), 3, axis=0)
-        smooth_corners = np.repeat(np.take(smooth, tri_poly), 3)
+        smooth_triangles = np.take(smooth, tri_poly)
+        flat_triangles = ~smooth_triangles
+        smooth_corners = np.repeat(smooth_triangles, 3)
         if smooth_corners.any():
             flat_verts = tri_verts.reshape(-1)
             corner_normals[smooth_corners] = vertex_normals[flat_verts[smooth_corners]]
@@ -164,7 +167,7 @@ def mesh_arrays(mesh, name=None, split_normals=None, attribute_keys=(), warn=Non
     if attribute_keys:
         corner_attributes = attribute_export.corner_attributes(
             mesh, attribute_keys, gather, warn or (lambda message: None),
-            attribute_export.TangentInputs(positions, tri_verts, corner_normals))
+            attribute_export.TangentInputs(positions, tri_verts, corner_normals, flat_triangles))
     texspace_location = tuple(getattr(mesh, "texspace_location", (0.0, 0.0, 0.0)))
     texspace_size = tuple(getattr(mesh, "texspace_size", (1.0, 1.0, 1.0)))
 

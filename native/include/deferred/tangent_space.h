@@ -19,6 +19,14 @@ namespace deferred {
 //   indices:        triangle_count x 3 vertex indices (< vertex_count)
 //   corner_normals: 3 triangle_count x 3, unit shading normals
 //   corner_uvs:     3 triangle_count x 2
+//   flat_triangles: triangle_count flags, or null: a flat-shaded triangle's
+//                   corners read the triangle's own normal as Cycles computes
+//                   it (scene/mesh.cpp Triangle::compute_normal, float32)
+//                   instead of corner_normals. Its zero components carry
+//                   either sign, and MikkTSpace welds corners by their bits,
+//                   so the triangles of one flat polygon may keep their own
+//                   tangents, as in Cycles (visible on n-gons and on UVs
+//                   that are not affine across a polygon).
 //   tangents (out): 3 triangle_count x 4: the unit tangent and the bitangent
 //                   sign (B = sign * cross(N, T)), as Blender's
 //                   Mesh.calc_tangents gives `tangent` and `bitangent_sign`.
@@ -29,6 +37,6 @@ namespace deferred {
 // 2^31 / 3 triangles or more.
 void compute_tangents(const float* positions, std::size_t vertex_count, const std::uint32_t* indices,
                       std::size_t triangle_count, const float* corner_normals, const float* corner_uvs,
-                      float* tangents);
+                      const bool* flat_triangles, float* tangents);
 
 }  // namespace deferred

@@ -132,6 +132,7 @@ private:
         return {p[0], p[1], p[2]};
     }
     V3 normal(std::size_t corner) const {
+        if (flat_ && flat_[corner / 3]) return flat_normals_[corner / 3];
         const float* n = normals_ + 3 * corner;
         return {n[0], n[1], n[2]};
     }
@@ -139,27 +140,21 @@ private:
     float v(std::size_t corner) const { return uvs_[2 * corner + 1]; }
     std::uint32_t weld(std::size_t tri, int i) const { return welded_[3 * tri + std::size_t(i)]; }
 
-    // The normals MikkTSpace reads, a flat triangle's corners replaced by
-    // its normal as Cycles computes it: cross(v1 - v0, v2 - v0) divided by
-    // its length sqrt((x x + y y) + z z) component by component, (1, 0, 0)
-    // for a zero-area triangle (Triangle::compute_normal; Cycles' SSE float3
-    // is plain products and a true division, so the signs of zero match).
+    // A flat triangle's normal as Cycles computes it, which MikkTSpace
+    // reads at its corners: cross(v1 - v0, v2 - v0) divided by its length
+    // sqrt((x x + y y) + z z) component by component, (1, 0, 0) for a
+    // zero-area triangle (Triangle::compute_normal; Cycles' SSE float3 is
+    // plain products and a true division, so the signs of zero match).
     void use_flat_normals(const bool* flat) {
-        flat_normals_.assign(normals_, normals_ + 3 * corner_count_);
+        flat_ = flat;
+        flat_normals_.resize(tri_count_);
         parallel_chunks(tri_count_, [&](std::size_t t) {
             if (!flat[t]) return;
             const V3 v0 = position(3 * t), a = position(3 * t + 1) - v0, b = position(3 * t + 2) - v0;
             const V3 n{a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
             const float len = std::sqrt((n.x * n.x + n.y * n.y) + n.z * n.z);
-            const V3 unit = len == 0.0f ? V3{1.0f, 0.0f, 0.0f} : V3{n.x / len, n.y / len, n.z / len};
-            for (std::size_t k = 0; k < 3; ++k) {
-                float* o = &flat_normals_[3 * (3 * t + k)];
-                o[0] = unit.x;
-                o[1] = unit.y;
-                o[2] = unit.z;
-            }
+            flat_normals_[t] = len == 0.0f ? V3{1.0f, 0.0f, 0.0f} : V3{n.x / len, n.y / len, n.z / len};
         });
-        normals_ = flat_normals_.data();
     }
 
     // welded_[corner]: the first corner with the same bits of position,
@@ -206,12 +201,12 @@ private:
             for (std::uint32_t c = 0; c < corner_count_; ++c) bucket[fill[position_id[indices_[c]]]++] = c;
         }
         welded_.resize(corner_count_);
+        auto same_bits_and_value = [](float x, float y) { return bits(x) == bits(y) && x == y; };
         auto same = [&](std::uint32_t a, std::uint32_t b) {
-            const float* na = normals_ + 3 * std::size_t(a);
-            const float* nb = normals_ + 3 * std::size_t(b);
-            for (int k = 0; k < 3; ++k)
-                if (bits(na[k]) != bits(nb[k]) || !(na[k] == nb[k])) return false;
-            return bits(u(a)) == bits(u(b)) && bits(v(a)) == bits(v(b)) && u(a) == u(b) && v(a) == v(b);
+            const V3 na = normal(a), nb = normal(b);
+            return same_bits_and_value(na.x, nb.x) && same_bits_and_value(na.y, nb.y) &&
+                   same_bits_and_value(na.z, nb.z) && same_bits_and_value(u(a), u(b)) &&
+                   same_bits_and_value(v(a), v(b));
         };
         parallel_chunks(vertex_count_, [&](std::size_t vert) {
             const std::uint32_t* first = bucket.data() + start[vert];
@@ -437,7 +432,8 @@ private:
     const float* uvs_;
     std::size_t corner_count_;
 
-    std::vector<float> flat_normals_;  // what normals_ points to when some triangles are flat
+    const bool* flat_ = nullptr;       // flat-shaded triangles, when any
+    std::vector<V3> flat_normals_;     // their normals (Cycles' computation), by triangle
     std::vector<std::uint32_t> welded_;
     std::vector<Triangle> tris_;
     std::vector<Group> groups_;

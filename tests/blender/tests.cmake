@@ -48,6 +48,7 @@ set(DEFERRED_BLENDER_TESTS
     shadow_catcher
     glossy_highlights
     capture_replay
+    tangents
 )
 
 foreach(_name IN LISTS DEFERRED_BLENDER_TESTS)

@@ -5,16 +5,17 @@
 # (frame stages, 64 samples end to end, the 16 passes' readback and a warm
 # render's time before its first sample: deferred_bench_frame; 1 000 /
 # 10 000 lights: deferred_bench_lights; the outputs' cost:
-# deferred_bench_outputs; shadows: deferred_bench_shadows). Writes four
+# deferred_bench_outputs; shadows: deferred_bench_shadows; node materials'
+# geometry pass against constant ones: deferred_bench_materials). Writes four
 # files to $OUT (the device tool returns at most eight): summary.txt,
 # native_tests.log, robustness.log, benches.md. Each step has a time limit
-# (killed 5 s after it): 150 s for the tests (in parallel), 290 s for the
+# (killed 5 s after it): 150 s for the tests (in parallel), 350 s for the
 # benchmarks, inside one device call (600 s) and a session's 15 minutes of
 # device time. Exits non-zero when a step failed or ran out of time.
 # Parts of it, for a rerun inside what is left of the device time:
 # GPU_CHECK_FILTER (a gtest filter for both test binaries, "-" for no
 # tests), GPU_CHECK_TEST_LIMIT (seconds, 150), GPU_CHECK_BENCHES (any of
-# "frame lights outputs shadows", all by default).
+# "frame lights outputs shadows materials", all by default).
 #   bash scripts/gpu_check.sh            (on the device, as root)
 #   GPU_CHECK_FILTER='HardCases.*' GPU_CHECK_BENCHES=frame bash scripts/gpu_check.sh
 #   GPU_CHECK_LOCAL=1 GPU_CHECK_SIZE="160 90" OUT=/tmp/gpu bash scripts/gpu_check.sh   (a dry run here)
@@ -61,7 +62,7 @@ run() {  # run NAME SECONDS LOG COMMAND...: time-limited; its exit status and ti
 # Line-buffered, so a test stopped at the limit leaves its last lines.
 filter="${GPU_CHECK_FILTER:-*}"
 test_limit="${GPU_CHECK_TEST_LIMIT:-150}"
-benches_to_run=" ${GPU_CHECK_BENCHES:-frame lights outputs shadows} "
+benches_to_run=" ${GPU_CHECK_BENCHES:-frame lights outputs shadows materials} "
 if [ "$filter" != "-" ]; then
 t0=$SECONDS
 shards=8
@@ -107,5 +108,7 @@ export DEFERRED_BENCH_PROFILE=1
 [[ "$benches_to_run" == *" outputs "* ]] && run bench_outputs 70 "$benches" "$stage/bin/deferred_bench_outputs" $size
 # shellcheck disable=SC2086
 [[ "$benches_to_run" == *" shadows "* ]] && run bench_shadows 80 "$benches" stdbuf -oL "$stage/bin/deferred_bench_shadows" $size
+# shellcheck disable=SC2086
+[[ "$benches_to_run" == *" materials "* ]] && run bench_materials 60 "$benches" "$stage/bin/deferred_bench_materials" $size 16 3
 cat "$summary"
 exit "$failed"

@@ -15,7 +15,8 @@ repo="$(cd "$(dirname "$0")/.." && pwd)"
 build="${1:-$repo/build}"
 stage="$repo/.gpu"
 binaries="tests/deferred_native_tests tests/robustness/robustness_gl_tests bench/deferred_bench_frame
-          bench/deferred_bench_lights bench/deferred_bench_outputs bench/deferred_bench_shadows"
+          bench/deferred_bench_lights bench/deferred_bench_outputs bench/deferred_bench_shadows
+          bench/deferred_bench_materials"
 for b in $binaries; do
   test -x "$build/$b" || { echo "missing $build/$b: build first (cmake --build $build)" >&2; exit 1; }
 done

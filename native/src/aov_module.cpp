@@ -1,5 +1,7 @@
 #include "aov_module.h"
 
+#include "parallel.h"
+
 #include <string>
 
 namespace deferred {
@@ -48,26 +50,39 @@ void AovModule::end_draws() const {
 }
 
 std::vector<AovImage> AovModule::finish() {
-    std::vector<AovImage> out;
-    for (std::size_t k = 0; k < aovs_.size(); ++k) {
-        AovImage img;
-        img.name = aovs_[k].name;
-        img.color = aovs_[k].color;
-        img.width = width_;
-        img.height = height_;
-        const std::size_t pixels = std::size_t(width_) * std::size_t(height_);
-        std::vector<float> rgba(pixels * 4);
+    // As the passes' readback (FilmModule::read_passes): every AOV into one
+    // pack buffer, then each copied out of the mapping on its own thread
+    // (a value AOV keeps the alpha channel: the accumulated value).
+    const std::size_t pixels = std::size_t(width_) * std::size_t(height_);
+    const std::size_t image_bytes = pixels * 4 * sizeof(float);
+    std::vector<AovImage> out(aovs_.size());
+    if (!aovs_.empty()) {
+        const Buffer pack = make_readback_buffer(image_bytes * aovs_.size(), "AOVs");
+        glBindBuffer(GL_PIXEL_PACK_BUFFER, pack.get());
         glPixelStorei(GL_PACK_ALIGNMENT, 1);
-        glGetTextureImage(images_[k].get(), 0, GL_RGBA, GL_FLOAT, GLsizei(rgba.size() * 4), rgba.data());
-        if (img.color) {
-            img.pixels = std::move(rgba);  // rgb, and in a the share of samples that wrote it
-        } else {
-            img.pixels.resize(pixels);
-            for (std::size_t i = 0; i < pixels; ++i) img.pixels[i] = rgba[i * 4 + 3];
-        }
-        out.push_back(std::move(img));
+        for (std::size_t k = 0; k < aovs_.size(); ++k)
+            glGetTextureImage(images_[k].get(), 0, GL_RGBA, GL_FLOAT, GLsizei(image_bytes),
+                              reinterpret_cast<void*>(image_bytes * k));
+        glBindBuffer(GL_PIXEL_PACK_BUFFER, 0);
+        check_gl("reading the AOVs");
+        const auto* mapped =
+            static_cast<const float*>(map_for_reading(pack, image_bytes * aovs_.size(), "AOVs"));
+        parallel_for(aovs_.size(), [&](std::size_t k) {
+            AovImage& img = out[k];
+            img.name = aovs_[k].name;
+            img.color = aovs_[k].color;
+            img.width = width_;
+            img.height = height_;
+            const float* rgba = mapped + pixels * 4 * k;
+            if (img.color) {
+                img.pixels.assign(rgba, rgba + pixels * 4);  // rgb, and in a the share of samples that wrote it
+            } else {
+                img.pixels.resize(pixels);
+                for (std::size_t i = 0; i < pixels; ++i) img.pixels[i] = rgba[i * 4 + 3];
+            }
+        });
+        glUnmapNamedBuffer(pack.get());
     }
-    check_gl("reading the AOVs");
     release();
     return out;
 }

@@ -34,6 +34,7 @@
 #define SSBO_RAY_SCENE 24         /* shadow rays' hierarchies and triangles (ray_scene.h, ray_lib.glsl) */
 #define SSBO_INSTANCE_MOTION 25   /* Vector pass: each instance's previous and next model matrix (motion_module.h) */
 #define SSBO_MOTION_POSITIONS 26  /* ... a deforming mesh's previous, then next vertex positions */
+#define SSBO_RECEIVERS 27         /* shadow map sizing: sample 0's depth range and grid (receivers_comp.glsl) */
 
 /* Textures sampled by compute passes (G-buffer inputs) */
 #define TEX_DEPTH 0

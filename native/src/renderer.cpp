@@ -49,6 +49,7 @@
 
 #include <array>
 #include <atomic>
+#include <cstring>
 #include <cmath>
 #include <cstddef>
 #include <cstdlib>
@@ -149,6 +150,8 @@ struct Renderer::Impl {
     std::int32_t world_graph = -1;  // the world's node graph in `materials`, -1: a constant colour
     VertexArray empty_vao;
     Buffer dummy_ssbo;
+    Buffer receiver_grid;  // receivers_comp.glsl's output, kept across frames
+    std::size_t receiver_grid_bytes = 0;
     GLint max_texture_size = 0, max_fb_width = 0, max_fb_height = 0;
     std::atomic<bool> cancel_requested{false};
 
@@ -178,6 +181,7 @@ struct Renderer::Impl {
             shaders.reset();
             empty_vao.reset();
             dummy_ssbo.reset();
+            receiver_grid.reset();
             context.reset();
         });
     }
@@ -297,24 +301,43 @@ struct Renderer::Impl {
     Buffer bake_frame_block(const Frame& f) const;
 
     // The visible surfaces the shadow maps are sized for: sample 0's depth
-    // (unjittered pixel centres) read back on a grid of at most 128 x 128
-    // points, as camera-relative positions with the width of a pixel there.
+    // (unjittered pixel centres) on a grid of at most 128 x 128 points, as
+    // camera-relative positions with the width of a pixel there.
     // `visible_depths` gets the nearest and farthest view depth of all the
-    // pixels that see a surface ((0, 0) if none does).
+    // pixels that see a surface ((0, 0) if none does). The GPU reduces the
+    // depth buffer to those (receivers_comp.glsl): the grid's depths and two
+    // numbers come back, not the whole buffer.
     std::vector<ShadowModule::Receiver> visible_receivers(const CameraMatrices& cam, int width, int height,
-                                                          std::pair<double, double>& visible_depths) const {
-        std::vector<float> depth(std::size_t(width) * std::size_t(height));
-        glGetTextureImage(gbuffer.depth_texture(), 0, GL_DEPTH_COMPONENT, GL_FLOAT,
-                          GLsizei(depth.size() * sizeof(float)), depth.data());
-        check_gl("reading the depth for shadow map sizes");
+                                                          std::pair<double, double>& visible_depths) {
+        const int step = std::max(1, std::max(width, height) / 128);
+        const int grid_w = (width - step / 2 + step - 1) / step, grid_h = (height - step / 2 + step - 1) / step;
+        const std::size_t header = 4 * sizeof(std::uint32_t);
+        const std::size_t bytes = header + std::size_t(grid_w) * std::size_t(grid_h) * sizeof(float);
+        if (bytes > receiver_grid_bytes) {
+            receiver_grid = make_storage_buffer(nullptr, bytes, "shadow receivers");
+            receiver_grid_bytes = bytes;
+        }
+        float two = 2.0f;
+        std::uint32_t start[4] = {0u, 0u, 0u, 0u};
+        std::memcpy(&start[1], &two, sizeof two);
+        glNamedBufferSubData(receiver_grid.get(), 0, sizeof start, start);
+        glUseProgram(shaders->compute_program("receivers_comp.glsl", {}));
+        glUniform4i(0, width, height, step, grid_w);
+        glBindTextureUnit(TEX_DEPTH, gbuffer.depth_texture());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_RECEIVERS, receiver_grid.get());
+        glDispatchCompute(GLuint((width + 15) / 16), GLuint((height + 15) / 16), 1);
+        glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+        std::vector<float> grid(std::size_t(grid_w) * std::size_t(grid_h));
+        std::uint32_t range_bits[2];
+        glGetNamedBufferSubData(receiver_grid.get(), 0, sizeof range_bits, range_bits);
+        glGetNamedBufferSubData(receiver_grid.get(), GLintptr(header), GLsizeiptr(grid.size() * sizeof(float)),
+                                grid.data());
+        check_gl("reducing the depth for shadow map sizes");
         const glm::dmat4 to_view = glm::inverse(cam.projection);
         // Reversed Z: the largest stored value is the nearest surface.
-        float z_near = 0.0f, z_far = 2.0f;
-        for (float z : depth)
-            if (z > 0.0f) {
-                z_near = std::max(z_near, z);
-                z_far = std::min(z_far, z);
-            }
+        float z_near, z_far;
+        std::memcpy(&z_near, &range_bits[0], sizeof z_near);
+        std::memcpy(&z_far, &range_bits[1], sizeof z_far);
         visible_depths = {0.0, 0.0};
         if (z_near > 0.0f) {
             auto view_depth = [&](double z) {
@@ -326,11 +349,10 @@ struct Renderer::Impl {
         const glm::dmat4 to_world = glm::inverse(cam.view);
         const glm::dvec4& vp = cam.viewplane;
         const double pixel = std::min((vp.y - vp.x) / width, (vp.w - vp.z) / height);  // at unit depth (persp)
-        const int step = std::max(1, std::max(width, height) / 128);
         std::vector<ShadowModule::Receiver> out;
         for (int y = step / 2; y < height; y += step)
             for (int x = step / 2; x < width; x += step) {
-                const double z = depth[std::size_t(y) * std::size_t(width) + std::size_t(x)];
+                const double z = grid[std::size_t(y / step) * std::size_t(grid_w) + std::size_t(x / step)];
                 if (!(z > 0.0)) continue;  // background (reversed Z: 0 is far)
                 const glm::dvec4 ndc(2.0 * (x + 0.5) / width - 1.0, 2.0 * (y + 0.5) / height - 1.0, z, 1.0);
                 glm::dvec4 v = to_view * ndc;

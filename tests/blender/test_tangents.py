@@ -137,6 +137,41 @@ def test_meshes(checks):
     compare(checks, "grid with degenerate triangles and collapsed UVs", triangulated(ob))
 
 
+def test_random_mesh(checks):
+    """A mesh made to exercise every rule: random vertex displacement, UV
+    islands cut at random faces (seams), mirrored islands (both bitangent
+    signs around one vertex), collapsed UVs and sharp edges under auto
+    smooth (split normals), triangulated so calc_tangents sees the same faces."""
+    clear()
+    bpy.ops.mesh.primitive_uv_sphere_add(segments=40, ring_count=20)
+    ob = bpy.context.object
+    bpy.ops.object.shade_smooth()
+    me = ob.data
+    rng = np.random.default_rng(7)
+    co = np.empty(len(me.vertices) * 3, np.float32)
+    me.vertices.foreach_get("co", co)
+    me.vertices.foreach_set("co", co + rng.normal(0.0, 0.02, co.size).astype(np.float32))
+    uv = me.uv_layers.active.data
+    uvs = np.empty(len(uv) * 2, np.float32)
+    uv.foreach_get("uv", uvs)
+    uvs = uvs.reshape(-1, 2)
+    for poly in me.polygons:
+        loops = list(poly.loop_indices)
+        roll = rng.random()
+        if roll < 0.15:        # an island of its own, mirrored in u
+            uvs[loops, 0] = 2.0 - uvs[loops, 0]
+        elif roll < 0.25:      # an island shifted away (a seam all round)
+            uvs[loops] += rng.random(2).astype(np.float32)
+        elif roll < 0.30:      # no UV area
+            uvs[loops] = uvs[loops[0]]
+    uv.foreach_set("uv", uvs.ravel())
+    me.use_auto_smooth = True
+    me.auto_smooth_angle = 0.6
+    sharp = rng.random(len(me.edges)) < 0.1
+    me.edges.foreach_set("use_edge_sharp", sharp)
+    compare(checks, "random sphere: displaced, islands, mirrors, no-area UVs, sharp edges", triangulated(ob))
+
+
 def test_ngon(checks):
     """A cylinder's caps are n-gons: calc_tangents refuses them, the export does not."""
     clear()
@@ -189,7 +224,7 @@ def main():
     if U.native_module() is None:
         checks.check(False, "the native module loads")
         checks.finish()
-    for test in (test_meshes, test_ngon, test_bad_input):
+    for test in (test_meshes, test_random_mesh, test_ngon, test_bad_input):
         checks.run(test.__name__, test, checks)
     checks.finish()
 

@@ -15,7 +15,7 @@ namespace py = pybind11;
 
 void declare_scene(py::module_& m);     // Camera, PASSES, exceptions
 void declare_renderer(py::module_& m);  // Renderer
-void declare_geometry(py::module_& m);  // compute_tangents
+void declare_geometry(py::module_& m);  // compute_tangents, compute_pointiness, compute_random_per_island
 
 // Row-major (4,4) float64 numpy matrix (as np.array(blender_matrix) gives) ->
 // the library's column-major Mat4d. Raises ValueError naming `what`.

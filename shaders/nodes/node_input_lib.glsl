@@ -61,8 +61,14 @@ void node_object_info(out vec3 location, out vec3 color, out float alpha, out fl
 
 /* svm_node_geometry. Tangent: radial around Z through the generated
  * coordinates (geom/primitive.h primitive_tangent), made orthogonal to N. */
-void node_geometry(out vec3 position, out vec3 normal, out vec3 tangent, out vec3 true_normal,
-                   out vec3 incoming, out vec3 parametric, out float backfacing) {
+/* Pointiness (per vertex, interpolated) and Random Per Island (per
+ * triangle) are mesh attributes the export computes as Cycles' Blender sync
+ * does (native/src/mesh_attributes.cpp); 0 where the output is unused. */
+void node_geometry(vec4 pointiness_attr, vec4 island_attr, out vec3 position, out vec3 normal, out vec3 tangent,
+                   out vec3 true_normal, out vec3 incoming, out vec3 parametric, out float backfacing,
+                   out float pointiness, out float random_per_island) {
+    pointiness = pointiness_attr.x;
+    random_per_island = island_attr.x;
     /* Parametric: (1 - u - v, u, 0) with Cycles' barycentrics u, v of
      * corners 1 and 2 (geom/triangle.h: f = u f1 + v f2 + (1 - u - v) f0),
      * i.e. the weights of corners 0 and 1. */

@@ -56,15 +56,10 @@ LIMITS = {EXACT: {"max": 1e-4}, STATISTICAL: {"mean": 1e-3, "p99": 1e-2}}
 # asserted; test_node_probes fails when one of them passes (remove it then).
 # Example: "geometry_pointiness": "needs per-vertex curvature from the exporter".
 KNOWN_UNSUPPORTED = {
-    "geometry_pointiness": "Geometry Pointiness: needs per-vertex curvature (warned, 0)",
-    "geometry_random_per_island": "Geometry Random Per Island: mesh islands are not exported (warned, 0)",
     "attribute_object_property": "Attribute of type Object/Instancer is not read (warned, 0)",
     "geometry_parametric": "supported (corner weights, as Cycles' u, v); the probe plane's diagonal passes "
                            "through 30 pixel centres of the tile, where Cycles' 0.005 px jitter picks either "
                            "triangle (every other pixel of the tile is exact: 1.4e-8)",
-    "geometry_true_normal": "supported (exact per triangle from its vertices), but the probe sphere's facets are "
-                            "smaller than a pixel: ~1% of pixel centres lie within Cycles' 0.005 px filter jitter "
-                            "of an edge and see the neighbouring facet (mean 1.1e-3, p99 8.8e-2)",
 }
 
 # Nodes whose cases are statistical (everything else is EXACT).
@@ -81,7 +76,8 @@ class Case(NamedTuple):
     node: str                       # bl_idname of the node under test
     build: Callable                 # build(t: Tree) -> output socket shown by the emission
     shape: str = "plane"            # "plane", "sphere", "grid" (a 4x4 plane with attributes)
-    #                                 or "ngon" (the plane as one 12-gon, warped UVs)
+    #                                 "ngon" (the plane as one 12-gon, warped UVs) or
+    #                                 "islands" (four separate quads)
     setup: Optional[Callable] = None  # setup(object) for object-level properties
     kind: Optional[str] = None      # EXACT / STATISTICAL; None: from the node
 
@@ -762,6 +758,10 @@ def _input_cases():
         Case("geometry_position", geometry, output_of(geometry, "Position")),
         Case("geometry_normal", geometry, output_of(geometry, "Normal"), shape="sphere", setup=_turn_and_squash),
         Case("geometry_tangent", geometry, output_of(geometry, "Tangent"), shape="sphere"),
+        # Exact per facet; ~1 % of the sphere's pixel centres lie within Cycles'
+        # 0.005 px jitter of a facet edge and see the neighbour, where Cycles'
+        # per-pixel seed decides: its mean error sits near the limit (8.2e-4 in
+        # the 323-case layout, 1.1e-3 in the 321-case one).
         Case("geometry_true_normal", geometry, output_of(geometry, "True Normal"), shape="sphere"),
         Case("geometry_incoming", geometry, output_of(geometry, "Incoming")),
         Case("geometry_parametric", geometry, output_of(geometry, "Parametric")),
@@ -769,6 +769,9 @@ def _input_cases():
              setup=lambda ob: setattr(ob, "rotation_euler", (math.pi, 0.0, 0.0))),
         Case("geometry_pointiness", geometry, output_of(geometry, "Pointiness"), shape="sphere"),
         Case("geometry_random_per_island", geometry, output_of(geometry, "Random Per Island")),
+        Case("geometry_random_per_island_islands", geometry, output_of(geometry, "Random Per Island"),
+             shape="islands"),
+        Case("geometry_pointiness_grid", geometry, output_of(geometry, "Pointiness"), shape="grid"),
         *(Case(f"object_info_{o.lower().replace(' ', '_')}", info, output_of(info, o), setup=set_object_info)
           for o in ("Location", "Color", "Alpha", "Object Index", "Material Index", "Random")),
         Case("layer_weight_fresnel", "ShaderNodeLayerWeight",
@@ -1011,6 +1014,27 @@ def _plane_mesh():
     return me
 
 
+def _islands_mesh():
+    """Four separate quads (four mesh islands) in the 1 m square, 4 px apart,
+    their edges on pixel boundaries; vertex and face orders differ per island
+    so that Cycles' disjoint-set roots (what Random Per Island hashes) do too."""
+    verts, faces = [], []
+    for k, (x0, y0) in enumerate(((-0.5, -0.5), (0.0625, -0.5), (-0.5, 0.0625), (0.0625, 0.0625))):
+        x1, y1 = x0 + 0.4375, y0 + 0.4375
+        quad = [(x0, y0, 0.0), (x1, y0, 0.0), (x1, y1, 0.0), (x0, y1, 0.0)]
+        base = len(verts)
+        if k % 2:
+            verts += quad[::-1]
+            faces.append((base + 3, base + 2, base + 1, base))
+        else:
+            verts += quad
+            faces.append((base, base + 1, base + 2, base + 3))
+    me = bpy.data.meshes.new("probe_islands")
+    me.from_pydata(verts, [], faces)
+    _add_uv_maps(me)
+    return me
+
+
 def _ngon_mesh():
     """The 1 m square as ONE 12-gon (three vertices a side), its UV map warped
     so the triangles Blender splits it into (its loop triangles, which both
@@ -1101,7 +1125,8 @@ class ProbeScene:
         self.reference_object.rotation_euler = (0.2, -0.3, 0.8)
         self.reference_object.scale = (1.5, 0.8, 1.2)
         self.scene.collection.objects.link(self.reference_object)
-        meshes = {"plane": _plane_mesh(), "sphere": _sphere_mesh(), "grid": _grid_mesh(), "ngon": _ngon_mesh()}
+        meshes = {"plane": _plane_mesh(), "sphere": _sphere_mesh(), "grid": _grid_mesh(), "ngon": _ngon_mesh(),
+                  "islands": _islands_mesh()}
         self.tiles = []             # (x0, y0): the tile's bottom-left pixel, rows from the bottom
         self.masks = {}
         for index, case in enumerate(self.cases):

@@ -120,6 +120,32 @@ def test_unsupported_node_named(checks, scene, plane):
     checks.check(np.allclose(centre(images["Combined"]), 0.0), "its output takes the default (black)")
 
 
+def test_geometry_mesh_values(checks, scene, plane):
+    """Geometry Pointiness and Random Per Island come from the export
+    (native/src/mesh_attributes.cpp; against Cycles in test_node_probes):
+    a flat plane's pointiness is 0.5 (every edge lies in the plane), its
+    island value is Cycles' hash of its disjoint-set root; an Auto Smooth
+    mesh, which Cycles splits first, is named in a warning."""
+    mat, em = emission_material("mesh_values")
+    geometry = mat.node_tree.nodes.new("ShaderNodeNewGeometry")
+    combine = mat.node_tree.nodes.new("ShaderNodeCombineXYZ")
+    mat.node_tree.links.new(geometry.outputs["Pointiness"], combine.inputs["X"])
+    mat.node_tree.links.new(geometry.outputs["Random Per Island"], combine.inputs["Y"])
+    mat.node_tree.links.new(combine.outputs["Vector"], em.inputs["Color"])
+    images, messages = render_combined(scene, plane, mat, "mesh_values")
+    c = centre(images["Combined"])
+    checks.check(abs(c[0] - 0.5) < 1e-6, "a flat plane's Pointiness is 0.5", f"{c[0]:.7f}")
+    checks.check(0.0 < c[1] < 1.0 and not warnings_of(messages), "Random Per Island is read, without a warning",
+                 f"{c[1]:.6f}, {warnings_of(messages)}")
+    plane.data.use_auto_smooth = True
+    try:
+        _, messages = render_combined(scene, plane, mat, "mesh_values_auto_smooth")
+    finally:
+        plane.data.use_auto_smooth = False
+    w = [m for m in warnings_of(messages) if "Auto Smooth" in m]
+    checks.check(len(w) == 2, "on an Auto Smooth mesh both are named in warnings", str(warnings_of(messages)))
+
+
 def test_alpha_rendered(checks, scene, plane):
     """Alpha is rendered (stochastic transparency; measured against Cycles
     by test_transparency.py): no warning, and the plane over the black world
@@ -300,7 +326,8 @@ def main():
     if not U.require_engine(checks):
         checks.finish()
     scene, plane = setup_scene()
-    for test in (test_groups_reroutes_mutes, test_unsupported_node_named, test_alpha_rendered, test_bad_trees,
+    for test in (test_groups_reroutes_mutes, test_unsupported_node_named, test_geometry_mesh_values,
+                 test_alpha_rendered, test_bad_trees,
                  test_image_sizes, test_emission_pass, test_program_cache, test_persistent_data):
         checks.run(test.__name__, test, checks, scene, plane)
     checks.finish()

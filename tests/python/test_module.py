@@ -174,3 +174,79 @@ class ModuleTest(unittest.TestCase):
 
 if __name__ == "__main__":
     unittest.main()
+
+
+def _lookup3_uint(kx):
+    """Cycles' hash_uint (util/hash.h), for the test's expected values."""
+    def rot(x, k):
+        return ((x << k) | (x >> (32 - k))) & 0xFFFFFFFF
+    a = b = c = (0xdeadbeef + (1 << 2) + 13) & 0xFFFFFFFF
+    a = (a + kx) & 0xFFFFFFFF
+    for x, y, z, k in (("c", "b", None, 14), ("a", "c", None, 11), ("b", "a", None, 25), ("c", "b", None, 16),
+                       ("a", "c", None, 4), ("b", "a", None, 14), ("c", "b", None, 24)):
+        v = {"a": a, "b": b, "c": c}
+        v[x] = ((v[x] ^ v[y]) - rot(v[y], k)) & 0xFFFFFFFF
+        a, b, c = v["a"], v["b"], v["c"]
+    return c
+
+
+class MeshAttributes(unittest.TestCase):
+    """compute_pointiness / compute_random_per_island (native/src/mesh_attributes.cpp)."""
+
+    def grid(self, n=4):
+        s = np.arange(n + 1, dtype=np.float32)
+        x, y = np.meshgrid(s, s)
+        positions = np.stack([x.ravel(), y.ravel(), np.zeros(x.size, np.float32)], -1).astype(np.float32)
+        idx = np.arange((n + 1) ** 2).reshape(n + 1, n + 1)
+        edges = np.concatenate([np.stack([idx[:, :-1].ravel(), idx[:, 1:].ravel()], -1),
+                                np.stack([idx[:-1, :].ravel(), idx[1:, :].ravel()], -1)]).astype(np.uint32)
+        normals = np.tile(np.float32([0, 0, 1]), (len(positions), 1))
+        return positions, normals, edges
+
+    def test_a_flat_grid_is_one_half_everywhere(self):
+        # Every edge lies in the plane: acos(N . mean edge) = pi / 2.
+        p, n, e = self.grid()
+        values = dn.compute_pointiness(p, n, e)
+        self.assertEqual(values.shape, (len(p),))
+        np.testing.assert_allclose(values, 0.5, atol=1e-6)
+
+    def test_a_cube_corner_is_convex(self):
+        # A cube's corner: its three edges point away from the outward normal,
+        # so N . mean edge < 0 and the value is above 0.5 (Cycles: convex > 0.5).
+        p = np.array([[x, y, z] for z in (0, 1) for y in (0, 1) for x in (0, 1)], np.float32)
+        n = (p - 0.5) / np.linalg.norm(p - 0.5, axis=1, keepdims=True)
+        e = np.array([[0, 1], [2, 3], [4, 5], [6, 7], [0, 2], [1, 3], [4, 6], [5, 7], [0, 4], [1, 5], [2, 6],
+                      [3, 7]], np.uint32)
+        values = dn.compute_pointiness(p, n.astype(np.float32), e)
+        raw = np.arccos(-1 / np.sqrt(3)) / np.pi   # N = (1,1,1)/sqrt 3 against the mean edge -(1,1,1)/3
+        np.testing.assert_allclose(values, raw, rtol=1e-5)   # every vertex alike: the blur keeps it
+
+    def test_duplicate_vertices_weld(self):
+        # A bumpy grid's last column duplicated (as a seam or a split edge
+        # leaves it): the copies weld to the originals and read their value.
+        p, n, e = self.grid(2)
+        p[:, 2] = np.float32([0.0, 0.3, -0.2, 0.1, 0.5, 0.0, -0.4, 0.2, 0.1])
+        seam = [2, 5, 8]
+        alone = dn.compute_pointiness(p, n, e)
+        values = dn.compute_pointiness(np.concatenate([p, p[seam]]), np.concatenate([n, n[seam]]), e)
+        np.testing.assert_allclose(values[len(p):], values[seam], atol=0)
+        np.testing.assert_allclose(values[:len(p)], alone, atol=1e-7)
+
+    def test_islands_hash_their_disjoint_set_root(self):
+        # Two triangles sharing an edge (one island) and a third apart.
+        edges = np.array([[0, 1], [1, 2], [2, 0], [1, 3], [3, 2], [4, 5], [5, 6], [6, 4]], np.uint32)
+        first = np.array([0, 1, 4], np.uint32)
+        values = dn.compute_random_per_island(7, edges, first)
+        # Union by rank in edge order: 0 takes 1, then 2 (and 3); 4 takes 5 and 6.
+        expect = [_lookup3_uint(0) / 4294967295.0, _lookup3_uint(0) / 4294967295.0, _lookup3_uint(4) / 4294967295.0]
+        np.testing.assert_allclose(values, np.float32(expect), rtol=0, atol=0)
+        self.assertNotEqual(values[0], values[2])
+
+    def test_bad_arrays(self):
+        p, n, e = self.grid(1)
+        with self.assertRaises(ValueError):
+            dn.compute_pointiness(p, n[:2], e)
+        with self.assertRaises(ValueError):
+            dn.compute_pointiness(p, n, np.array([[0, 99]], np.uint32))
+        with self.assertRaises(ValueError):
+            dn.compute_random_per_island(2, np.array([[0, 5]], np.uint32), np.array([0], np.uint32))

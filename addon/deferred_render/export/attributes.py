@@ -9,6 +9,10 @@
                    active render one
 - ``attr:NAME``    any of the above by name, or a generic attribute (float,
                    int, bool, vector, 2D vector, colour) on points, corners or faces
+- ``pointiness:``  the Geometry node's Pointiness, per vertex, and
+- ``island:``      its Random Per Island, per triangle, both as Cycles 3.4
+                   computes them (native ``compute_pointiness`` /
+                   ``compute_random_per_island``)
 
 Only keys some material of the object reads are exported, with numpy
 ``foreach_get`` (no Python loop over elements). A key the mesh cannot
@@ -119,8 +123,9 @@ def _generic(mesh, name, gather):
     return gather(data, attr.domain)
 
 
-class TangentInputs:
-    """What MikkTSpace reads besides the UV map: the exported triangles."""
+class ExportedGeometry:
+    """The exported triangles, which the native computations read (MikkTSpace
+    besides the UV map, Random Per Island)."""
 
     __slots__ = ("positions", "indices", "corner_normals", "flat_triangles")
 
@@ -133,6 +138,40 @@ class TangentInputs:
         self.flat_triangles = flat_triangles
 
 
+def _pointiness(mesh, gather, inputs, warn):
+    from .. import native  # the compiled module; NativeUnavailable is a RuntimeError
+    _warn_split(mesh, "Pointiness", warn)
+    nv = len(mesh.vertices)
+    normals = _get(mesh.vertex_normals, "vector", nv, 3)
+    values = native.load().compute_pointiness(inputs.positions, np.ascontiguousarray(normals), _edges(mesh))
+    return gather(values.reshape(nv, 1), "POINT")
+
+
+def _random_per_island(mesh, inputs, warn):
+    from .. import native
+    _warn_split(mesh, "Random Per Island", warn)
+    first = np.ascontiguousarray(inputs.indices[:, 0])
+    values = native.load().compute_random_per_island(len(mesh.vertices), _edges(mesh), first)
+    return np.repeat(values, 3).reshape(-1, 1)
+
+
+def _edges(mesh):
+    n = len(mesh.edges)
+    edges = np.empty(n * 2, dtype=np.uint32)
+    if n:
+        mesh.edges.foreach_get("vertices", edges)
+    return edges.reshape(n, 2)
+
+
+def _warn_split(mesh, what, warn):
+    # Cycles 3.4 splits an auto-smooth mesh at its sharp edges before it
+    # computes these (blender/util.h object_to_mesh: split_faces): islands
+    # end at sharp edges and Pointiness reads the split fans' normals.
+    if mesh.use_auto_smooth or mesh.has_custom_normals:
+        warn(f"mesh '{mesh.name}': Geometry {what} is computed on the mesh as modelled; Cycles first splits "
+             "an Auto Smooth mesh at its sharp edges, so it may differ there")
+
+
 def _tangents(mesh, name, gather, inputs):
     uvs = _uv(mesh, name, gather)
     if uvs is None:
@@ -142,10 +181,11 @@ def _tangents(mesh, name, gather, inputs):
                                           np.ascontiguousarray(uvs, dtype=np.float32), inputs.flat_triangles)
 
 
-def corner_attributes(mesh, keys, gather, warn, tangent_inputs=None):
+def corner_attributes(mesh, keys, gather, warn, geometry=None):
     """[(key, (3T, C) float32)] for the keys the mesh has (object space).
 
-    ``tangent_inputs`` (TangentInputs) is needed for ``tangent:`` keys."""
+    ``geometry`` (ExportedGeometry) is needed for ``tangent:``, ``pointiness:``
+    and ``island:`` keys."""
     out = []
     for key in sorted(keys):
         kind, _, name = key.partition(":")
@@ -157,7 +197,11 @@ def corner_attributes(mesh, keys, gather, warn, tangent_inputs=None):
                 attr = _render_color(mesh) if name == "" else mesh.color_attributes.get(name)
                 data = _color(mesh, attr, gather) if attr is not None else None
             elif kind == "tangent":
-                data = _tangents(mesh, name, gather, tangent_inputs)
+                data = _tangents(mesh, name, gather, geometry)
+            elif kind == "pointiness":
+                data = _pointiness(mesh, gather, geometry, warn)
+            elif kind == "island":
+                data = _random_per_island(mesh, geometry, warn)
             elif kind == "attr":
                 attr = mesh.color_attributes.get(name)
                 data = _color(mesh, attr, gather) if attr is not None else _generic(mesh, name, gather)

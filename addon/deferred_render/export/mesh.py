@@ -167,7 +167,7 @@ def mesh_arrays(mesh, name=None, split_normals=None, attribute_keys=(), warn=Non
     if attribute_keys:
         corner_attributes = attribute_export.corner_attributes(
             mesh, attribute_keys, gather, warn or (lambda message: None),
-            attribute_export.TangentInputs(positions, tri_verts, corner_normals, flat_triangles))
+            attribute_export.ExportedGeometry(positions, tri_verts, corner_normals, flat_triangles))
     texspace_location = tuple(getattr(mesh, "texspace_location", (0.0, 0.0, 0.0)))
     texspace_size = tuple(getattr(mesh, "texspace_size", (1.0, 1.0, 1.0)))
 

@@ -71,12 +71,14 @@ def object_info(b):
 
 @register("ShaderNodeNewGeometry")
 def geometry(b):
-    for name in ("Pointiness", "Random Per Island"):
-        if b.node.outputs[name].is_linked:
-            b._graph.note(f"'{b.node.name}': Geometry '{name}' is not supported (0 used)")
-    b.call("node_geometry", [],
+    # Pointiness and Random Per Island are mesh data the export computes as
+    # Cycles does (export/attributes.py), read only where they are used.
+    def mesh_value(output, key):
+        return b.attribute(key) if b.node.outputs[output].is_linked else b.shading("attr_none")
+    b.call("node_geometry", [mesh_value("Pointiness", "pointiness:"), mesh_value("Random Per Island", "island:")],
            [("Position", "vector"), ("Normal", "vector"), ("Tangent", "vector"), ("True Normal", "vector"),
-            ("Incoming", "vector"), ("Parametric", "vector"), ("Backfacing", "float")])
+            ("Incoming", "vector"), ("Parametric", "vector"), ("Backfacing", "float"), ("Pointiness", "float"),
+            ("Random Per Island", "float")])
 
 
 @register("ShaderNodeLayerWeight")

@@ -90,8 +90,14 @@ OURS = ("ours", "ours_rays")
 PLANS = {
     "showcase":    {"ref_spp": 1024, "unocc_spp": 512, "ours_rays": [1, 4, 16, 64, 256], "ours": [1, 4, 16, 64], "eevee": [1, 4, 16, 64],
                     "cycles": [1, 4, 16, 64], "ours_noshadow": [16, 64]},
-    "box_room":    {"ref_spp": 1024, "unocc_spp": 512, "ours_rays": [1, 4, 16, 64, 256], "ours": [1, 4, 16, 64], "eevee": [1, 4, 16, 64],
-                    "cycles": [1, 4, 16, 64], "ours_noshadow": [16, 64]},
+    # box_room: its chrome ball's highlight (radiance ~200 over a few pixels)
+    # is reached by the pixel filter's tail of the pixels around it, whose
+    # values a path tracer and this film alike sample by chance: Cycles'
+    # 1024-sample halves disagreed 3x on one of them. The 8192-sample
+    # reference (385 s here) resolves them; Cycles at 256 is the issue's
+    # comparison at equal samples.
+    "box_room":    {"ref_spp": 8192, "unocc_spp": 512, "ours_rays": [1, 4, 16, 64, 256], "ours": [1, 4, 16, 64], "eevee": [1, 4, 16, 64],
+                    "cycles": [1, 4, 16, 64, 256], "ours_noshadow": [16, 64]},
     # many_lights: its 1024 small lights already have use_shadow off; only the
     # moon (0.05 W/m2) casts shadow maps, so no extra shadow-free run.
     "many_lights": {"ref_spp": 256, "unocc_spp": 128, "ours": [1, 4, 16], "eevee": [1, 4],

@@ -6,8 +6,8 @@
 // needs Blender, which the GPU machines do not have).
 //
 // The scene is bench_materials.py's, as its capture holds it
-// (bench/gpu/captures/materials_*.npz): 64 UV spheres (radius 0.95, 48 x 24,
-// 2 208 triangles) in an 8 x 8 grid under a sun, a 50 mm camera 14 m away.
+// (bench/gpu/captures/materials_*.npz): 64 UV spheres (radius 0.95, 48 x 24:
+// 2 304 triangles) in an 8 x 8 grid under a sun, a 50 mm camera 14 m away.
 // The textured material is that capture's graph, node for node: UV ->
 // Mapping (scale 4, 2, 1) -> a 512 x 512 RGBA8 image -> Base Color, and the
 // same image -> tangent-space Normal Map (tangents from compute_tangents);
@@ -136,8 +136,8 @@ struct Row {
 int main(int argc, char** argv) {
     const int width = argc > 2 ? std::atoi(argv[1]) : 1920;
     const int height = argc > 2 ? std::atoi(argv[2]) : 1080;
-    const int samples = argc > 3 ? std::atoi(argv[3]) : 16;
-    const int repeats = argc > 4 ? std::atoi(argv[4]) : 3;
+    const int samples = std::max(1, argc > 3 ? std::atoi(argv[3]) : 16);
+    const int repeats = std::max(1, argc > 4 ? std::atoi(argv[4]) : 3);
     std::setvbuf(stdout, nullptr, _IOLBF, 0);
     try {
         Renderer renderer;
@@ -216,7 +216,7 @@ int main(int argc, char** argv) {
             rows.push_back(row);
         }
 
-        std::printf("\n%dx%d, %d samples, 64 spheres (2 208 triangles each), median of %d renders: GPU time per "
+        std::printf("\n%dx%d, %d samples, 64 spheres (2 304 triangles each), median of %d renders: GPU time per "
                     "film sample (ms)\n\n",
                     width, height, samples, repeats);
         std::printf("| material | geometry | against constant | shadows | lighting | total | first render: "

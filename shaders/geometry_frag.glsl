@@ -128,6 +128,9 @@ in vec2 v_barycentric;
 #if MATERIAL_ATTRIBUTE_COUNT > 0
 in vec4 v_attr[MATERIAL_ATTRIBUTE_COUNT];
 #endif
+#ifdef MATERIAL_FLAT_ATTRIBUTE
+flat in vec4 v_attr_flat;
+#endif
 layout(std430, binding = SSBO_INSTANCES) readonly buffer Instances { GpuInstance instances[]; };
 layout(location = 11) uniform vec3 texspace_location;
 layout(location = 12) uniform vec3 texspace_size;
@@ -227,6 +230,9 @@ void shading_point_init(vec3 N, vec3 Ng, vec3 V, bool back) {
 #if MATERIAL_ATTRIBUTE_COUNT > 0
     for (int k = 0; k < MATERIAL_ATTRIBUTE_COUNT; ++k) g_sd.attr[k] = v_attr[k];
 #endif
+#ifdef MATERIAL_FLAT_ATTRIBUTE
+    g_sd.attr[MATERIAL_FLAT_ATTRIBUTE] = v_attr_flat;
+#endif
 #ifdef MATERIAL_BUMP
     /* Cycles' sd->dP: orthographic, the pixel's size on the camera plane;
      * perspective, the ray length times the per-pixel change of the ray's
@@ -251,6 +257,10 @@ void shading_point_init(vec3 N, vec3 Ng, vec3 V, bool back) {
         g_sd.dattr_dx[k] = dFdxFine(v_attr[k]);
         g_sd.dattr_dy[k] = dFdyFine(v_attr[k]);
     }
+#endif
+#ifdef MATERIAL_FLAT_ATTRIBUTE
+    g_sd.dattr_dx[MATERIAL_FLAT_ATTRIBUTE] = vec4(0.0);
+    g_sd.dattr_dy[MATERIAL_FLAT_ATTRIBUTE] = vec4(0.0);
 #endif
 #else
     g_sd.bump_dP = 0.0;

@@ -64,6 +64,9 @@ out vec2 v_barycentric;       /* weights of the triangle's corners 0 and 1 */
 #if MATERIAL_ATTRIBUTE_COUNT > 0
 out vec4 v_attr[MATERIAL_ATTRIBUTE_COUNT];
 #endif
+#ifdef MATERIAL_FLAT_ATTRIBUTE
+flat out vec4 v_attr_flat; /* that slot, constant per triangle: not interpolated */
+#endif
 #endif
 
 #ifdef GBUF_GEOMETRY
@@ -172,6 +175,9 @@ void main() {
         }
         v_attr[k] = a;
     }
+#endif
+#ifdef MATERIAL_FLAT_ATTRIBUTE
+    v_attr_flat = v_attr[MATERIAL_FLAT_ATTRIBUTE];
 #endif
 #endif
     v_uv = (mesh_flags & 2u) != 0u ? corner_uvs[corner] : vec2(0.0);

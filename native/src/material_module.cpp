@@ -151,6 +151,14 @@ GLuint MaterialModule::program(ShaderLibrary& shaders, std::uint32_t graph, cons
     v.defines.push_back("MATERIAL_GRAPH");
     if (g.graph.alpha) v.defines.push_back("MATERIAL_ALPHA");
     v.defines.push_back("MATERIAL_ATTRIBUTE_COUNT " + std::to_string(g.graph.attributes.size()));
+    // Random Per Island is constant per triangle and meant to be hashed
+    // further: read flat, since interpolating three equal values may move
+    // the last bit (material_graph.h).
+    for (std::size_t k = 0; k < g.graph.attributes.size(); ++k)
+        if (g.graph.attributes[k].rfind(kFlatAttributePrefix, 0) == 0) {
+            v.defines.push_back("MATERIAL_FLAT_ATTRIBUTE " + std::to_string(k));
+            break;
+        }
     v.defines.push_back("MATERIAL_IMAGE_COUNT " + std::to_string(g.graph.images.size()));
     if (calls(graph, "node_bump_offset")) v.defines.push_back("MATERIAL_BUMP");
     return shaders.graphics_program("geometry_vert.glsl", "geometry_frag.glsl", v,

@@ -27,7 +27,6 @@ F3 operator+(F3 a, F3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
 float dot(F3 a, F3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 F3 divide(F3 a, float f) { return {a.x / f, a.y / f, a.z / f}; }
 F3 normalize(F3 a) { return divide(a, std::sqrt(dot(a, a))); }
-bool operator==(F3 a, F3 b) { return a.x == b.x && a.y == b.y && a.z == b.z; }
 
 void check_indices(const std::uint32_t* indices, std::size_t count, std::size_t vertex_count, const char* what) {
     for (std::size_t i = 0; i < count; ++i)
@@ -70,10 +69,17 @@ void compute_pointiness(const float* positions, const float* vertex_normals, std
         const F3 p = co(v);
         return p.x + p.y + p.z;
     };
+    // Cycles' comparator leaves equal sums of different positions unordered
+    // (and is not a strict weak order there); these are ordered by their
+    // coordinates, so the sort is well defined.
     std::sort(sorted.begin(), sorted.end(), [&](std::size_t a, std::size_t b) {
-        if (co(a) == co(b)) return a > b;
         const float sa = sum(a), sb = sum(b);
-        return sa != sb ? sa < sb : a < b;
+        if (sa != sb) return sa < sb;
+        const F3 pa = co(a), pb = co(b);
+        if (pa.x != pb.x) return pa.x < pb.x;
+        if (pa.y != pb.y) return pa.y < pb.y;
+        if (pa.z != pb.z) return pa.z < pb.z;
+        return a > b;  // equal positions: the higher index first, as Cycles
     });
     std::vector<std::size_t> orig(vertex_count);
     for (std::size_t i = 0; i < vertex_count; ++i) {
@@ -107,7 +113,6 @@ void compute_pointiness(const float* positions, const float* vertex_normals, std
         std::set<std::pair<std::size_t, std::size_t>> visited;
         for (std::size_t e = 0; e < edge_count; ++e) {
             const std::size_t v0 = orig[edges[2 * e]], v1 = orig[edges[2 * e + 1]];
-            if (v0 == v1) continue;  // welded into one vertex: no direction
             if (!visited.insert({std::min(v0, v1), std::max(v0, v1)}).second) continue;
             unique_edges.push_back({v0, v1});
         }
@@ -124,7 +129,13 @@ void compute_pointiness(const float* positions, const float* vertex_normals, std
     std::vector<float> raw(vertex_count, 0.0f);
     for (std::size_t v = 0; v < vertex_count; ++v) {
         if (orig[v] != v || counter[v] == 0) continue;
-        const float c = std::clamp(dot(normal[v], divide(accum[v], float(counter[v]))), -1.0f, 1.0f);  // safe_acosf
+        // safe_acosf: acosf(clamp(x, -1, 1)) with Cycles' clamp, min(max(x,
+        // -1), 1) by comparisons, which turns NaN into -1: a vertex with an
+        // edge to itself (its two ends welded: a zero vector normalised)
+        // reads pi, i.e. 1.
+        const float x = dot(normal[v], divide(accum[v], float(counter[v])));
+        const float lo = x > -1.0f ? x : -1.0f;
+        const float c = lo < 1.0f ? lo : 1.0f;
         raw[v] = std::acos(c) * float(M_1_PI);
     }
     // STEP 4: one blur step over the same edges, then the duplicates copy.

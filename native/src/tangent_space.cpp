@@ -4,11 +4,15 @@
 // Mesh.calc_tangents and Cycles call. The steps carry the port's names:
 //
 //  1. Weld (generateSharedVerticesIndexList): corners equal in position,
-//     normal and UV are one vertex. The port finds them by a hash of the
-//     values' bits and then compares them with ==, so -0 and +0 are
-//     different vertices (the normals Cycles computes for a flat triangle
-//     carry either sign of zero, which splits an n-gon's tangents) and NaN
-//     never welds.
+//     normal and UV are one vertex. The port starts its search at a hash of
+//     the values' bits and compares with ==, so two corners equal in value
+//     but not in bits (a zero of either sign: the normals Cycles computes
+//     for flat triangles carry both, which splits a flat n-gon's tangents)
+//     weld only where one's linear probe happens to reach the other in its
+//     hash table, which depends on the table's layout and, above 10 000
+//     triangles, on thread timing. This welds by bits and value: the port's
+//     result wherever the probes do not meet (a random 12-gon differs in
+//     about 1 of 1 000, by a helper's differential test). NaN never welds.
 //  2. A triangle with two corners at one position (==) is degenerate
 //     (degenPrologue); the others get their tangent from the UV gradient
 //     (initTriangle, the paper's eq. 18), flipped on UV-mirrored triangles;
@@ -208,16 +212,51 @@ private:
                    same_bits_and_value(na.z, nb.z) && same_bits_and_value(u(a), u(b)) &&
                    same_bits_and_value(v(a), v(b));
         };
+        // A corner joins the first earlier representative in its bucket with
+        // the same bits and values. Buckets are a vertex's few corners; a
+        // point many corners share (a collapsed mesh, a cone's tip with a
+        // UV seam per face) is sorted by its corners' bits instead, so the
+        // search stays O(k log k), not O(k^2).
+        constexpr std::ptrdiff_t kLinearBucket = 16;
         parallel_chunks(vertex_count_, [&](std::size_t vert) {
-            const std::uint32_t* first = bucket.data() + start[vert];
-            const std::uint32_t* last = bucket.data() + start[vert + 1];
-            for (const std::uint32_t* it = first; it != last; ++it) {
-                welded_[*it] = *it;
-                for (const std::uint32_t* rep = first; rep != it; ++rep)
-                    if (welded_[*rep] == *rep && same(*rep, *it)) {
-                        welded_[*it] = *rep;
-                        break;
-                    }
+            std::uint32_t* first = bucket.data() + start[vert];
+            std::uint32_t* last = bucket.data() + start[vert + 1];
+            if (last - first <= kLinearBucket) {
+                for (const std::uint32_t* it = first; it != last; ++it) {
+                    welded_[*it] = *it;
+                    for (const std::uint32_t* rep = first; rep != it; ++rep)
+                        if (welded_[*rep] == *rep && same(*rep, *it)) {
+                            welded_[*it] = *rep;
+                            break;
+                        }
+                }
+                return;
+            }
+            struct Keyed {
+                std::uint32_t key[5];
+                std::uint32_t corner;
+            };
+            std::vector<Keyed> keyed(std::size_t(last - first));
+            for (std::size_t i = 0; i < keyed.size(); ++i) {
+                const std::uint32_t c = first[i];
+                const V3 n = normal(c);
+                keyed[i] = {{bits(n.x), bits(n.y), bits(n.z), bits(u(c)), bits(v(c))}, c};
+            }
+            std::sort(keyed.begin(), keyed.end(), [](const Keyed& a, const Keyed& b) {
+                for (int k = 0; k < 5; ++k)
+                    if (a.key[k] != b.key[k]) return a.key[k] < b.key[k];
+                return a.corner < b.corner;
+            });
+            // A run of equal bits in corner order: each joins the run's first
+            // corner unless a value is NaN (never equal), which stays alone.
+            for (std::size_t i = 0; i < keyed.size();) {
+                std::size_t end = i + 1;
+                while (end < keyed.size() && std::equal(keyed[i].key, keyed[i].key + 5, keyed[end].key)) ++end;
+                const std::uint32_t rep = keyed[i].corner;
+                welded_[rep] = rep;
+                for (std::size_t j = i + 1; j < end; ++j)
+                    welded_[keyed[j].corner] = same(rep, keyed[j].corner) ? rep : keyed[j].corner;
+                i = end;
             }
         });
     }

@@ -120,12 +120,29 @@ def test_unsupported_node_named(checks, scene, plane):
     checks.check(np.allclose(centre(images["Combined"]), 0.0), "its output takes the default (black)")
 
 
+def _hash_uint(kx):
+    """Cycles' hash_uint (util/hash.h: lookup3's final mix)."""
+    def rot(x, k):
+        return ((x << k) | (x >> (32 - k))) & 0xFFFFFFFF
+    a = b = c = (0xdeadbeef + (1 << 2) + 13) & 0xFFFFFFFF
+    a = (a + kx) & 0xFFFFFFFF
+    c = ((c ^ b) - rot(b, 14)) & 0xFFFFFFFF
+    a = ((a ^ c) - rot(c, 11)) & 0xFFFFFFFF
+    b = ((b ^ a) - rot(a, 25)) & 0xFFFFFFFF
+    c = ((c ^ b) - rot(b, 16)) & 0xFFFFFFFF
+    a = ((a ^ c) - rot(c, 4)) & 0xFFFFFFFF
+    b = ((b ^ a) - rot(a, 14)) & 0xFFFFFFFF
+    c = ((c ^ b) - rot(b, 24)) & 0xFFFFFFFF
+    return c
+
+
 def test_geometry_mesh_values(checks, scene, plane):
     """Geometry Pointiness and Random Per Island come from the export
     (native/src/mesh_attributes.cpp; against Cycles in test_node_probes):
     a flat plane's pointiness is 0.5 (every edge lies in the plane), its
-    island value is Cycles' hash of its disjoint-set root; an Auto Smooth
-    mesh, which Cycles splits first, is named in a warning."""
+    island value is Cycles' hash of its disjoint-set root (recomputed here
+    from the plane's edges); an Auto Smooth mesh, which Cycles splits
+    first, is named in a warning."""
     mat, em = emission_material("mesh_values")
     geometry = mat.node_tree.nodes.new("ShaderNodeNewGeometry")
     combine = mat.node_tree.nodes.new("ShaderNodeCombineXYZ")
@@ -135,8 +152,24 @@ def test_geometry_mesh_values(checks, scene, plane):
     images, messages = render_combined(scene, plane, mat, "mesh_values")
     c = centre(images["Combined"])
     checks.check(abs(c[0] - 0.5) < 1e-6, "a flat plane's Pointiness is 0.5", f"{c[0]:.7f}")
-    checks.check(0.0 < c[1] < 1.0 and not warnings_of(messages), "Random Per Island is read, without a warning",
-                 f"{c[1]:.6f}, {warnings_of(messages)}")
+    parent = list(range(len(plane.data.vertices)))
+    rank = [0] * len(parent)
+
+    def find(x):
+        while parent[x] != x:
+            x = parent[x]
+        return x
+    for e in plane.data.edges:   # util/disjoint_set.h: union by rank, in edge order
+        x, y = find(e.vertices[0]), find(e.vertices[1])
+        if x != y:
+            if rank[x] < rank[y]:
+                x, y = y, x
+            parent[y] = x
+            rank[x] += rank[x] == rank[y]
+    expect = np.float32(_hash_uint(find(0))) / np.float32(4294967295.0)
+    checks.check(c[1] == expect and not warnings_of(messages),
+                 "Random Per Island is Cycles' hash of the plane's island root, without a warning",
+                 f"{c[1]:.8f} vs {expect:.8f}, {warnings_of(messages)}")
     plane.data.use_auto_smooth = True
     try:
         _, messages = render_combined(scene, plane, mat, "mesh_values_auto_smooth")

@@ -6,9 +6,12 @@ runs the same algorithm (the C++ port in intern/mikktspace) over polygons,
 so on meshes made of triangles the two must agree to rounding: Blender
 sums a group's corners on threads above 10 000 faces, so the order of
 additions may differ there, nowhere else (bound 1e-6; measured 0 on every
-mesh below, 1.8e-7 on a 512 x 512 sphere). Also: an n-gon mesh gets
-tangents (calc_tangents refuses n-gons), without a warning, and the export
-of a mesh the native module cannot take says so instead of failing.
+mesh below, 1.8e-7 on a 512 x 512 sphere). The meshes are smooth or Auto
+Smooth: a flat triangle's corners read Cycles' triangle normal, not
+Blender's polygon normal, so flat meshes are compared with Cycles instead
+(test_node_probes). Also: an n-gon mesh gets tangents (calc_tangents
+refuses n-gons), without a warning, and bad arrays are ValueErrors (which
+the export turns into a warning naming the mesh).
 Cycles itself is the reference in test_node_probes (normal maps and the
 Tangent node on spheres and on a flat 12-gon).
 
@@ -76,7 +79,7 @@ def exported_tangents(ob, warnings):
     return dict(arrays.attributes).get("tangent:")
 
 
-def compare(checks, name, ob, smooth=True):
+def compare(checks, name, ob):
     """Smooth (or auto smooth) meshes: calc_tangents reads the same normals as the export."""
     warnings = []
     ours = exported_tangents(ob, warnings)

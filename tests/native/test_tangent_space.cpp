@@ -313,8 +313,9 @@ TEST(Tangents, ADegenerateTriangleCopiesAGoodCornerOrKeepsTheDefault) {
 }
 
 TEST(Tangents, AFanOfManyTrianglesAroundOneVertex) {
-    // 200 triangles around a centre (beyond the exact subgroup search's
-    // limit): the centre's tangent is still +X for uv = (x, y).
+    // 200 triangles around a centre, each with its own UVs at the tip (a
+    // bucket of 200 corners, which the weld sorts instead of scanning): the
+    // centre's tangent is still +X for uv = (x, y).
     Mesh m;
     const auto centre = m.vertex(0, 0, 0);
     const int n = 200;

@@ -172,10 +172,6 @@ class ModuleTest(unittest.TestCase):
         self.assertGreater(len(ticks), 5)
 
 
-if __name__ == "__main__":
-    unittest.main()
-
-
 def _lookup3_uint(kx):
     """Cycles' hash_uint (util/hash.h), for the test's expected values."""
     def rot(x, k):
@@ -238,9 +234,25 @@ class MeshAttributes(unittest.TestCase):
         first = np.array([0, 1, 4], np.uint32)
         values = dn.compute_random_per_island(7, edges, first)
         # Union by rank in edge order: 0 takes 1, then 2 (and 3); 4 takes 5 and 6.
-        expect = [_lookup3_uint(0) / 4294967295.0, _lookup3_uint(0) / 4294967295.0, _lookup3_uint(4) / 4294967295.0]
-        np.testing.assert_allclose(values, np.float32(expect), rtol=0, atol=0)
+        # float(hash) / float(0xFFFFFFFF) in float32, as util/hash.h.
+        expect = [np.float32(_lookup3_uint(r)) / np.float32(4294967295.0) for r in (0, 0, 4)]
+        np.testing.assert_array_equal(values, np.array(expect, np.float32))
         self.assertNotEqual(values[0], values[2])
+
+    def test_an_edge_whose_ends_weld_reads_one(self):
+        # A vertex duplicated onto another and joined to it by an edge: the
+        # edge has no direction (Cycles normalises a zero vector, NaN, and
+        # its clamp turns NaN into -1: acos(-1) / pi = 1) before the blur.
+        p, n, e = self.grid(2)
+        p2 = np.concatenate([p, p[4:5]])
+        n2 = np.concatenate([n, n[4:5]])
+        e2 = np.concatenate([e, np.array([[4, 9]], np.uint32)])
+        values = dn.compute_pointiness(p2, n2, e2)
+        self.assertTrue(np.isfinite(values).all())
+        # Vertex 4 (the centre) has 4 real edges and the self edge: raw 1,
+        # blurred with its 4 neighbours (0.5 each) and itself twice more.
+        self.assertAlmostEqual(float(values[4]), (1.0 + 4 * 0.5 + 2 * 1.0) / 7.0, places=6)
+        self.assertEqual(values[9], values[4])
 
     def test_bad_arrays(self):
         p, n, e = self.grid(1)
@@ -250,3 +262,7 @@ class MeshAttributes(unittest.TestCase):
             dn.compute_pointiness(p, n, np.array([[0, 99]], np.uint32))
         with self.assertRaises(ValueError):
             dn.compute_random_per_island(2, np.array([[0, 5]], np.uint32), np.array([0], np.uint32))
+
+
+if __name__ == "__main__":
+    unittest.main()

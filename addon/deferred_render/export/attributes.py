@@ -167,7 +167,7 @@ def _warn_split(mesh, what, warn):
     # Cycles 3.4 splits an auto-smooth mesh at its sharp edges before it
     # computes these (blender/util.h object_to_mesh: split_faces): islands
     # end at sharp edges and Pointiness reads the split fans' normals.
-    if mesh.use_auto_smooth or mesh.has_custom_normals:
+    if mesh.use_auto_smooth:
         warn(f"mesh '{mesh.name}': Geometry {what} is computed on the mesh as modelled; Cycles first splits "
              "an Auto Smooth mesh at its sharp edges, so it may differ there")
 
@@ -205,7 +205,7 @@ def corner_attributes(mesh, keys, gather, warn, geometry=None):
             elif kind == "attr":
                 attr = mesh.color_attributes.get(name)
                 data = _color(mesh, attr, gather) if attr is not None else _generic(mesh, name, gather)
-        except RuntimeError as ex:
+        except (RuntimeError, ValueError) as ex:  # ValueError: the native computations' bad input
             warn(f"mesh '{mesh.name}': {kind} '{name}' unavailable ({ex}); the material reads 0")
             continue
         if data is None:

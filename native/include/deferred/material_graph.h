@@ -50,6 +50,7 @@ struct MaterialGraph {
     std::vector<float> constants;      // per material: values, not structure
     std::vector<std::uint32_t> images;       // image slot -> image id (Renderer::add_image)
     std::vector<std::string> attributes;     // attribute slot k (Shading "attrK") -> mesh attribute name
+                                             // (one starting with kFlatAttributePrefix is read flat)
     // The closure's alpha can be below 1 (Principled Alpha, a Transparent
     // BSDF): the program discards by it (stochastic transparency), draws
     // its own depth pre-pass and its own shadow-map casters.
@@ -62,6 +63,11 @@ struct MaterialGraph {
     std::vector<std::string> aovs;
 };
 constexpr int kMaxGraphAovs = 8;  // MAX_GRAPH_AOVS in material_lib.glsl
+// A mesh attribute constant per triangle whose exact value matters (the
+// add-on's "island:", Random Per Island, which users hash): the geometry
+// pass reads it with a flat varying rather than interpolating three equal
+// values, which may move the last bit. One per graph.
+constexpr const char* kFlatAttributePrefix = "island:";
 
 // An image for texture nodes: RGBA, row 0 at the bottom (Blender's order).
 // 8-bit data is kept 8-bit on the GPU (RGBA8, read as value/255), float data

@@ -7,14 +7,16 @@
 
 namespace deferred {
 
-// Pointiness per vertex (attr_create_pointiness): vertices closer than
-// sqrt(FLT_EPSILON) are welded (Cycles' sort by coordinate sum), the welded
-// vertex normal is the normalised sum of theirs, and a vertex's raw value is
+// Pointiness per vertex (attr_create_pointiness): a vertex welds to a later
+// one in Cycles' order by coordinate sum whose sum is within 3 FLT_EPSILON
+// and whose squared distance is below FLT_EPSILON; the welded vertex normal
+// is the normalised sum of theirs, and a vertex's raw value is
 // acos(N . mean of its unit edge directions) / pi over its distinct edges;
 // then each value is averaged with its neighbours' (one blur step over the
 // edges). positions, vertex_normals: vertex_count x 3; edges: edge_count x 2
 // vertex indices; out: vertex_count. An edge whose two ends weld into one
-// vertex is skipped (Cycles would normalise a zero vector: NaN).
+// vertex gives that vertex 1, as in Cycles (a zero vector normalised is
+// NaN, which Cycles' clamp turns into -1).
 void compute_pointiness(const float* positions, const float* vertex_normals, std::size_t vertex_count,
                         const std::uint32_t* edges, std::size_t edge_count, float* out);
 

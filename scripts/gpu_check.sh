@@ -9,7 +9,7 @@
 # geometry pass against constant ones: deferred_bench_materials). Writes four
 # files to $OUT (the device tool returns at most eight): summary.txt,
 # native_tests.log, robustness.log, benches.md. Each step has a time limit
-# (killed 5 s after it): 150 s for the tests (in parallel), 350 s for the
+# (killed 5 s after it): 150 s for the tests (in parallel), 330 s for the
 # benchmarks, inside one device call (600 s) and a session's 15 minutes of
 # device time. Exits non-zero when a step failed or ran out of time.
 # Parts of it, for a rerun inside what is left of the device time:
@@ -109,6 +109,6 @@ export DEFERRED_BENCH_PROFILE=1
 # shellcheck disable=SC2086
 [[ "$benches_to_run" == *" shadows "* ]] && run bench_shadows 80 "$benches" stdbuf -oL "$stage/bin/deferred_bench_shadows" $size
 # shellcheck disable=SC2086
-[[ "$benches_to_run" == *" materials "* ]] && run bench_materials 60 "$benches" "$stage/bin/deferred_bench_materials" $size 16 3
+[[ "$benches_to_run" == *" materials "* ]] && run bench_materials 40 "$benches" "$stage/bin/deferred_bench_materials" $size 16 3
 cat "$summary"
 exit "$failed"

@@ -56,11 +56,10 @@ class MeshArrays:
         return len(self.positions)
 
     def nbytes(self):
-        total = 0
-        for arr in (self.positions, self.indices, self.corner_normals, self.corner_uvs, self.material_indices):
-            if arr is not None:
-                total += arr.nbytes
-        return total + sum(a.nbytes for _, a in self.attributes)
+        # Each array once: the render UV map and its "uv:" attribute may be one array.
+        arrays = {id(a): a for a in (self.positions, self.indices, self.corner_normals, self.corner_uvs,
+                                     self.material_indices, *(a for _, a in self.attributes)) if a is not None}
+        return sum(a.nbytes for a in arrays.values())
 
 
 class MeshSkipped(Exception):

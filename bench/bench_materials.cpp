@@ -34,47 +34,12 @@ namespace {
 
 using namespace deferred;
 
-GraphArg int_arg(int v) {
-    GraphArg a;
-    a.kind = GraphArg::Kind::Int;
-    a.value = v;
-    return a;
-}
-GraphArg const_arg(SocketType t, int offset) {
-    GraphArg a;
-    a.kind = GraphArg::Kind::Const;
-    a.type = t;
-    a.value = offset;
-    return a;
-}
-GraphArg block_arg(int offset, int count) {
-    GraphArg a;
-    a.kind = GraphArg::Kind::Block;
-    a.value = offset;
-    a.output = count;
-    return a;
-}
-GraphArg link_arg(SocketType type, int node, int output, SocketType from) {
-    GraphArg a;
-    a.kind = GraphArg::Kind::Link;
-    a.type = type;
-    a.node = node;
-    a.output = output;
-    a.from = from;
-    return a;
-}
-GraphArg shading_arg(const char* name) {
-    GraphArg a;
-    a.kind = GraphArg::Kind::Shading;
-    a.name = name;
-    return a;
-}
-GraphArg image_arg(int slot) {
-    GraphArg a;
-    a.kind = GraphArg::Kind::Image;
-    a.value = slot;
-    return a;
-}
+GraphArg int_arg(int v) { return GraphArg::literal(v); }
+GraphArg const_arg(SocketType t, int offset) { return GraphArg::constant(t, offset); }
+GraphArg block_arg(int offset, int count) { return GraphArg::block(offset, count); }
+GraphArg link_arg(SocketType t, int node, int output, SocketType from) { return GraphArg::link(t, node, output, from); }
+GraphArg shading_arg(const char* name) { return GraphArg::shading(name); }
+GraphArg image_arg(int slot) { return GraphArg::image(slot); }
 
 // The graph the add-on built for bench_materials.py's textured material
 // (bench/gpu/captures/materials_textured.npz, add_graph_material).

@@ -25,25 +25,9 @@ namespace {
 // A Diffuse BSDF (grey, Lambert) whose AOV Output nodes write the position
 // (colour AOV "position") and a constant (value AOV "mask").
 MaterialGraph aov_graph() {
-    auto constant = [](SocketType t, int offset) {
-        GraphArg a;
-        a.kind = GraphArg::Kind::Const;
-        a.type = t;
-        a.value = offset;
-        return a;
-    };
-    auto shading = [](const std::string& name) {
-        GraphArg a;
-        a.kind = GraphArg::Kind::Shading;
-        a.name = name;
-        return a;
-    };
-    auto slot = [](int k) {
-        GraphArg a;
-        a.kind = GraphArg::Kind::Int;
-        a.value = k;
-        return a;
-    };
+    auto constant = GraphArg::constant;
+    auto shading = GraphArg::shading;
+    auto slot = GraphArg::literal;
     MaterialGraph g;
     g.name = "aov overlay";
     g.constants = {0.5f, 0.5f, 0.5f, 0.0f, 1.0f};

@@ -17,27 +17,10 @@
 namespace deferred::testing {
 namespace {
 
-GraphArg const_arg(SocketType t, int offset) {
-    GraphArg a;
-    a.kind = GraphArg::Kind::Const;
-    a.type = t;
-    a.value = offset;
-    return a;
-}
-GraphArg shading_arg(const std::string& name) {
-    GraphArg a;
-    a.kind = GraphArg::Kind::Shading;
-    a.name = name;
-    return a;
-}
+GraphArg const_arg(SocketType t, int offset) { return GraphArg::constant(t, offset); }
+GraphArg shading_arg(const std::string& name) { return GraphArg::shading(name); }
 GraphArg link_arg(SocketType type, int node, int output, SocketType from) {
-    GraphArg a;
-    a.kind = GraphArg::Kind::Link;
-    a.type = type;
-    a.node = node;
-    a.output = output;
-    a.from = from;
-    return a;
+    return GraphArg::link(type, node, output, from);
 }
 
 // Emission shader of `color` (an argument) and strength 1 (constant 0).
@@ -321,15 +304,8 @@ TEST_F(MaterialGraphRender, ImagesAreUploadedAsGivenAndRefusedWhenBroken) {
 
 // Emission of a 1x1 image read through image slot 0 (Closest, Extend, flat, no flags).
 MaterialGraph image_emission_graph(std::uint32_t image_id) {
-    auto int_arg = [](int v) {
-        GraphArg a;
-        a.kind = GraphArg::Kind::Int;
-        a.value = v;
-        return a;
-    };
-    GraphArg image;
-    image.kind = GraphArg::Kind::Image;
-    image.value = 0;
+    auto int_arg = [](int v) { return GraphArg::literal(v); };
+    const GraphArg image = GraphArg::image(0);
     MaterialGraph g;
     g.constants = {1.0f};
     g.nodes.push_back({"node_tex_image",

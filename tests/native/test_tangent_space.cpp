@@ -28,7 +28,7 @@ struct Mesh {
     std::size_t triangles() const { return indices.size() / 3; }
 
     std::uint32_t vertex(float x, float y, float z) {
-        positions.insert(positions.end(), {x, y, z});
+        for (float c : {x, y, z}) positions.push_back(c);  // (insert of a list: a GCC 12 false overflow warning)
         return std::uint32_t(positions.size() / 3 - 1);
     }
     // A triangle with +Z normals and UVs from the corner positions.
@@ -78,6 +78,23 @@ void expect_all(const std::vector<float>& t, float x, float y, float z, float si
     }
 }
 
+// Two triangles with one continuous UV map but different gradients, both
+// keeping the UV orientation, +Z normals:
+// A = O, (1,0), (0,1) with uv = (x, y): T_A = +X;
+// B = O, (0,1), (-1,1) with uv (0,0), (0,1), (-1,2): dP/du = (1,1,0), T_B = (1,1,0)/sqrt(2).
+// Corners 0..2 are A's (O, (1,0), (0,1)), 3..5 B's (O, (0,1), (-1,1)).
+Mesh two_triangles_bent_in_uv() {
+    Mesh m;
+    const auto o = m.vertex(0, 0, 0), x = m.vertex(1, 0, 0), y = m.vertex(0, 1, 0), w = m.vertex(-1, 1, 0);
+    auto uv = [](const float* p) {
+        if (p[0] < 0) return std::pair{-1.0f, 2.0f};
+        return std::pair{p[0], p[1]};
+    };
+    m.triangle(o, x, y, uv);
+    m.triangle(o, y, w, uv);
+    return m;
+}
+
 }  // namespace
 
 TEST(Tangents, FollowTheUVGradientAndItsOrientation) {
@@ -119,20 +136,10 @@ TEST(Tangents, AMirroredHalfKeepsItsOwnTangentAcrossTheSeam) {
 }
 
 TEST(Tangents, ASharedVertexAveragesItsCornersByAngle) {
-    // Two triangles with one continuous UV map but different gradients:
-    // A = O, (1,0), (0,1) with uv = (x, y): T_A = +X;
-    // B = O, (0,1), (-1,1) with uv (0,0), (0,1), (-1,2): dP/du = (1,1,0), T_B = (1,1,0)/sqrt(2).
-    // Both keep the UV orientation. At O, A's angle is 90 degrees and B's 45;
+    // two_triangles_bent_in_uv: at O, A's angle is 90 degrees and B's 45;
     // at (0,1), A's is 45 and B's 90. MikkTSpace weights each face's
     // tangent by its corner angle there.
-    Mesh m;
-    const auto o = m.vertex(0, 0, 0), x = m.vertex(1, 0, 0), y = m.vertex(0, 1, 0), w = m.vertex(-1, 1, 0);
-    auto uv = [](const float* p) {
-        if (p[0] < 0) return std::pair{-1.0f, 2.0f};
-        return std::pair{p[0], p[1]};
-    };
-    m.triangle(o, x, y, uv);
-    m.triangle(o, y, w, uv);
+    Mesh m = two_triangles_bent_in_uv();
     const auto t = m.tangents();
     const double pi = 3.14159265358979323846, s = 1.0 / std::sqrt(2.0);
     auto expected = [&](double weight_a, double weight_b) {
@@ -164,14 +171,7 @@ TEST(Tangents, CornersWeldOnlyWithTheSameBitsSoMinusZeroSplits) {
     // flat-triangle normals carry either sign of zero, so the triangles of
     // a flat n-gon keep their own tangents there; with equal bits, the
     // shared corners average (the test above).
-    Mesh m;
-    const auto o = m.vertex(0, 0, 0), x = m.vertex(1, 0, 0), y = m.vertex(0, 1, 0), w = m.vertex(-1, 1, 0);
-    auto uv = [](const float* p) {
-        if (p[0] < 0) return std::pair{-1.0f, 2.0f};
-        return std::pair{p[0], p[1]};
-    };
-    m.triangle(o, x, y, uv);
-    m.triangle(o, y, w, uv);
+    Mesh m = two_triangles_bent_in_uv();
     for (int k = 3; k < 6; ++k) m.normals[3 * std::size_t(k)] = -0.0f;  // the second triangle's normals
     const auto t = m.tangents();
     const float s = float(1.0 / std::sqrt(2.0));
@@ -191,14 +191,7 @@ TEST(Tangents, FlatTrianglesReadTheirOwnNormalAsCyclesComputesIt) {
     // 0 * -1 - 0 * 0 = -0), A's (0, 0, 1). So the two do not weld at their
     // shared corners and each keeps its own tangent: Cycles' image of a flat
     // n-gon. With smooth shading (the same +Z normals given) they average.
-    Mesh m;
-    const auto o = m.vertex(0, 0, 0), x = m.vertex(1, 0, 0), y = m.vertex(0, 1, 0), w = m.vertex(-1, 1, 0);
-    auto uv = [](const float* p) {
-        if (p[0] < 0) return std::pair{-1.0f, 2.0f};
-        return std::pair{p[0], p[1]};
-    };
-    m.triangle(o, x, y, uv);
-    m.triangle(o, y, w, uv);
+    Mesh m = two_triangles_bent_in_uv();
     const auto smooth = m.tangents();
     EXPECT_GT(smooth[4 * 3 + 0] - smooth[4 * 3 + 1], 0.1f);  // O in B leans towards A's +X
     m.flat = {1, 1};

@@ -127,9 +127,10 @@ class ExportedGeometry:
     """The exported triangles, which the native computations read (MikkTSpace
     besides the UV map, Random Per Island)."""
 
-    __slots__ = ("positions", "indices", "corner_normals", "flat_triangles")
+    __slots__ = ("positions", "indices", "corner_normals", "flat_triangles", "_edges")
 
     def __init__(self, positions, indices, corner_normals, flat_triangles=None):
+        self._edges = None  # the mesh's (E, 2) edges, read once for Pointiness and Random Per Island
         self.positions = positions            # (V, 3) float32
         self.indices = indices                # (T, 3) uint32
         self.corner_normals = corner_normals  # (3T, 3) float32, unit
@@ -137,13 +138,22 @@ class ExportedGeometry:
         # hands MikkTSpace (native/include/deferred/tangent_space.h)
         self.flat_triangles = flat_triangles
 
+    def edges(self, mesh):
+        if self._edges is None:
+            n = len(mesh.edges)
+            edges = np.empty(n * 2, dtype=np.uint32)
+            if n:
+                mesh.edges.foreach_get("vertices", edges)
+            self._edges = edges.reshape(n, 2)
+        return self._edges
+
 
 def _pointiness(mesh, gather, inputs, warn):
     from .. import native  # the compiled module; NativeUnavailable is a RuntimeError
     _warn_split(mesh, "Pointiness", warn)
     nv = len(mesh.vertices)
     normals = _get(mesh.vertex_normals, "vector", nv, 3)
-    values = native.load().compute_pointiness(inputs.positions, np.ascontiguousarray(normals), _edges(mesh))
+    values = native.load().compute_pointiness(inputs.positions, np.ascontiguousarray(normals), inputs.edges(mesh))
     return gather(values.reshape(nv, 1), "POINT")
 
 
@@ -151,16 +161,8 @@ def _random_per_island(mesh, inputs, warn):
     from .. import native
     _warn_split(mesh, "Random Per Island", warn)
     first = np.ascontiguousarray(inputs.indices[:, 0])
-    values = native.load().compute_random_per_island(len(mesh.vertices), _edges(mesh), first)
+    values = native.load().compute_random_per_island(len(mesh.vertices), inputs.edges(mesh), first)
     return np.repeat(values, 3).reshape(-1, 1)
-
-
-def _edges(mesh):
-    n = len(mesh.edges)
-    edges = np.empty(n * 2, dtype=np.uint32)
-    if n:
-        mesh.edges.foreach_get("vertices", edges)
-    return edges.reshape(n, 2)
 
 
 def _warn_split(mesh, what, warn):

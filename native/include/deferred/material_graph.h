@@ -12,6 +12,7 @@
 
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace deferred {
@@ -34,6 +35,49 @@ struct GraphArg {
     std::int32_t output = 0;
     SocketType from = SocketType::Float;
     std::string name;
+
+    // Named constructors, one per kind (the add-on's bindings build the same
+    // from its tuples; C++ callers: tests, benchmarks).
+    static GraphArg literal(std::int32_t v) {
+        GraphArg a;
+        a.value = v;
+        return a;
+    }
+    static GraphArg constant(SocketType t, std::int32_t offset) {
+        GraphArg a;
+        a.kind = Kind::Const;
+        a.type = t;
+        a.value = offset;
+        return a;
+    }
+    static GraphArg block(std::int32_t offset, std::int32_t count) {
+        GraphArg a;
+        a.kind = Kind::Block;
+        a.value = offset;
+        a.output = count;
+        return a;
+    }
+    static GraphArg link(SocketType t, std::int32_t node, std::int32_t output, SocketType from) {
+        GraphArg a;
+        a.kind = Kind::Link;
+        a.type = t;
+        a.node = node;
+        a.output = output;
+        a.from = from;
+        return a;
+    }
+    static GraphArg shading(std::string shading_name) {
+        GraphArg a;
+        a.kind = Kind::Shading;
+        a.name = std::move(shading_name);
+        return a;
+    }
+    static GraphArg image(std::int32_t slot) {
+        GraphArg a;
+        a.kind = Kind::Image;
+        a.value = slot;
+        return a;
+    }
 };
 
 struct GraphNode {

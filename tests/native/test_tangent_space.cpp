@@ -306,8 +306,8 @@ TEST(Tangents, ADegenerateTriangleCopiesAGoodCornerOrKeepsTheDefault) {
 }
 
 TEST(Tangents, AFanOfManyTrianglesAroundOneVertex) {
-    // 200 triangles around a centre, each with its own UVs at the tip (a
-    // bucket of 200 corners, which the weld sorts instead of scanning): the
+    // 200 triangles around a centre: 200 corners at one point (a bucket the
+    // weld sorts instead of scanning) and one group of 200 triangles; the
     // centre's tangent is still +X for uv = (x, y).
     Mesh m;
     const auto centre = m.vertex(0, 0, 0);

@@ -6,16 +6,21 @@
 # render's time before its first sample: deferred_bench_frame; 1 000 /
 # 10 000 lights: deferred_bench_lights; the outputs' cost:
 # deferred_bench_outputs; shadows: deferred_bench_shadows; node materials'
-# geometry pass against constant ones: deferred_bench_materials). Writes four
+# geometry pass against constant ones: deferred_bench_materials; the raster
+# pipeline against compute on this GPU: deferred_bench_raster; shadow rays'
+# compile time against the traversal's call sites: deferred_bench_ray_compile).
+# Writes four
 # files to $OUT (the device tool returns at most eight): summary.txt,
 # native_tests.log, robustness.log, benches.md. Each step has a time limit
-# (killed 5 s after it): 150 s for the tests (in parallel), 330 s for the
+# (killed 5 s after it): 150 s for the tests (in parallel), 420 s for the
 # benchmarks, inside one device call (600 s) and a session's 15 minutes of
 # device time. Exits non-zero when a step failed or ran out of time.
 # Parts of it, for a rerun inside what is left of the device time:
 # GPU_CHECK_FILTER (a gtest filter for both test binaries, "-" for no
 # tests), GPU_CHECK_TEST_LIMIT (seconds, 150), GPU_CHECK_BENCHES (any of
-# "frame lights outputs shadows materials", all by default).
+# "raster materials raycompile frame lights outputs shadows", all by
+# default; DEFERRED_BENCH_FRAME_BLOCKS=rays runs the frame bench's
+# shadow-rays block alone).
 #   bash scripts/gpu_check.sh            (on the device, as root)
 #   GPU_CHECK_FILTER='HardCases.*' GPU_CHECK_BENCHES=frame bash scripts/gpu_check.sh
 #   GPU_CHECK_LOCAL=1 GPU_CHECK_SIZE="160 90" OUT=/tmp/gpu bash scripts/gpu_check.sh   (a dry run here)
@@ -62,7 +67,7 @@ run() {  # run NAME SECONDS LOG COMMAND...: time-limited; its exit status and ti
 # Line-buffered, so a test stopped at the limit leaves its last lines.
 filter="${GPU_CHECK_FILTER:-*}"
 test_limit="${GPU_CHECK_TEST_LIMIT:-150}"
-benches_to_run=" ${GPU_CHECK_BENCHES:-frame lights outputs shadows materials} "
+benches_to_run=" ${GPU_CHECK_BENCHES:-raster materials raycompile frame lights outputs shadows} "
 if [ "$filter" != "-" ]; then
 t0=$SECONDS
 shards=8
@@ -99,6 +104,12 @@ fi
 # (DEFERRED_BENCH_PROFILE: bench/cpu_profile.h) where the engine's GPU
 # timestamps cannot tell GPU work from the CPU issuing it.
 export DEFERRED_BENCH_PROFILE=1
+# The cheap ones first, so a check stopped early still has them.
+# shellcheck disable=SC2086
+[[ "$benches_to_run" == *" raster "* ]] && run bench_raster 30 "$benches" "$stage/bin/deferred_bench_raster" $size
+# shellcheck disable=SC2086
+[[ "$benches_to_run" == *" materials "* ]] && run bench_materials 40 "$benches" "$stage/bin/deferred_bench_materials" $size 16 3
+[[ "$benches_to_run" == *" raycompile "* ]] && run bench_ray_compile 60 "$benches" "$stage/bin/deferred_bench_ray_compile" 16
 # shellcheck disable=SC2086
 [[ "$benches_to_run" == *" frame "* ]] && run bench_frame 100 "$benches" stdbuf -oL "$stage/bin/deferred_bench_frame" $size
 # Brute force (every light at every pixel) up to 1000 lights, beside the culled rows up to 65 536.
@@ -108,7 +119,5 @@ export DEFERRED_BENCH_PROFILE=1
 [[ "$benches_to_run" == *" outputs "* ]] && run bench_outputs 70 "$benches" "$stage/bin/deferred_bench_outputs" $size
 # shellcheck disable=SC2086
 [[ "$benches_to_run" == *" shadows "* ]] && run bench_shadows 80 "$benches" stdbuf -oL "$stage/bin/deferred_bench_shadows" $size
-# shellcheck disable=SC2086
-[[ "$benches_to_run" == *" materials "* ]] && run bench_materials 40 "$benches" "$stage/bin/deferred_bench_materials" $size 16 3
 cat "$summary"
 exit "$failed"

@@ -16,7 +16,8 @@ build="${1:-$repo/build}"
 stage="$repo/.gpu"
 binaries="tests/deferred_native_tests tests/robustness/robustness_gl_tests bench/deferred_bench_frame
           bench/deferred_bench_lights bench/deferred_bench_outputs bench/deferred_bench_shadows
-          bench/deferred_bench_materials"
+          bench/deferred_bench_materials bench/deferred_bench_raster
+          bench/deferred_bench_ray_compile"
 for b in $binaries; do
   test -x "$build/$b" || { echo "missing $build/$b: build first (cmake --build $build)" >&2; exit 1; }
 done

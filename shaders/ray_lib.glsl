@@ -27,8 +27,20 @@ bool ray_box(uvec4 a, uvec4 b, vec3 o, vec3 inv, float tmax) {
  * necessarily unit) over t in (0, tmax): 0 at an opaque surface, the product
  * of 1 - alpha over partly transparent ones (Cycles' transparent shadows),
  * 1 where nothing is hit. Any hit ends an opaque ray, so the children are
- * visited in stored order. */
+ * visited in stored order.
+ * RAY_SUBROUTINE (ray_scene.h, ray_traversal_defines): called through a
+ * subroutine uniform. GLSL compilers inline a function at every call site,
+ * and the lighting program calls this from up to ten (light_lib.glsl); a
+ * subroutine call is resolved only when the program runs, so the compiler
+ * can keep one copy (bench/bench_ray_compile.cpp measures what that saves
+ * on a driver). The program's user selects it (use_ray_traversal). */
+#ifdef RAY_SUBROUTINE
+subroutine float RayTransmittance(vec3 origin, vec3 dir, float tmax);
+subroutine uniform RayTransmittance ray_transmittance;
+subroutine(RayTransmittance) float ray_transmittance_bvh(vec3 origin, vec3 dir, float tmax) {
+#else
 float ray_transmittance(vec3 origin, vec3 dir, float tmax) {
+#endif
     uvec4 header = ray_scene[0];
     if (header.z == 0u) return 1.0;
     float T = 1.0;

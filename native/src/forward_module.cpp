@@ -1,6 +1,7 @@
 #include "forward_module.h"
 
 #include "geometry_stage.h"
+#include "ray_scene.h"
 #include "material_module.h"
 
 #include <deferred/renderer.h>
@@ -61,6 +62,7 @@ std::uint64_t ForwardModule::draw(FrameScene& scene, const ViewVolume& view) {
             auto program = programs_.find(id);
             if (program == programs_.end() || mesh.slot_ranges[s].second == 0) continue;
             glUseProgram(program->second);
+            use_ray_traversal(program->second, GL_FRAGMENT_SHADER);  // with shadow rays: lights them
             const Material& m = scene.scene_material(id);
             if (m.graph >= 0 && !geometry_->failed(id)) {
                 materials_->bind_for_draw(std::uint32_t(m.graph), mesh);

@@ -3,6 +3,7 @@
 #include "film_module.h"
 #include "light_culling.h"
 #include "light_module.h"
+#include "ray_scene.h"
 #include "world_module.h"
 
 #include "../../shaders/shader_defines.h"
@@ -30,7 +31,10 @@ void LightingStage::prepare(ShaderLibrary& shaders, const ShaderVariant& base, c
                            std::to_string(batch_) + " lights" + (config.shadow_rays ? " with shadow rays" : "") +
                            ", and a budget that large never selects; every light is shaded");
     if (config.shadow_maps) v.defines.push_back("HAS_SHADOWS");
-    if (config.shadow_rays) v.defines.push_back("SHADOW_RAYS");
+    if (config.shadow_rays) {
+        v.defines.push_back("SHADOW_RAYS");
+        add_ray_traversal_define(v.defines);
+    }
     if (config.world_occlusion) v.defines.push_back("HAS_WORLD_OCCLUSION");
     world.add_defines(v);
     if (config.ao) v.defines.push_back("OUT_AO");
@@ -45,6 +49,7 @@ void LightingStage::run(const LightModule& lights, const LightCulling* culling, 
                         GLuint instance_groups, std::uint32_t world_group, int width, int height,
                         const std::function<void()>& between_batches) const {
     glUseProgram(program_);
+    use_ray_traversal(program_, GL_COMPUTE_SHADER);
     if (culling) culling->bind();
     film.bind_for_lighting();
     if (instance_groups) {

@@ -2,12 +2,15 @@
 
 #include "scene_store.h"
 
+#include <deferred/renderer.h>
+
 #include "../../shaders/shader_defines.h"
 #include "../../shaders/shader_shared.h"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <limits>
 #include <numeric>
@@ -408,6 +411,22 @@ float trace_transmittance(const std::vector<glm::uvec4>& scene, const glm::vec3&
         }
     }
     return T;
+}
+
+void add_ray_traversal_define(std::vector<std::string>& defines) {
+    const char* call = std::getenv("DEFERRED_RAY_CALL");
+    if (call && std::string(call) == "inline") return;
+    defines.push_back("RAY_SUBROUTINE");
+}
+
+void use_ray_traversal(GLuint program, GLenum stage) {
+    GLint locations = 0;
+    glGetProgramStageiv(program, stage, GL_ACTIVE_SUBROUTINE_UNIFORM_LOCATIONS, &locations);
+    if (locations <= 0) return;
+    // The traversal is the stage's one subroutine uniform (ray_lib.glsl).
+    const GLuint index = glGetSubroutineIndex(program, stage, "ray_transmittance_bvh");
+    if (index == GL_INVALID_INDEX || locations != 1) throw Error("a ray-tracing program's subroutines are not the traversal's");
+    glUniformSubroutinesuiv(stage, 1, &index);
 }
 
 }  // namespace deferred

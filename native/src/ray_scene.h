@@ -34,6 +34,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <string>
 #include <vector>
 
 namespace deferred {
@@ -63,6 +64,16 @@ std::shared_ptr<const MeshBvh> mesh_bvh(const GpuMesh& mesh);
 // reference the GPU traversal is tested against (tests/native/test_rays.cpp).
 float trace_transmittance(const std::vector<glm::uvec4>& scene, const glm::vec3& origin, const glm::vec3& dir,
                           float tmax);
+
+// How the programs that trace shadow rays call the traversal: through a
+// subroutine (RAY_SUBROUTINE, ray_lib.glsl), so a driver need not compile a
+// copy of it per call site, unless DEFERRED_RAY_CALL=inline (the inlined
+// calls, for comparing the two on a driver). Adds the define to `defines`.
+void add_ray_traversal_define(std::vector<std::string>& defines);
+// After glUseProgram of a program that may trace rays (subroutine uniforms
+// are reset by every glUseProgram): selects the traversal in `stage`; does
+// nothing for a program without the subroutine.
+void use_ray_traversal(GLuint program, GLenum stage);
 
 class RayScene {
 public:

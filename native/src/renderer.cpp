@@ -694,7 +694,10 @@ void Renderer::Impl::prepare_programs(Frame& f) {
     ShaderVariant forward_variant;
     lights.add_defines(forward_variant);
     if (!shadows.empty()) forward_variant.defines.push_back("HAS_SHADOWS");
-    if (f.shadow_rays) forward_variant.defines.push_back("SHADOW_RAYS");
+    if (f.shadow_rays) {
+        forward_variant.defines.push_back("SHADOW_RAYS");
+        add_ray_traversal_define(forward_variant.defines);
+    }
     if (shadows.world_index() >= 0) forward_variant.defines.push_back("HAS_WORLD_OCCLUSION");
     world_module.add_defines(forward_variant);
     forward_variant.defines.push_back("FORWARD_PASS");

@@ -1,6 +1,7 @@
 // Shadow rays' cost to the driver's compiler, against the number of places a
 // program calls the traversal (shaders/bench_ray_compile_comp.glsl), inlined
-// as GLSL compilers do, or called through a subroutine uniform. On an H200
+// as GLSL compilers do, or called through a subroutine uniform as the
+// engine's programs do (RAY_SUBROUTINE, ray_lib.glsl). On an H200
 // the native tests with shadow rays took 20-60 s each where llvmpipe takes
 // seconds, on images of at most 96 x 64 pixels; the lighting program calls
 // the traversal from up to ten places (light_lib.glsl). This says whether
@@ -9,6 +10,9 @@
 // For each variant: compile + link ms (no disk cache), then the GPU time of
 // one dispatch of 1M random rays (the best of 3) against 4 instances of a 131k-triangle
 // bumpy grid (each ray crosses the sites' branches as its index's bits say).
+// On an H200 (run 5, bench/gpu/results) it stopped with GL_INVALID_VALUE
+// before its first row, where llvmpipe runs it: each step is now checked by
+// name, so the next GPU check says which call it was.
 // Usage: deferred_bench_ray_compile [max sites: 1, 2, 4, 8 or 16] [rays, 1M]
 #include "egl_context.h"
 #include "gl_util.h"
@@ -30,6 +34,7 @@ int main(int argc, char** argv) {
     setenv("DEFERRED_SHADER_CACHE", "off", 1);  // every variant compiled, none loaded
     try {
         EglContext context(-1);
+        check_gl("creating the context");
         std::printf("GL: %s | %s | %s\n\n", reinterpret_cast<const char*>(glGetString(GL_VENDOR)),
                     reinterpret_cast<const char*>(glGetString(GL_RENDERER)),
                     reinterpret_cast<const char*>(glGetString(GL_VERSION)));
@@ -54,6 +59,7 @@ int main(int argc, char** argv) {
         RayScene scene;
         scene.build(instances);
         scene.upload();
+        check_gl("uploading the ray scene");
         // Rays from above the grid towards random points below it or beside it.
         std::mt19937 rng(7);
         std::uniform_real_distribution<float> u(0.0f, 1.0f);
@@ -82,17 +88,16 @@ int main(int argc, char** argv) {
                 const auto t0 = std::chrono::steady_clock::now();
                 const GLuint program = library.compute_program("bench_ray_compile_comp.glsl", variant);
                 glFinish();
+                check_gl("compiling the program");
                 const double compile_ms =
                     std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
                 glUseProgram(program);
-                if (subroutine) {
-                    // Subroutine uniforms are reset by every glUseProgram: set after it.
-                    const GLuint index = glGetSubroutineIndex(program, GL_COMPUTE_SHADER, "trace_bvh");
-                    glUniformSubroutinesuiv(GL_COMPUTE_SHADER, 1, &index);
-                }
+                use_ray_traversal(program, GL_COMPUTE_SHADER);  // the engine's call, as the lighting pass makes it
+                check_gl("using the program");
                 scene.bind();
                 glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, rays.get());
                 glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, out.get());
+                check_gl("binding the buffers");
                 double best = 1e30;
                 for (int rep = 0; rep < 3; ++rep) {
                     glBeginQuery(GL_TIME_ELAPSED, query);
@@ -102,10 +107,11 @@ int main(int argc, char** argv) {
                     glGetQueryObjectui64v(query, GL_QUERY_RESULT, &ns);
                     best = std::min(best, double(ns) * 1e-6);
                 }
+                check_gl("the timed dispatches");
                 glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
                 std::vector<float> T(ray_count);
                 glGetNamedBufferSubData(out.get(), 0, GLsizeiptr(T.size() * sizeof(float)), T.data());
-                check_gl("ray compile bench");
+                check_gl("reading the result back");
                 double sum = 0.0;
                 for (float t : T) sum += t;
                 std::printf("| %d | %s | %.0f | %.2f | %.1f |\n", sites, subroutine ? "subroutine" : "inlined",

@@ -3,28 +3,19 @@
  * traversal. GLSL has no calls that stay calls: a compiler inlines
  * ray_transmittance at every call site, and the lighting program calls it
  * from up to ten (light_lib.glsl). RAY_SITES sites here, each in its own
- * branch so no two can be merged; RAY_SUBROUTINE calls through a subroutine
- * uniform instead (a call the compiler cannot resolve at compile time, so
- * it may keep one copy of the traversal). */
+ * branch so no two can be merged; with RAY_SUBROUTINE each calls through
+ * ray_lib.glsl's subroutine uniform instead, as the engine's programs do (a
+ * call the compiler cannot resolve at compile time, so it may keep one copy
+ * of the traversal). */
 #include "ray_lib.glsl"
 
 layout(local_size_x = 64) in;
 layout(std430, binding = 0) readonly buffer Rays { vec4 rays[]; }; /* (origin, tmax), (dir, 0) */
 layout(std430, binding = 1) writeonly buffer Transmittance { float transmittance[]; };
 
-#ifdef RAY_SUBROUTINE
-subroutine float TraceFunction(vec3 origin, vec3 dir, float tmax);
-subroutine(TraceFunction) float trace_bvh(vec3 origin, vec3 dir, float tmax) {
-    return ray_transmittance(origin, dir, tmax);
-}
-subroutine uniform TraceFunction trace;
-#else
-float trace(vec3 origin, vec3 dir, float tmax) { return ray_transmittance(origin, dir, tmax); }
-#endif
-
 #define SITE(k)                                                                     \
     if (((i >> uint(k)) & 1u) != 0u)                                                \
-        T += trace(o.xyz + vec3(float(k) * 1e-3), d.xyz, o.w) * float(k + 1);
+        T += ray_transmittance(o.xyz + vec3(float(k) * 1e-3), d.xyz, o.w) * float(k + 1);
 
 void main() {
     uint i = gl_GlobalInvocationID.x;

@@ -7,9 +7,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <string>
+#include <vector>
 
 using namespace deferred;
 using deferred::testing::overview_camera;
@@ -159,7 +161,15 @@ TEST(LightSampling, ABudgetTheDispatchCannotUseIsWarnedAndShadesEveryLight) {
     for (const std::string& w : f.warnings) warned = warned || w.find("Light Samples 16 has no effect") != std::string::npos;
     EXPECT_TRUE(f.timings.shadow_rays);
     EXPECT_TRUE(warned);
-    EXPECT_EQ(f.find(Pass::Combined)->pixels, exact.find(Pass::Combined)->pixels);
+    // Every light's image: equal up to float rounding (on an H200 the two
+    // renders differed in the last bit of a few values, 1 part in 5e6; a
+    // selection of 16 of 40 lights would differ by whole lights).
+    const std::vector<float>& a = f.find(Pass::Combined)->pixels;
+    const std::vector<float>& b = exact.find(Pass::Combined)->pixels;
+    ASSERT_EQ(a.size(), b.size());
+    float worst = 0.0f;
+    for (std::size_t i = 0; i < a.size(); ++i) worst = std::max(worst, std::abs(a[i] - b[i]) / std::max(std::abs(b[i]), 1e-3f));
+    EXPECT_LE(worst, 1e-5f);
 }
 
 TEST(LightSampling, GroupsAndShadowPassStayConsistent) {

@@ -7,7 +7,7 @@
 # and the GL loader packages the device's README asks for (glvnd's libEGL,
 # libGL, ...). Everything goes to .gpu/ (ignored through .git/info/exclude).
 # Then, with the device tool:
-#   run(command="bash scripts/gpu_check.sh", carry=[".gpu"], timeout_s=570)
+#   run(command="bash scripts/gpu_check.sh", carry=[".gpu"], timeout_s=600)
 # and commit what comes back (the GPU's name is in it) into bench/gpu/results/.
 #   bash scripts/gpu_stage.sh [build_dir]
 set -euo pipefail

@@ -16,6 +16,8 @@
 //   fill     depth-only fill (a shadow map's work): 29 full-screen quads
 //            into a 2048x2048 depth target, and colour fill into 1 and into
 //            4 RGBA16F targets at the frame's size: pixels per second;
+//   layouts  the engine's G-buffer targets written over the frame against
+//            a visibility buffer's one or two 32-bit ids;
 //   mesh     a 1M-triangle grid covering the frame, depth only and with 4
 //            targets: triangles per second.
 // Usage: deferred_bench_raster [width height]
@@ -156,14 +158,14 @@ struct Targets {
     Framebuffer fbo;
 };
 
-Targets make_targets(int w, int h, int colours, GLenum depth_format) {
+Targets make_targets(int w, int h, const std::vector<GLenum>& formats, GLenum depth_format) {
     Targets t;
     GLuint fbo = 0;
     glCreateFramebuffers(1, &fbo);
     t.fbo = Framebuffer(fbo);
     std::vector<GLenum> draw;
-    for (int i = 0; i < colours; ++i) {
-        t.colour.push_back(make_texture_2d(GL_RGBA16F, w, h, "probe colour"));
+    for (std::size_t i = 0; i < formats.size(); ++i) {
+        t.colour.push_back(make_texture_2d(formats[i], w, h, "probe colour"));
         glNamedFramebufferTexture(fbo, GL_COLOR_ATTACHMENT0 + i, t.colour.back().get(), 0);
         draw.push_back(GL_COLOR_ATTACHMENT0 + i);
     }
@@ -176,6 +178,25 @@ Targets make_targets(int w, int h, int colours, GLenum depth_format) {
     if (glCheckNamedFramebufferStatus(fbo, GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
         throw std::runtime_error("probe framebuffer incomplete");
     return t;
+}
+
+Targets make_targets(int w, int h, int colours, GLenum depth_format) {
+    return make_targets(w, h, std::vector<GLenum>(std::size_t(colours), GL_RGBA16F), depth_format);
+}
+
+// A fragment shader writing a constant to each target, typed by its format.
+std::string constant_writer(const std::vector<GLenum>& formats) {
+    std::string decl, body;
+    for (std::size_t i = 0; i < formats.size(); ++i) {
+        const std::string n = std::to_string(i);
+        const GLenum f = formats[i];
+        const char* type = f == GL_R32UI ? "uint" : f == GL_RG32UI ? "uvec2" : f == GL_RGBA32UI ? "uvec4" : "vec4";
+        const char* value = f == GL_R32UI ? "uint(gl_FragCoord.x)" : f == GL_RG32UI ? "uvec2(gl_FragCoord.xy)"
+                          : f == GL_RGBA32UI ? "uvec4(gl_FragCoord.xyxy)" : "vec4(gl_FragCoord.xy, 0.5, 1.0)";
+        decl += "layout(location = " + n + ") out " + type + " out" + n + ";\n";
+        body += "    out" + n + " = " + value + ";\n";
+    }
+    return std::string(kHeader) + decl + "void main() {\n" + body + "}\n";
 }
 
 }  // namespace
@@ -262,6 +283,33 @@ int main(int argc, char** argv) {
             const double ms = gpu_ms([] { for (int i = 0; i < 8; ++i) glDrawArrays(GL_TRIANGLES, 0, 3); });
             std::printf("| %d RGBA16F target%s, 8 full-screen layers | %.3f | %.1f |\n", targets,
                         targets > 1 ? "s" : "", ms, 8.0 * pixels / ms * 1e-6);
+        }
+
+        // G-buffer layouts: what the raster writes per pixel today against a
+        // visibility buffer's one or two 32-bit ids (its materials would be
+        // evaluated in compute).
+        {
+            struct Layout { const char* name; std::vector<GLenum> formats; };
+            const std::vector<Layout> layouts = {
+                {"visibility: R32UI (4 B)", {GL_R32UI}},
+                {"visibility: RG32UI (8 B)", {GL_RG32UI}},
+                {"the G-buffer: emission RGBA32F, base and params0 RGBA16F, normal R32UI (36 B)",
+                 {GL_RGBA32F, GL_RGBA16F, GL_RGBA16F, GL_R32UI}},
+                {"the same + params1 RGBA16F, geometry RGBA32UI (60 B)",
+                 {GL_RGBA32F, GL_RGBA16F, GL_RGBA16F, GL_R32UI, GL_RGBA16F, GL_RGBA32UI}},
+            };
+            std::printf("\n| targets written, 8 full-screen layers at %dx%d | ms per layer | Gpixel/s |\n|---|---:|---:|\n",
+                        width, height);
+            for (const Layout& l : layouts) {
+                Targets t = make_targets(width, height, l.formats, 0);
+                Program p = link({{GL_VERTEX_SHADER, std::string(kHeader) + kFullscreenVert},
+                                  {GL_FRAGMENT_SHADER, constant_writer(l.formats)}});
+                glBindFramebuffer(GL_FRAMEBUFFER, t.fbo.get());
+                glViewport(0, 0, width, height);
+                glUseProgram(p.get());
+                const double ms = gpu_ms([] { for (int i = 0; i < 8; ++i) glDrawArrays(GL_TRIANGLES, 0, 3); });
+                std::printf("| %s | %.3f | %.1f |\n", l.name, ms / 8.0, 8.0 * pixels / ms * 1e-6);
+            }
         }
 
         // mesh: a grid of 1M triangles over the frame.

@@ -439,6 +439,9 @@ void main() {
     out_geometry = gbuffer_pack_geometry(N, Ng, terminator_offset(Ng), v_term_cutoff);
 #endif
 #if defined(GBUF_UV) && !defined(FORWARD_PASS) && !defined(AOV_PASS) && !defined(EMISSION_BAKE)
-    out_uv = v_uv;
+    /* The rasteriser interpolates through plane equations: UVs near the
+     * float range on a sliver triangle overflow there (inf - inf = NaN, a
+     * fuzzed scene on llvmpipe). The UV pass then reads 0, not a NaN. */
+    out_uv = (any(isnan(v_uv)) || any(isinf(v_uv))) ? vec2(0.0) : v_uv;
 #endif
 }

@@ -36,5 +36,10 @@ void main() {
     const vec2 center = to_raster(raster_center, v_position);
     out_motion = vec4(to_raster(raster_previous, v_position_previous) - center,
                       center - to_raster(raster_next, v_position_next));
+    /* A fragment whose interpolants are not finite (a fuzzed scene: llvmpipe
+     * rasterised a degenerate triangle at the near plane with NaN window
+     * depth, which the depth clamp made equal to the G-buffer's) counts as
+     * no sample, as a pixel that saw no surface: its motion would be NaN. */
+    if (any(isnan(out_motion)) || any(isinf(out_motion))) discard;
     out_count = 1.0;
 }

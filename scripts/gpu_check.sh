@@ -12,12 +12,12 @@
 # Writes four
 # files to $OUT (the device tool returns at most eight): summary.txt,
 # native_tests.log, robustness.log, benches.md. Each step has a time limit
-# (killed 5 s after it): 150 s for the tests (in parallel), 420 s for the
+# (killed 5 s after it): 120 s for the tests (in parallel), 470 s for the
 # benchmarks, inside one device call (600 s) and a session's 15 minutes of
 # device time. Exits non-zero when a step failed or ran out of time.
 # Parts of it, for a rerun inside what is left of the device time:
 # GPU_CHECK_FILTER (a gtest filter for both test binaries, "-" for no
-# tests), GPU_CHECK_TEST_LIMIT (seconds, 150), GPU_CHECK_BENCHES (any of
+# tests), GPU_CHECK_TEST_LIMIT (seconds, 120), GPU_CHECK_BENCHES (any of
 # "raster materials raycompile frame lights outputs shadows", all by
 # default; DEFERRED_BENCH_FRAME_BLOCKS=rays runs the frame bench's
 # shadow-rays block alone).
@@ -66,7 +66,7 @@ run() {  # run NAME SECONDS LOG COMMAND...: time-limited; its exit status and ti
 # test's time there is the driver compiling programs, on the CPU).
 # Line-buffered, so a test stopped at the limit leaves its last lines.
 filter="${GPU_CHECK_FILTER:-*}"
-test_limit="${GPU_CHECK_TEST_LIMIT:-150}"
+test_limit="${GPU_CHECK_TEST_LIMIT:-120}"
 benches_to_run=" ${GPU_CHECK_BENCHES:-raster materials raycompile frame lights outputs shadows} "
 if [ "$filter" != "-" ]; then
 t0=$SECONDS
@@ -108,7 +108,7 @@ export DEFERRED_BENCH_PROFILE=1
 # shellcheck disable=SC2086
 [[ "$benches_to_run" == *" raster "* ]] && run bench_raster 30 "$benches" "$stage/bin/deferred_bench_raster" $size
 # shellcheck disable=SC2086
-[[ "$benches_to_run" == *" materials "* ]] && run bench_materials 40 "$benches" "$stage/bin/deferred_bench_materials" $size 16 3
+[[ "$benches_to_run" == *" materials "* ]] && run bench_materials 90 "$benches" "$stage/bin/deferred_bench_materials" $size 16 3
 [[ "$benches_to_run" == *" raycompile "* ]] && run bench_ray_compile 60 "$benches" "$stage/bin/deferred_bench_ray_compile" 16
 # shellcheck disable=SC2086
 [[ "$benches_to_run" == *" frame "* ]] && run bench_frame 100 "$benches" stdbuf -oL "$stage/bin/deferred_bench_frame" $size

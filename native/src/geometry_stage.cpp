@@ -19,6 +19,12 @@ void GeometryStage::prepare(ShaderLibrary& shaders, MaterialModule& materials, c
     // compiles: the set is the scene's).
     failed_.assign(scene.material_count(), false);
     alpha_.assign(scene.material_count(), false);
+    // Every graph's compile started first, then each waited for: with the
+    // driver's compiler threads (ShaderLibrary::prefetch_graphics) a scene's
+    // node materials compile in parallel.
+    for (std::uint32_t id = 0; id < scene.material_count(); ++id)
+        if (scene.scene_material(id).graph >= 0)
+            materials.prefetch(shaders, std::uint32_t(scene.scene_material(id).graph), base);
     for (std::uint32_t id = 0; id < scene.material_count(); ++id) {
         const Material& m = scene.scene_material(id);
         if (m.graph < 0) continue;
@@ -131,6 +137,10 @@ void GeometryStage::prepare_aovs(ShaderLibrary& shaders, MaterialModule& materia
     aov_variant.defines.push_back("AOV_PASS");
     for (auto& [id, program] : graph_programs_) {
         const std::uint32_t graph = std::uint32_t(scene.scene_material(id).graph);
+        if (!materials.aovs(graph).empty()) materials.prefetch(shaders, graph, aov_variant);
+    }
+    for (auto& [id, program] : graph_programs_) {
+        const std::uint32_t graph = std::uint32_t(scene.scene_material(id).graph);
         const std::vector<std::string>& names = materials.aovs(graph);
         for (std::size_t k = 0; k < aovs.size(); ++k)
             for (std::size_t slot = 0; slot < names.size(); ++slot)
@@ -165,6 +175,10 @@ void GeometryStage::draw_aovs(const FrameScene& scene, const AovModule& aovs, co
 void GeometryStage::prepare_casters(ShaderLibrary& shaders, MaterialModule& materials, const FrameScene& scene,
                                     bool world_map, std::vector<std::string>& warnings) {
     std::map<std::uint32_t, GLuint>& out = world_map ? world_casters_ : light_casters_;
+    for (auto& [id, program] : graph_programs_)
+        if (is_alpha_graph(id))
+            materials.prefetch(shaders, std::uint32_t(scene.scene_material(id).graph),
+                               MaterialModule::caster_variant(world_map));
     for (auto& [id, program] : graph_programs_) {
         if (!is_alpha_graph(id)) continue;
         const std::uint32_t graph = std::uint32_t(scene.scene_material(id).graph);

@@ -144,6 +144,21 @@ void MaterialModule::bind_constants() const {
 }
 
 GLuint MaterialModule::program(ShaderLibrary& shaders, std::uint32_t graph, const ShaderVariant& base) {
+    return shaders.graphics_program("geometry_vert.glsl", "geometry_frag.glsl", program_variant(graph, base),
+                                    {{kMaterialGraphFile, graph_source(shaders, graph)}});
+}
+
+void MaterialModule::prefetch(ShaderLibrary& shaders, std::uint32_t graph, const ShaderVariant& base) {
+    if (!shaders.parallel_compile()) return;
+    try {
+        shaders.prefetch_graphics("geometry_vert.glsl", "geometry_frag.glsl", program_variant(graph, base),
+                                  {{kMaterialGraphFile, graph_source(shaders, graph)}});
+    } catch (const std::exception&) {
+        // program() reports it.
+    }
+}
+
+ShaderVariant MaterialModule::program_variant(std::uint32_t graph, const ShaderVariant& base) const {
     const StoredGraph& g = graphs_.at(graph);
     ShaderVariant v = base;
     // The constant program's transparency switch is not this program's.
@@ -161,18 +176,20 @@ GLuint MaterialModule::program(ShaderLibrary& shaders, std::uint32_t graph, cons
         }
     v.defines.push_back("MATERIAL_IMAGE_COUNT " + std::to_string(g.graph.images.size()));
     if (calls(graph, "node_bump_offset")) v.defines.push_back("MATERIAL_BUMP");
-    return shaders.graphics_program("geometry_vert.glsl", "geometry_frag.glsl", v,
-                                    {{kMaterialGraphFile, graph_source(shaders, graph)}});
+    return v;
 }
 
 std::string MaterialModule::graph_source(ShaderLibrary& shaders, std::uint32_t graph) const {
     const StoredGraph& g = graphs_.at(graph);
+    // Made once per graph: a prefetch and the request after it both need it.
+    if (!g.source.empty()) return g.source;
     // The node library files the graph calls into (and theirs), then the graph.
     std::vector<std::string> functions = material_graph_functions(g.graph);
     functions.push_back("node_closure_none");
     std::string source = "#include \"material_lib.glsl\"\n";
     for (const std::string& file : shaders.node_files_for(functions)) source += "#include \"" + file + "\"\n";
-    return source + g.glsl;
+    g.source = source + g.glsl;
+    return g.source;
 }
 
 bool MaterialModule::calls(std::uint32_t graph, const std::string& function) const {
@@ -196,11 +213,15 @@ std::array<int, 2> MaterialModule::largest_image(std::uint32_t graph) const {
     return size;
 }
 
-GLuint MaterialModule::caster_program(ShaderLibrary& shaders, std::uint32_t graph, bool world_map) {
+ShaderVariant MaterialModule::caster_variant(bool world_map) {
     ShaderVariant v;
     v.defines.push_back("SHADOW_PASS");
     if (world_map) v.defines.push_back("WORLD_MAP");
-    return program(shaders, graph, v);
+    return v;
+}
+
+GLuint MaterialModule::caster_program(ShaderLibrary& shaders, std::uint32_t graph, bool world_map) {
+    return program(shaders, graph, caster_variant(world_map));
 }
 
 void MaterialModule::bind_for_draw(std::uint32_t graph, const GpuMesh& mesh) const {

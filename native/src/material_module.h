@@ -65,6 +65,11 @@ public:
     // world_map: the world's occlusion map). Uniforms: the map's view-projection
     // at location 2, origin at 20, axis at 21 (shadow_frag.glsl's 2, 3, 4).
     GLuint caster_program(ShaderLibrary& shaders, std::uint32_t graph, bool world_map);
+    static ShaderVariant caster_variant(bool world_map);
+    // Starts compiling program(shaders, graph, base) on the driver's threads
+    // (ShaderLibrary::prefetch_graphics): prefetch every graph a frame needs,
+    // then ask for each, and the compiles overlap. Never throws.
+    void prefetch(ShaderLibrary& shaders, std::uint32_t graph, const ShaderVariant& base);
     // The generated file (kMaterialGraphFile) a graph's programs include:
     // material_lib.glsl, the node-library files the graph calls, the graph.
     std::string graph_source(ShaderLibrary& shaders, std::uint32_t graph) const;
@@ -79,9 +84,11 @@ public:
     void bind_for_draw(std::uint32_t graph, const GpuMesh& mesh) const;
 
 private:
+    ShaderVariant program_variant(std::uint32_t graph, const ShaderVariant& base) const;
     struct StoredGraph {
         MaterialGraph graph;   // constants moved to the shared buffer
         std::string glsl;
+        mutable std::string source;  // graph_source(), made on first use
         std::uint32_t constants_offset = 0;
         bool principled = false;
     };

@@ -5,12 +5,14 @@
 #include <deferred/renderer.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <functional>
 #include <regex>
+#include <thread>
 
 #include <unistd.h>
 #include <sstream>
@@ -95,45 +97,13 @@ std::string ShaderLibrary::map_log(const std::string& log) const {
     return out;
 }
 
-GLuint ShaderLibrary::compile_source(GLenum stage, const std::string& src, const std::string& label) const {
-    GLuint shader = glCreateShader(stage);
-    const char* ptr = src.c_str();
-    glShaderSource(shader, 1, &ptr, nullptr);
-    glCompileShader(shader);
-    GLint ok = GL_FALSE;
-    glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
-    if (!ok) {
-        GLint len = 0;
-        glGetShaderiv(shader, GL_INFO_LOG_LENGTH, &len);
-        std::string log(static_cast<std::size_t>(std::max(len, 1)), '\0');
-        glGetShaderInfoLog(shader, len, nullptr, log.data());
-        glDeleteShader(shader);
-        const char* kind = stage == GL_VERTEX_SHADER ? "vertex" : stage == GL_FRAGMENT_SHADER ? "fragment" : "compute";
-        throw Error(std::string("compiling the ") + kind + " shader of " + label + " failed:\n" + map_log(log.c_str()));
-    }
-    return shader;
-}
-
-GLuint ShaderLibrary::link(const std::vector<GLuint>& stages, const std::string& label, bool retrievable) const {
-    GLuint program = glCreateProgram();
-    if (retrievable) glProgramParameteri(program, GL_PROGRAM_BINARY_RETRIEVABLE_HINT, GL_TRUE);
-    for (GLuint s : stages) glAttachShader(program, s);
-    glLinkProgram(program);
-    for (GLuint s : stages) {
-        glDetachShader(program, s);
-        glDeleteShader(s);
-    }
-    GLint ok = GL_FALSE;
-    glGetProgramiv(program, GL_LINK_STATUS, &ok);
-    if (!ok) {
-        GLint len = 0;
-        glGetProgramiv(program, GL_INFO_LOG_LENGTH, &len);
-        std::string log(static_cast<std::size_t>(std::max(len, 1)), '\0');
-        glGetProgramInfoLog(program, len, nullptr, log.data());
-        glDeleteProgram(program);
-        throw Error("linking program " + label + " failed:\n" + map_log(log.c_str()));
-    }
-    return program;
+std::string ShaderLibrary::shader_error(GLenum stage, GLuint shader, const std::string& label) const {
+    GLint len = 0;
+    glGetShaderiv(shader, GL_INFO_LOG_LENGTH, &len);
+    std::string log(static_cast<std::size_t>(std::max(len, 1)), '\0');
+    glGetShaderInfoLog(shader, len, nullptr, log.data());
+    const char* kind = stage == GL_VERTEX_SHADER ? "vertex" : stage == GL_FRAGMENT_SHADER ? "fragment" : "compute";
+    return std::string("compiling the ") + kind + " shader of " + label + " failed:\n" + map_log(log.c_str());
 }
 
 namespace {
@@ -163,24 +133,49 @@ std::string cache_folder() {
 
 }  // namespace
 
+ShaderLibrary::~ShaderLibrary() {
+    for (auto& [key, p] : pending_) {
+        for (auto& [stage, shader] : p.shaders) glDeleteShader(shader);
+        if (p.program) glDeleteProgram(p.program);
+    }
+}
+
+void ShaderLibrary::init_driver() {
+    if (!driver_.empty()) return;
+    for (GLenum e : {GL_VENDOR, GL_RENDERER, GL_VERSION}) {
+        const GLubyte* v = glGetString(e);
+        driver_ += v ? reinterpret_cast<const char*>(v) : "";
+        driver_ += '\n';
+    }
+    GLint formats = 0;
+    glGetIntegerv(GL_NUM_PROGRAM_BINARY_FORMATS, &formats);
+    cache_dir_ = formats > 0 ? cache_folder() : "";
+    // The driver's own compiler threads, one per hardware thread; without one
+    // of the extensions a compile finishes inside the call that issues it.
+    const char* env = std::getenv("DEFERRED_PARALLEL_COMPILE");
+    if (env && std::string(env) == "0") return;
+    const GLuint threads = std::max(1u, std::thread::hardware_concurrency());
+    if (epoxy_has_gl_extension("GL_KHR_parallel_shader_compile")) {
+        glMaxShaderCompilerThreadsKHR(threads);
+        parallel_ = true;
+    } else if (epoxy_has_gl_extension("GL_ARB_parallel_shader_compile")) {
+        glMaxShaderCompilerThreadsARB(threads);
+        parallel_ = true;
+    }
+}
+
+bool ShaderLibrary::parallel_compile() {
+    init_driver();
+    return parallel_;
+}
+
 // A program from its stage sources: from the in-memory map, else the disk
 // cache (glProgramBinary, keyed by the sources and the driver's strings: a
 // driver update misses and recompiles), else compiled, linked and stored.
-GLuint ShaderLibrary::build(const std::string& key, const std::vector<std::pair<GLenum, std::string>>& stages,
-                            const std::string& label) {
-    auto it = programs_.find(key);
-    if (it != programs_.end()) return it->second.get();
-    StageTimer timer;
-    if (driver_.empty()) {
-        for (GLenum e : {GL_VENDOR, GL_RENDERER, GL_VERSION}) {
-            const GLubyte* v = glGetString(e);
-            driver_ += v ? reinterpret_cast<const char*>(v) : "";
-            driver_ += '\n';
-        }
-        GLint formats = 0;
-        glGetIntegerv(GL_NUM_PROGRAM_BINARY_FORMATS, &formats);
-        cache_dir_ = formats > 0 ? cache_folder() : "";
-    }
+void ShaderLibrary::issue(const std::string& key, const std::vector<std::pair<GLenum, std::string>>& stages,
+                          const std::string& label) {
+    init_driver();
+    const auto t0 = std::chrono::steady_clock::now();
     std::string all = driver_;
     for (const auto& [stage, src] : stages) all += std::to_string(stage) + ":" + src;
     const std::uint64_t h1 = fnv1a(all), h2 = fnv1a(all, 0x9e3779b97f4a7c15ull);
@@ -210,40 +205,88 @@ GLuint ShaderLibrary::build(const std::string& key, const std::vector<std::pair<
                 if (ok) {
                     programs_.emplace(key, Program(p));
                     ++disk_loads_;
-                    load_ms_ += timer.lap_ms();
-                    return p;
+                    load_ms_ += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+                    return;
                 }
                 glDeleteProgram(p);  // stale or refused: compile below
             }
         }
     }
 
-    std::vector<GLuint> compiled;
-    try {
-        for (const auto& [stage, src] : stages) compiled.push_back(compile_source(stage, src, label));
-    } catch (...) {
-        for (GLuint sh : compiled) glDeleteShader(sh);
-        throw;
+    // Compile and link without asking for their status: with the driver's
+    // own threads these calls return at once and the work goes on there;
+    // complete() asks, and waits.
+    Pending p;
+    p.label = label;
+    p.path = path;
+    p.check = h2;
+    for (const auto& [stage, src] : stages) {
+        const GLuint shader = glCreateShader(stage);
+        const char* ptr = src.c_str();
+        glShaderSource(shader, 1, &ptr, nullptr);
+        glCompileShader(shader);
+        p.shaders.emplace_back(stage, shader);
     }
-    GLuint p = link(compiled, label, !path.empty());
-    programs_.emplace(key, Program(p));
-    ++compile_count_;
-    compile_ms_ += timer.lap_ms();
+    p.program = glCreateProgram();
+    if (!path.empty()) glProgramParameteri(p.program, GL_PROGRAM_BINARY_RETRIEVABLE_HINT, GL_TRUE);
+    for (const auto& [stage, shader] : p.shaders) glAttachShader(p.program, shader);
+    glLinkProgram(p.program);
+    pending_[key] = std::move(p);
+    compile_ms_ += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
 
+GLuint ShaderLibrary::complete(const std::string& key) {
+    auto node = pending_.extract(key);
+    Pending& p = node.mapped();
+    const auto t0 = std::chrono::steady_clock::now();
+    auto discard = [&] {
+        for (auto& [stage, shader] : p.shaders) glDeleteShader(shader);
+        glDeleteProgram(p.program);
+    };
+    for (const auto& [stage, shader] : p.shaders) {
+        GLint ok = GL_FALSE;
+        glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);  // waits for the compile
+        if (!ok) {
+            const std::string message = shader_error(stage, shader, p.label);
+            discard();
+            throw Error(message);
+        }
+    }
+    GLint ok = GL_FALSE;
+    glGetProgramiv(p.program, GL_LINK_STATUS, &ok);  // waits for the link
+    if (!ok) {
+        GLint len = 0;
+        glGetProgramiv(p.program, GL_INFO_LOG_LENGTH, &len);
+        std::string log(static_cast<std::size_t>(std::max(len, 1)), '\0');
+        glGetProgramInfoLog(p.program, len, nullptr, log.data());
+        discard();
+        throw Error("linking program " + p.label + " failed:\n" + map_log(log.c_str()));
+    }
+    for (const auto& [stage, shader] : p.shaders) {
+        glDetachShader(p.program, shader);
+        glDeleteShader(shader);
+    }
+    const GLuint program = p.program;
+    programs_.emplace(key, Program(program));
+    ++compile_count_;
+    compile_ms_ += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+
+    const std::string& path = p.path;
     if (!path.empty()) {
         GLint length = 0;
-        glGetProgramiv(p, GL_PROGRAM_BINARY_LENGTH, &length);
+        glGetProgramiv(program, GL_PROGRAM_BINARY_LENGTH, &length);
         if (length > 0) {
             std::vector<char> binary(std::size_t(length), 0);
             GLenum format = 0;
-            glGetProgramBinary(p, length, nullptr, &format, binary.data());
+            glGetProgramBinary(program, length, nullptr, &format, binary.data());
             std::error_code ec;
             std::filesystem::create_directories(cache_dir_, ec);
             // Unique per process and library: parallel renders share the folder.
             const std::string tmp = path + ".tmp" + std::to_string(::getpid()) + "_" +
                                     std::to_string(reinterpret_cast<std::uintptr_t>(this));
             if (std::FILE* f = std::fopen(tmp.c_str(), "wb")) {
-                const bool written = std::fwrite(&h2, sizeof h2, 1, f) == 1 && std::fwrite(&format, sizeof format, 1, f) == 1 &&
+                const bool written = std::fwrite(&p.check, sizeof p.check, 1, f) == 1 &&
+                                     std::fwrite(&format, sizeof format, 1, f) == 1 &&
                                      std::fwrite(binary.data(), 1, binary.size(), f) == binary.size();
                 std::fclose(f);
                 // Renamed into place only when whole: a reader never sees half a file.
@@ -255,7 +298,17 @@ GLuint ShaderLibrary::build(const std::string& key, const std::vector<std::pair<
         while (glGetError() != GL_NO_ERROR) {
         }
     }
-    return p;
+    return program;
+}
+
+GLuint ShaderLibrary::build(const std::string& key, const std::vector<std::pair<GLenum, std::string>>& stages,
+                            const std::string& label) {
+    if (auto it = programs_.find(key); it != programs_.end()) return it->second.get();
+    if (pending_.find(key) == pending_.end()) {
+        issue(key, stages, label);
+        if (auto it = programs_.find(key); it != programs_.end()) return it->second.get();  // from the disk cache
+    }
+    return complete(key);
 }
 
 namespace {
@@ -334,33 +387,79 @@ void ShaderLibrary::prune_disk_cache() const {
     for (std::size_t i = 0; i + kMaxCachedPrograms < files.size(); ++i) std::filesystem::remove(files[i].second, ec);
 }
 
-GLuint ShaderLibrary::compute_program(const std::string& comp_file, const ShaderVariant& variant,
-                                      const std::map<std::string, std::string>& generated) {
+std::string ShaderLibrary::compute_key(const std::string& comp_file, const ShaderVariant& variant,
+                                       const std::map<std::string, std::string>& generated) const {
     std::string key = comp_file + "|" + variant.key();
     for (const auto& [name, text] : generated) key += "|" + name + ":" + text;
+    return key;
+}
+
+std::string ShaderLibrary::graphics_key(const std::string& vert_file, const std::string& frag_file,
+                                        const ShaderVariant& variant,
+                                        const std::map<std::string, std::string>& generated) const {
+    std::string key = vert_file + "+" + frag_file + "|" + variant.key();
+    for (const auto& [name, text] : generated) key += "|" + name + ":" + text;
+    return key;
+}
+
+namespace {
+// generated_ points at a call's generated files while its sources expand.
+struct GeneratedScope {
+    const std::map<std::string, std::string>*& slot;
+    GeneratedScope(const std::map<std::string, std::string>*& s, const std::map<std::string, std::string>& g)
+        : slot(s) {
+        slot = &g;
+    }
+    ~GeneratedScope() { slot = nullptr; }
+};
+}  // namespace
+
+GLuint ShaderLibrary::compute_program(const std::string& comp_file, const ShaderVariant& variant,
+                                      const std::map<std::string, std::string>& generated) {
+    const std::string key = compute_key(comp_file, variant, generated);
     if (auto it = programs_.find(key); it != programs_.end()) return it->second.get();
-    struct Scope {
-        const std::map<std::string, std::string>*& slot;
-        ~Scope() { slot = nullptr; }
-    } scope{generated_};
-    generated_ = &generated;
+    if (pending_.count(key)) return complete(key);
+    GeneratedScope scope(generated_, generated);
     return build(key, {{GL_COMPUTE_SHADER, expand(comp_file, variant)}}, comp_file + "|" + variant.key());
 }
 
 GLuint ShaderLibrary::graphics_program(const std::string& vert_file, const std::string& frag_file,
                                        const ShaderVariant& variant,
                                        const std::map<std::string, std::string>& generated) {
-    std::string key = vert_file + "+" + frag_file + "|" + variant.key();
-    for (const auto& [name, text] : generated) key += "|" + name + ":" + text;
+    const std::string key = graphics_key(vert_file, frag_file, variant, generated);
     if (auto it = programs_.find(key); it != programs_.end()) return it->second.get();
-    struct Scope {
-        const std::map<std::string, std::string>*& slot;
-        ~Scope() { slot = nullptr; }
-    } scope{generated_};
-    generated_ = &generated;
+    if (pending_.count(key)) return complete(key);
+    GeneratedScope scope(generated_, generated);
     const std::string label = vert_file + "+" + frag_file + "|" + variant.key();
     return build(key, {{GL_VERTEX_SHADER, expand(vert_file, variant)}, {GL_FRAGMENT_SHADER, expand(frag_file, variant)}},
                  label);
+}
+
+void ShaderLibrary::prefetch_compute(const std::string& comp_file, const ShaderVariant& variant,
+                                     const std::map<std::string, std::string>& generated) {
+    if (!parallel_compile()) return;
+    const std::string key = compute_key(comp_file, variant, generated);
+    if (programs_.count(key) || pending_.count(key)) return;
+    try {
+        GeneratedScope scope(generated_, generated);
+        issue(key, {{GL_COMPUTE_SHADER, expand(comp_file, variant)}}, comp_file + "|" + variant.key());
+    } catch (const std::exception&) {
+        // The request reports it.
+    }
+}
+
+void ShaderLibrary::prefetch_graphics(const std::string& vert_file, const std::string& frag_file,
+                                      const ShaderVariant& variant, const std::map<std::string, std::string>& generated) {
+    if (!parallel_compile()) return;
+    const std::string key = graphics_key(vert_file, frag_file, variant, generated);
+    if (programs_.count(key) || pending_.count(key)) return;
+    try {
+        GeneratedScope scope(generated_, generated);
+        issue(key, {{GL_VERTEX_SHADER, expand(vert_file, variant)}, {GL_FRAGMENT_SHADER, expand(frag_file, variant)}},
+              vert_file + "+" + frag_file + "|" + variant.key());
+    } catch (const std::exception&) {
+        // The request reports it.
+    }
 }
 
 }  // namespace deferred

@@ -14,6 +14,7 @@
 
 #include "gl_util.h"
 
+#include <cstdint>
 #include <map>
 #include <string>
 #include <utility>
@@ -46,6 +47,23 @@ public:
 
     std::size_t compiled_program_count() const { return programs_.size(); }
 
+    // Starts compiling a program that compute_program / graphics_program will
+    // be asked for with the same arguments, without waiting for it, where the
+    // driver compiles on its own threads (GL_KHR_parallel_shader_compile or
+    // the ARB one: the library asks for as many threads as it has). Prefetch
+    // a batch, then ask for each: the batch compiles in parallel, and each
+    // request reports its own errors as before. Does nothing without the
+    // extension, or with DEFERRED_PARALLEL_COMPILE=0 in the environment;
+    // never throws (the request will).
+    void prefetch_compute(const std::string& comp_file, const ShaderVariant& variant,
+                          const std::map<std::string, std::string>& generated = {});
+    void prefetch_graphics(const std::string& vert_file, const std::string& frag_file, const ShaderVariant& variant,
+                           const std::map<std::string, std::string>& generated = {});
+    bool parallel_compile();  // the driver compiles prefetched programs on its own threads
+    ~ShaderLibrary();
+    ShaderLibrary(const ShaderLibrary&) = delete;
+    ShaderLibrary& operator=(const ShaderLibrary&) = delete;
+
     // The node-library files (shaders/nodes/) that define `functions`, each
     // after the files it calls into: a node material's program includes only
     // these (parsing the whole library costs llvmpipe ~1.2 s per program).
@@ -59,10 +77,26 @@ public:
     double load_ms() const { return load_ms_; }
 
 private:
-    GLuint compile_source(GLenum stage, const std::string& src, const std::string& label) const;
-    GLuint link(const std::vector<GLuint>& stages, const std::string& label, bool retrievable) const;
+    // A program whose compile and link were issued, their status not yet asked.
+    struct Pending {
+        GLuint program = 0;
+        std::vector<std::pair<GLenum, GLuint>> shaders;
+        std::string label, path;
+        std::uint64_t check = 0;  // the disk cache's second hash
+    };
+    void init_driver();
+    // Issues the compile and link (or loads the disk cache's binary) of `key`.
+    void issue(const std::string& key, const std::vector<std::pair<GLenum, std::string>>& stages,
+               const std::string& label);
+    // Waits for a pending program: its errors thrown, its binary stored.
+    GLuint complete(const std::string& key);
+    std::string shader_error(GLenum stage, GLuint shader, const std::string& label) const;
     GLuint build(const std::string& key, const std::vector<std::pair<GLenum, std::string>>& stages,
                  const std::string& label);
+    std::string compute_key(const std::string& comp_file, const ShaderVariant& variant,
+                            const std::map<std::string, std::string>& generated) const;
+    std::string graphics_key(const std::string& vert_file, const std::string& frag_file, const ShaderVariant& variant,
+                             const std::map<std::string, std::string>& generated) const;
     void prune_disk_cache() const;
     void expand_into(const std::string& file, std::string& out, std::vector<std::string>& included) const;
     std::string map_log(const std::string& log) const;
@@ -73,6 +107,8 @@ private:
     const std::map<std::string, std::string>* generated_ = nullptr;  // during one program's expansion
     std::size_t compile_count_ = 0, disk_loads_ = 0;
     double compile_ms_ = 0.0, load_ms_ = 0.0;
+    std::map<std::string, Pending> pending_;
+    bool parallel_ = false;  // the driver compiles on its own threads (init_driver)
     std::string driver_;     // GL vendor/renderer/version: part of every disk-cache key
     std::string cache_dir_;  // empty: no disk cache (disabled, or the driver has no binary formats)
 };

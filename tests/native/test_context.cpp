@@ -9,6 +9,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdlib>
+
 using namespace deferred;
 
 TEST(Context, CreatesGL45CoreAndReportsIt) {
@@ -71,6 +73,42 @@ TEST_F(ShaderErrors, CompileErrorNamesFileAndLine) {
         EXPECT_NE(msg.find("passes_comp.glsl:"), std::string::npos) << msg;
         EXPECT_NE(msg.find("unknown PASS_ID"), std::string::npos) << msg;
     }
+}
+
+TEST_F(ShaderErrors, PrefetchedProgramsAreTheRequestedOnesAndReportTheirOwnErrors) {
+    // A batch prefetched (compiling on the driver's threads where it has
+    // them), then requested: the good program is the one a request returns
+    // again, the failing one throws its own error at its request, as without
+    // a prefetch, and again at a second request.
+    ShaderLibrary library;
+    ShaderVariant bad, good;
+    bad.defines.push_back("PASS_ID 99");  // hits the #error in passes_comp.glsl
+    good.defines.push_back("PASS_ID 1");
+    library.prefetch_compute("passes_comp.glsl", bad);  // never throws
+    library.prefetch_compute("passes_comp.glsl", good);
+    const GLuint program = library.compute_program("passes_comp.glsl", good);
+    EXPECT_NE(program, 0u);
+    EXPECT_EQ(library.compute_program("passes_comp.glsl", good), program);
+    for (int attempt = 0; attempt < 2; ++attempt) {
+        try {
+            library.compute_program("passes_comp.glsl", bad);
+            ADD_FAILURE() << "expected a compile error, attempt " << attempt;
+        } catch (const Error& e) {
+            EXPECT_NE(std::string(e.what()).find("unknown PASS_ID"), std::string::npos) << e.what();
+        }
+    }
+    check_gl("prefetched programs");
+    // Mesa's llvmpipe and NVIDIA's driver both offer the extension.
+    EXPECT_EQ(library.parallel_compile(), epoxy_has_gl_extension("GL_KHR_parallel_shader_compile") ||
+                                              epoxy_has_gl_extension("GL_ARB_parallel_shader_compile"));
+    // DEFERRED_PARALLEL_COMPILE=0: no compiler threads asked for, prefetch a no-op.
+    setenv("DEFERRED_PARALLEL_COMPILE", "0", 1);
+    ShaderLibrary serial;
+    EXPECT_FALSE(serial.parallel_compile());
+    unsetenv("DEFERRED_PARALLEL_COMPILE");
+    serial.prefetch_compute("passes_comp.glsl", good);
+    EXPECT_EQ(serial.compile_count() + serial.disk_loads(), 0u);
+    EXPECT_NE(serial.compute_program("passes_comp.glsl", good), 0u);
 }
 
 TEST_F(ShaderErrors, EveryShipedVariantFamilyCompiles) {

@@ -39,28 +39,41 @@ void PassStage::prepare(ShaderLibrary& shaders, const ShaderVariant& base, const
                 // Normal and UV are averaged over the samples.
                 if (!pass_from_first_sample(p)) data_every_sample_ = true;
             }
+    // Each pass's program starts compiling now, on the driver's threads where
+    // it has them (ShaderLibrary::prefetch_compute), while sample 0 draws;
+    // run() asks for it after sample 0's lighting.
+    for (auto& [p, image] : film.pass_images())
+        if (written_per_sample(p)) shaders.prefetch_compute("passes_comp.glsl", variant(p, sample_mode(p)));
 }
 
-GLuint PassStage::program(Pass p, const char* mode) const {
+bool PassStage::written_per_sample(Pass p) {
+    // Shadow: resolved after the samples; AO: accumulated by the lighting
+    // pass; Vector: drawn by the motion module; Shadow Catcher: resolved
+    // after the samples.
+    return p != Pass::Shadow && p != Pass::AO && p != Pass::Vector && p != Pass::ShadowCatcher;
+}
+
+const char* PassStage::sample_mode(Pass p) { return pass_from_first_sample(p) ? nullptr : "ACCUMULATE"; }
+
+ShaderVariant PassStage::variant(Pass p, const char* mode) const {
     ShaderVariant v = base_;
     v.defines.push_back("PASS_ID " + std::to_string(static_cast<int>(p)));
     if (mode) v.defines.push_back(mode);
     if (p == Pass::Env) world_->add_defines(v);
-    return shaders_->compute_program("passes_comp.glsl", v);
+    return v;
+}
+
+GLuint PassStage::program(Pass p, const char* mode) const {
+    return shaders_->compute_program("passes_comp.glsl", variant(p, mode));
 }
 
 void PassStage::run(int sample, bool data, const GBuffer& gbuffer) const {
     // Filtered passes every sample, the rest at sample 0.
     for (auto& [p, image] : film_->pass_images()) {
         const bool first_only = pass_from_first_sample(p);
-        // Shadow: resolved after the samples; AO: accumulated by the
-        // lighting pass; Vector: drawn by the motion module; Shadow Catcher:
-        // resolved after the samples.
-        if ((first_only && sample > 0) || p == Pass::Shadow || p == Pass::AO || p == Pass::Vector ||
-            p == Pass::ShadowCatcher)
-            continue;
+        if ((first_only && sample > 0) || !written_per_sample(p)) continue;
         if (data_gbuffer_ && is_data_pass(p) != data) continue;
-        glUseProgram(program(p, first_only ? nullptr : "ACCUMULATE"));
+        glUseProgram(program(p, sample_mode(p)));
         gbuffer.bind_textures();
         if (p == Pass::Env) world_->bind();
         glBindImageTexture(IMG_PASS_OUT, image.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);

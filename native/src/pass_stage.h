@@ -45,6 +45,11 @@ public:
     bool resolve(bool catchers, const MotionModule& motion) const;
 
 private:
+    // Whether run() writes the pass each sample (or at sample 0), and with
+    // which mode (ACCUMULATE, or none for sample 0's data passes).
+    static bool written_per_sample(Pass p);
+    static const char* sample_mode(Pass p);
+    ShaderVariant variant(Pass p, const char* mode) const;
     GLuint program(Pass p, const char* mode) const;
 
     ShaderLibrary* shaders_ = nullptr;

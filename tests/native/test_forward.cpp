@@ -34,8 +34,11 @@ struct Pane {
 
 // A floor and the given panes (half size 2, z = height, no shadow of their
 // own); the camera covers 6 m, so the panes cover the middle of the frame.
+// `rays`: shadow rays instead of maps, and an opaque caster out of the
+// camera's view (half size 1 at (4.5, 1.5, 8.5)) whose shadow falls on the
+// right of the panes (x 1..2, y -0.75..1.25 at z = 1).
 FrameResult render_scene(const std::vector<Pane>& panes, int samples, bool film_transparent = false,
-                         bool with_floor = true, float world = 0.25f) {
+                         bool with_floor = true, float world = 0.25f, bool rays = false) {
     Renderer r;
     set_world_color(r, world, world, world);
     Light sun;
@@ -51,7 +54,9 @@ FrameResult render_scene(const std::vector<Pane>& panes, int samples, bool film_
     std::sort(order.begin(), order.end(), [](const Pane& a, const Pane& b) { return a.height > b.height; });
     for (const Pane& p : order)
         add_plane(r, p.material, 2.0f, 1, tools::translation(0, 0, p.height), /*cast_shadow=*/false);
+    if (rays) add_plane(r, diffuse(0.5f, 0.5f, 0.5f), 1.0f, 1, tools::translation(4.5, 1.5, 8.5));
     RenderSettings s;
+    s.shadow_rays = rays;
     s.width = s.height = kSize;
     s.samples = samples;
     s.film_transparent = film_transparent;
@@ -105,6 +110,29 @@ TEST(ForwardPass, OneLayerAtOneSampleIsTheExactComposite) {
     EXPECT_LT(worst, 1e-6);
     EXPECT_GT(forward.timings.forward_ms, 0.0);
     EXPECT_EQ(floor_only.timings.forward_ms, 0.0);  // no Blend material: no forward pass
+}
+
+TEST(ForwardPass, ShadowRaysLightTheLayerAsTheLightingPassDoes) {
+    // With shadow rays the forward pass traces them itself (a fragment
+    // shader calling the traversal through its subroutine, selected after
+    // each glUseProgram): 0.4 pane + 0.6 floor as in the first test, and the
+    // caster's shadow on the pane's right, where the sun's light is gone.
+    const Material green = diffuse(0.25f, 0.75f, 0.375f);
+    FrameResult floor_only = render_scene({}, 1, false, true, 0.25f, true);
+    FrameResult pane_opaque = render_scene({{green, 1.0}}, 1, false, true, 0.25f, true);
+    FrameResult forward = render_scene({{blend_of(green, 0.4f), 1.0}}, 1, false, true, 0.25f, true);
+    ASSERT_TRUE(forward.timings.shadow_rays);
+    const PassImage& F = *floor_only.find(Pass::Combined);
+    const PassImage& P = *pane_opaque.find(Pass::Combined);
+    const PassImage& C = *forward.find(Pass::Combined);
+    const double worst = worst_inside(C, [&](int x, int y) { return 0.4 * pixel4(P, x, y) + 0.6 * pixel4(F, x, y); });
+    // The pane at x = 1.5, y = 0.25 (in the shadow) against x = -1.5 (in the
+    // sun): pixel (x + 3) * 8, rows from the bottom.
+    const glm::dvec4 shadowed = pixel4(C, 36, 26), lit = pixel4(C, 12, 26);
+    std::printf("one layer with shadow rays: worst relative difference %.2e; green in and out of the shadow %.4f, "
+                "%.4f\n", worst, shadowed.y, lit.y);
+    EXPECT_LT(worst, 1e-4);
+    EXPECT_LT(shadowed.y, 0.5 * lit.y);  // the caster shadows the pane
 }
 
 TEST(ForwardPass, EqualsStochasticTransparencyConverged) {

@@ -57,6 +57,7 @@ void ShaderLibrary::expand_into(const std::string& file, std::string& out,
     int line_no = 0;
     out += "#line 1 " + std::to_string(file_id) + "\n";
     static const std::regex include_re(R"(^\s*#\s*include\s+\"([^\"]+)\"\s*$)");
+    static const std::regex branch_re(R"(^\s*#\s*(endif|else|elif)\b.*)");
     std::smatch m;
     while (std::getline(in, line)) {
         ++line_no;
@@ -66,6 +67,13 @@ void ShaderLibrary::expand_into(const std::string& file, std::string& out,
         } else {
             out += line;
             out += '\n';
+            // An include inside a group the preprocessor skips takes its
+            // #line directives with it, the one back to this file included:
+            // number again after each branch, or the log names the wrong
+            // file and line (light_lib.glsl's lines after a skipped
+            // shadow_lib.glsl were reported ~390 lines on, in another file).
+            if (std::regex_match(line, branch_re))
+                out += "#line " + std::to_string(line_no + 1) + " " + std::to_string(file_id) + "\n";
         }
     }
 }

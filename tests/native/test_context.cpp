@@ -9,7 +9,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdlib>
+#include <sstream>
+#include <vector>
 
 using namespace deferred;
 
@@ -72,6 +75,46 @@ TEST_F(ShaderErrors, CompileErrorNamesFileAndLine) {
         const std::string msg = e.what();
         EXPECT_NE(msg.find("passes_comp.glsl:"), std::string::npos) << msg;
         EXPECT_NE(msg.find("unknown PASS_ID"), std::string::npos) << msg;
+    }
+}
+
+TEST_F(ShaderErrors, ErrorsAfterASkippedIncludeNameTheirFileAndLine) {
+    // light_lib.glsl includes shadow_lib.glsl under #ifdef HAS_SHADOWS. With
+    // SHADOW_RAYS and no HAS_SHADOWS (a variant the renderer never makes)
+    // its calls to shadow_ray fail: the log must name light_lib.glsl at
+    // those calls' lines, though the skipped group took the include's #line
+    // directives with it.
+    std::string text;
+    for (const ShaderSource& src : embedded_shader_sources())
+        if (std::string(src.name) == "light_lib.glsl") text = src.text;
+    ASSERT_FALSE(text.empty());
+    std::vector<int> calls;
+    int lines = 0;
+    {
+        std::istringstream in(text);
+        std::string line;
+        while (std::getline(in, line)) {
+            ++lines;
+            if (line.find("shadow_ray(s, P") != std::string::npos) calls.push_back(lines);
+        }
+    }
+    ASSERT_FALSE(calls.empty());
+    ShaderVariant v;
+    v.defines = {"HAS_POINT_LIGHTS", "HAS_AREA_LIGHTS", "HAS_SUN_LIGHTS", "SHADOW_RAYS"};
+    try {
+        shaders().compute_program("lighting_comp.glsl", v);
+        FAIL() << "expected a compile error";
+    } catch (const Error& e) {
+        const std::string msg = e.what();
+        int named = 0, beyond = 0;
+        for (std::size_t at = msg.find("light_lib.glsl:"); at != std::string::npos;
+             at = msg.find("light_lib.glsl:", at + 1)) {
+            const int line = std::atoi(msg.c_str() + at + 15);
+            if (std::find(calls.begin(), calls.end(), line) != calls.end()) ++named;
+            if (line > lines) ++beyond;
+        }
+        EXPECT_GT(named, 0) << msg;
+        EXPECT_EQ(beyond, 0) << msg;
     }
 }
 
@@ -170,19 +213,29 @@ TEST_F(ShaderErrors, EveryNodeFileCompilesInEveryGraphVariant) {
         // Emissive meshes lighting a Blend-mode surface (the forward pass is
         // a fragment shader: no compute built-ins in the mesh lights' code).
         {"FORWARD_PASS", "FORWARD_MAX_LIGHTS 512", "HAS_MESH_LIGHTS", "HAS_EMISSION_TEXELS", "HAS_SHADOWS"},
+        // With shadow rays: the traversal behind its subroutine (ray_lib.glsl).
+        // (The renderer traces rays only where some light casts shadows.)
+        {"FORWARD_PASS", "FORWARD_MAX_LIGHTS 512", "HAS_POINT_LIGHTS", "HAS_AREA_LIGHTS", "HAS_MESH_LIGHTS",
+         "HAS_SHADOWS", "SHADOW_RAYS", "RAY_SUBROUTINE"},
         {"AOV_PASS", "GBUF_GEOMETRY"},
         {"SHADOW_PASS", "GBUF_GEOMETRY"},
         {"SHADOW_PASS", "WORLD_MAP"},
         {"EMISSION_BAKE"},
     };
-    for (const std::vector<std::string>& extra : variants) {
+    auto variant_of = [](const std::vector<std::string>& extra) {
         ShaderVariant v;
         v.defines = {"MATERIAL_GRAPH", "MATERIAL_ALPHA", "MATERIAL_BUMP", "MATERIAL_ATTRIBUTE_COUNT 0",
                      "MATERIAL_IMAGE_COUNT 0"};
         v.defines.insert(v.defines.end(), extra.begin(), extra.end());
-        EXPECT_NE(shaders().graphics_program("geometry_vert.glsl", "geometry_frag.glsl", v,
+        return v;
+    };
+    // All compiling at once on the driver's threads (NVIDIA: seconds each).
+    for (const std::vector<std::string>& extra : variants)
+        shaders().prefetch_graphics("geometry_vert.glsl", "geometry_frag.glsl", variant_of(extra),
+                                    {{kMaterialGraphFile, source}});
+    for (const std::vector<std::string>& extra : variants)
+        EXPECT_NE(shaders().graphics_program("geometry_vert.glsl", "geometry_frag.glsl", variant_of(extra),
                                              {{kMaterialGraphFile, source}}),
                   0u)
             << (extra.empty() ? std::string("G-buffer") : extra[0]);
-    }
 }

@@ -13,8 +13,8 @@
 
 namespace deferred {
 
-void LightingStage::prepare(ShaderLibrary& shaders, const ShaderVariant& base, const LightModule& lights,
-                            const WorldModule& world, const Config& config, std::vector<std::string>& warnings) {
+ShaderVariant LightingStage::variant(const ShaderVariant& base, const LightModule& lights, const WorldModule& world,
+                                     const Config& config, bool& light_sampling) {
     ShaderVariant v = base;
     lights.add_defines(v);
     if (config.light_split) v.defines.push_back("OUT_LIGHT_SPLIT");
@@ -22,14 +22,10 @@ void LightingStage::prepare(ShaderLibrary& shaders, const ShaderVariant& base, c
     // Selection only where some pixel can have more lights than the budget,
     // within one lighting dispatch (512 lights, 8 with shadow rays): a budget
     // of a dispatch's size or more never selects.
-    batch_ = config.shadow_rays ? kRayLightBatch : kLightBatch;
+    const std::uint32_t batch = config.shadow_rays ? kRayLightBatch : kLightBatch;
     const std::uint32_t budget = std::uint32_t(std::max(config.light_samples, 0));
-    light_sampling_ = budget > 0 && lights.count() > budget && budget < batch_;
-    if (light_sampling_) v.defines.push_back("LIGHT_SAMPLING " + std::to_string(budget));
-    if (budget > 0 && !light_sampling_ && lights.count() > budget)
-        warnings.push_back("Light Samples " + std::to_string(budget) + " has no effect: the lighting runs in groups of " +
-                           std::to_string(batch_) + " lights" + (config.shadow_rays ? " with shadow rays" : "") +
-                           ", and a budget that large never selects; every light is shaded");
+    light_sampling = budget > 0 && lights.count() > budget && budget < batch;
+    if (light_sampling) v.defines.push_back("LIGHT_SAMPLING " + std::to_string(budget));
     if (config.shadow_maps) v.defines.push_back("HAS_SHADOWS");
     if (config.shadow_rays) {
         v.defines.push_back("SHADOW_RAYS");
@@ -42,6 +38,24 @@ void LightingStage::prepare(ShaderLibrary& shaders, const ShaderVariant& base, c
     if (config.shadow_pass) v.defines.push_back("OUT_SHADOW");
     if (config.catchers) v.defines.push_back("SHADOW_CATCHER");
     if (config.forward_layer) v.defines.push_back("FORWARD_LAYER");
+    return v;
+}
+
+void LightingStage::prefetch(ShaderLibrary& shaders, const ShaderVariant& base, const LightModule& lights,
+                             const WorldModule& world, const Config& config) {
+    bool light_sampling = false;
+    shaders.prefetch_compute("lighting_comp.glsl", variant(base, lights, world, config, light_sampling));
+}
+
+void LightingStage::prepare(ShaderLibrary& shaders, const ShaderVariant& base, const LightModule& lights,
+                            const WorldModule& world, const Config& config, std::vector<std::string>& warnings) {
+    const ShaderVariant v = variant(base, lights, world, config, light_sampling_);
+    batch_ = config.shadow_rays ? kRayLightBatch : kLightBatch;
+    const std::uint32_t budget = std::uint32_t(std::max(config.light_samples, 0));
+    if (budget > 0 && !light_sampling_ && lights.count() > budget)
+        warnings.push_back("Light Samples " + std::to_string(budget) + " has no effect: the lighting runs in groups of " +
+                           std::to_string(batch_) + " lights" + (config.shadow_rays ? " with shadow rays" : "") +
+                           ", and a budget that large never selects; every light is shaded");
     program_ = shaders.compute_program("lighting_comp.glsl", v);
 }
 

@@ -51,6 +51,12 @@ public:
     // A light budget no dispatch can use is warned (every light is shaded).
     void prepare(ShaderLibrary& shaders, const ShaderVariant& base, const LightModule& lights,
                  const WorldModule& world, const Config& config, std::vector<std::string>& warnings);
+    // Starts compiling prepare()'s program for `config` on the driver's
+    // threads (ShaderLibrary::prefetch_compute), so that it overlaps the
+    // frame's other compiles (the lighting program is the largest: 11.7 s
+    // with shadow rays on an H200). Never throws.
+    static void prefetch(ShaderLibrary& shaders, const ShaderVariant& base, const LightModule& lights,
+                         const WorldModule& world, const Config& config);
     // Shades one sample: every batch of lights into the film (bound here).
     // `instance_groups`: each instance's light group (0: no light groups),
     // `world_group` the world's; `between_batches` runs before each batch
@@ -60,6 +66,10 @@ public:
     bool light_sampling() const { return light_sampling_; }
 
 private:
+    // The program's variant; `light_sampling`: whether stochastic light
+    // selection is on (a budget below the dispatch's batch and the lights).
+    static ShaderVariant variant(const ShaderVariant& base, const LightModule& lights, const WorldModule& world,
+                                 const Config& config, bool& light_sampling);
     GLuint program_ = 0;
     std::uint32_t batch_ = kLightBatch;
     bool light_sampling_ = false;

@@ -686,6 +686,24 @@ void Renderer::Impl::prepare_programs(Frame& f) {
         if (m.graph < 0 && m.alpha < 1.0f) f.scene_alpha = true;
     if (f.scene_alpha) f.caster_defines.push_back("SCENE_ALPHA");
 
+    LightingStage::Config lighting;
+    lighting.light_split = f.plan.light_split;
+    lighting.culled = f.culled;
+    lighting.light_samples = settings.light_samples;
+    lighting.shadow_maps = !shadows.empty();
+    lighting.shadow_rays = f.shadow_rays;
+    lighting.world_occlusion = shadows.world_index() >= 0;
+    lighting.ao = settings.passes.contains(Pass::AO);
+    lighting.light_groups = settings.light_groups;
+    lighting.shadow_pass = f.plan.shadow_pass;
+    lighting.catchers = f.plan.catchers;
+    // The lighting program, the frame's largest, starts compiling first, to
+    // overlap the node materials' compiles, where its variant is already
+    // known: without Blend-mode materials there is no forward layer.
+    bool any_blend = false;
+    for (const Material& m : scene.materials()) any_blend = any_blend || m.blend;
+    if (!any_blend) LightingStage::prefetch(*shaders, base, lights, world_module, lighting);
+
     f.geometry.prepare(*shaders, materials, f.scene, base, f.scene_alpha, result.warnings);
     result.timings.material_programs = f.geometry.distinct_graph_programs();
 
@@ -724,17 +742,6 @@ void Renderer::Impl::prepare_programs(Frame& f) {
         result.timings.gbuffer_bytes += forward.bytes();
     }
 
-    LightingStage::Config lighting;
-    lighting.light_split = f.plan.light_split;
-    lighting.culled = f.culled;
-    lighting.light_samples = settings.light_samples;
-    lighting.shadow_maps = !shadows.empty();
-    lighting.shadow_rays = f.shadow_rays;
-    lighting.world_occlusion = shadows.world_index() >= 0;
-    lighting.ao = settings.passes.contains(Pass::AO);
-    lighting.light_groups = settings.light_groups;
-    lighting.shadow_pass = f.plan.shadow_pass;
-    lighting.catchers = f.plan.catchers;
     lighting.forward_layer = forward.active();
     f.lighting.prepare(*shaders, base, lights, world_module, lighting, result.warnings);
 

@@ -12,12 +12,13 @@
 # Writes four
 # files to $OUT (the device tool returns at most eight): summary.txt,
 # native_tests.log, robustness.log, benches.md. Each step has a time limit
-# (killed 5 s after it): 120 s for the tests (in parallel), 470 s for the
-# benchmarks, inside one device call (600 s) and a session's 15 minutes of
-# device time. Exits non-zero when a step failed or ran out of time.
+# (killed 5 s after it): 100 s for the tests (in parallel), 430 s for the
+# benchmarks (with the kills' grace and the loaders' setup, under 600 s: one
+# device call with timeout_s=600) inside a session's 15 minutes of device
+# time. Exits non-zero when a step failed or ran out of time.
 # Parts of it, for a rerun inside what is left of the device time:
 # GPU_CHECK_FILTER (a gtest filter for both test binaries, "-" for no
-# tests), GPU_CHECK_TEST_LIMIT (seconds, 120), GPU_CHECK_BENCHES (any of
+# tests), GPU_CHECK_TEST_LIMIT (seconds, 100), GPU_CHECK_BENCHES (any of
 # "raster materials raycompile frame lights outputs shadows", all by
 # default; DEFERRED_BENCH_FRAME_BLOCKS=rays runs the frame bench's
 # shadow-rays block alone).
@@ -66,7 +67,7 @@ run() {  # run NAME SECONDS LOG COMMAND...: time-limited; its exit status and ti
 # test's time there is the driver compiling programs, on the CPU).
 # Line-buffered, so a test stopped at the limit leaves its last lines.
 filter="${GPU_CHECK_FILTER:-*}"
-test_limit="${GPU_CHECK_TEST_LIMIT:-120}"
+test_limit="${GPU_CHECK_TEST_LIMIT:-100}"
 benches_to_run=" ${GPU_CHECK_BENCHES:-raster materials raycompile frame lights outputs shadows} "
 if [ "$filter" != "-" ]; then
 t0=$SECONDS
@@ -108,16 +109,16 @@ export DEFERRED_BENCH_PROFILE=1
 # shellcheck disable=SC2086
 [[ "$benches_to_run" == *" raster "* ]] && run bench_raster 30 "$benches" "$stage/bin/deferred_bench_raster" $size
 # shellcheck disable=SC2086
-[[ "$benches_to_run" == *" materials "* ]] && run bench_materials 90 "$benches" "$stage/bin/deferred_bench_materials" $size 16 3
-[[ "$benches_to_run" == *" raycompile "* ]] && run bench_ray_compile 60 "$benches" "$stage/bin/deferred_bench_ray_compile" 16
+[[ "$benches_to_run" == *" materials "* ]] && run bench_materials 80 "$benches" "$stage/bin/deferred_bench_materials" $size 16 3
+[[ "$benches_to_run" == *" raycompile "* ]] && run bench_ray_compile 50 "$benches" "$stage/bin/deferred_bench_ray_compile" 16
 # shellcheck disable=SC2086
 [[ "$benches_to_run" == *" frame "* ]] && run bench_frame 100 "$benches" stdbuf -oL "$stage/bin/deferred_bench_frame" $size
 # Brute force (every light at every pixel) up to 1000 lights, beside the culled rows up to 65 536.
 # shellcheck disable=SC2086
 [[ "$benches_to_run" == *" lights "* ]] && run bench_lights 40 "$benches" "$stage/bin/deferred_bench_lights" $size 1000
 # shellcheck disable=SC2086
-[[ "$benches_to_run" == *" outputs "* ]] && run bench_outputs 70 "$benches" "$stage/bin/deferred_bench_outputs" $size
+[[ "$benches_to_run" == *" outputs "* ]] && run bench_outputs 60 "$benches" "$stage/bin/deferred_bench_outputs" $size
 # shellcheck disable=SC2086
-[[ "$benches_to_run" == *" shadows "* ]] && run bench_shadows 80 "$benches" stdbuf -oL "$stage/bin/deferred_bench_shadows" $size
+[[ "$benches_to_run" == *" shadows "* ]] && run bench_shadows 70 "$benches" stdbuf -oL "$stage/bin/deferred_bench_shadows" $size
 cat "$summary"
 exit "$failed"

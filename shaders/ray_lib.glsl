@@ -28,7 +28,7 @@ bool ray_box(uvec4 a, uvec4 b, vec3 o, vec3 inv, float tmax) {
  * of 1 - alpha over partly transparent ones (Cycles' transparent shadows),
  * 1 where nothing is hit. Any hit ends an opaque ray, so the children are
  * visited in stored order.
- * RAY_SUBROUTINE (ray_scene.h, ray_traversal_defines): called through a
+ * RAY_SUBROUTINE (ray_scene.h, add_ray_traversal_define): called through a
  * subroutine uniform. GLSL compilers inline a function at every call site,
  * and the lighting program calls this from up to ten (light_lib.glsl); a
  * subroutine call is resolved only when the program runs, so the compiler

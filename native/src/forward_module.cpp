@@ -55,14 +55,18 @@ std::uint64_t ForwardModule::draw(FrameScene& scene, const ViewVolume& view) {
     std::stable_sort(sorted_.begin(), sorted_.end(), [](const Sorted& a, const Sorted& b) { return a.depth > b.depth; });
     begin_sample();
     materials_->bind_constants();
+    GLuint bound = 0;  // the program in use (a glUseProgram resets its subroutine)
     for (const Sorted& f : sorted_) {
         const GpuMesh& mesh = scene.mesh(*f.one.draw);
         for (std::size_t s = 0; s < mesh.slot_ranges.size(); ++s) {
             const std::uint32_t id = scene.slot_material(*f.one.draw, s);
             auto program = programs_.find(id);
             if (program == programs_.end() || mesh.slot_ranges[s].second == 0) continue;
-            glUseProgram(program->second);
-            use_ray_traversal(program->second, GL_FRAGMENT_SHADER);  // with shadow rays: lights them
+            if (program->second != bound) {
+                glUseProgram(program->second);
+                use_ray_traversal(program->second, GL_FRAGMENT_SHADER);  // with shadow rays: lights them
+                bound = program->second;
+            }
             const Material& m = scene.scene_material(id);
             if (m.graph >= 0 && !geometry_->failed(id)) {
                 materials_->bind_for_draw(std::uint32_t(m.graph), mesh);

@@ -255,7 +255,13 @@ GLuint ShaderLibrary::complete(const std::string& key) {
         GLint ok = GL_FALSE;
         glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);  // waits for the compile
         if (!ok) {
-            const std::string message = shader_error(stage, shader, p.label);
+            std::string message;
+            try {
+                message = shader_error(stage, shader, p.label);
+            } catch (...) {
+                discard();  // the entry has left pending_: nothing else deletes its objects
+                throw;
+            }
             discard();
             throw Error(message);
         }
@@ -263,12 +269,19 @@ GLuint ShaderLibrary::complete(const std::string& key) {
     GLint ok = GL_FALSE;
     glGetProgramiv(p.program, GL_LINK_STATUS, &ok);  // waits for the link
     if (!ok) {
-        GLint len = 0;
-        glGetProgramiv(p.program, GL_INFO_LOG_LENGTH, &len);
-        std::string log(static_cast<std::size_t>(std::max(len, 1)), '\0');
-        glGetProgramInfoLog(p.program, len, nullptr, log.data());
+        std::string message;
+        try {
+            GLint len = 0;
+            glGetProgramiv(p.program, GL_INFO_LOG_LENGTH, &len);
+            std::string log(static_cast<std::size_t>(std::max(len, 1)), '\0');
+            glGetProgramInfoLog(p.program, len, nullptr, log.data());
+            message = "linking program " + p.label + " failed:\n" + map_log(log.c_str());
+        } catch (...) {
+            discard();
+            throw;
+        }
         discard();
-        throw Error("linking program " + p.label + " failed:\n" + map_log(log.c_str()));
+        throw Error(message);
     }
     for (const auto& [stage, shader] : p.shaders) {
         glDetachShader(p.program, shader);

@@ -141,14 +141,20 @@ TEST_F(ShaderErrors, PrefetchedProgramsAreTheRequestedOnesAndReportTheirOwnError
         }
     }
     check_gl("prefetched programs");
+    // The user's own setting, kept and put back.
+    const char* user = std::getenv("DEFERRED_PARALLEL_COMPILE");
+    const std::string user_value = user ? user : "";
     // Mesa's llvmpipe and NVIDIA's driver both offer the extension.
-    EXPECT_EQ(library.parallel_compile(), epoxy_has_gl_extension("GL_KHR_parallel_shader_compile") ||
-                                              epoxy_has_gl_extension("GL_ARB_parallel_shader_compile"));
+    if (!user) {
+        EXPECT_EQ(library.parallel_compile(), epoxy_has_gl_extension("GL_KHR_parallel_shader_compile") ||
+                                                  epoxy_has_gl_extension("GL_ARB_parallel_shader_compile"));
+    }
     // DEFERRED_PARALLEL_COMPILE=0: no compiler threads asked for, prefetch a no-op.
     setenv("DEFERRED_PARALLEL_COMPILE", "0", 1);
     ShaderLibrary serial;
     EXPECT_FALSE(serial.parallel_compile());
-    unsetenv("DEFERRED_PARALLEL_COMPILE");
+    if (user) setenv("DEFERRED_PARALLEL_COMPILE", user_value.c_str(), 1);
+    else unsetenv("DEFERRED_PARALLEL_COMPILE");
     serial.prefetch_compute("passes_comp.glsl", good);
     EXPECT_EQ(serial.compile_count() + serial.disk_loads(), 0u);
     EXPECT_NE(serial.compute_program("passes_comp.glsl", good), 0u);

@@ -83,6 +83,18 @@
  * lighting pass does not otherwise use (the pass images and the world bake). */
 #define IMG_CATCHER_HIT 3
 #define IMG_CATCHER_PASS 6
+/* The film's splat (film_splat_comp.glsl, a dispatch of its own after each
+ * sample): this sample's values, and the accumulation they are added to. */
+#define IMG_SPLAT_SAMPLE 0
+#define IMG_SPLAT_FILM 1
+/* ... its uniforms: the taps' first offsets and counts (x, y, count x,
+ * count y), the edge margin, then each axis's weights (SPLAT_MAX_TAPS each;
+ * film.h kMaxSplatTaps) */
+#define LOC_SPLAT_TAPS 0
+#define LOC_SPLAT_MARGIN 1
+#define LOC_SPLAT_WEIGHTS_X 2
+#define SPLAT_MAX_TAPS 8
+#define LOC_SPLAT_WEIGHTS_Y (LOC_SPLAT_WEIGHTS_X + SPLAT_MAX_TAPS)
 
 /* The world map's sampling density: this fraction uniform on the sphere, the
  * rest by luminance (defensive importance sampling: every direction keeps a

@@ -128,6 +128,9 @@ def main(argv=None):
     rays = ap.add_mutually_exclusive_group()
     rays.add_argument("--shadow-rays", action="store_true", help="shadow rays instead of the captured method")
     rays.add_argument("--shadow-maps", action="store_true", help="shadow maps instead of the captured method")
+    ap.add_argument("--filter-splat", choices=["on", "off"],
+                    help="the film's filter splatting (native RenderSettings.filter_splat) instead of the captured "
+                         "setting")
     args = ap.parse_args(argv)
 
     data, calls, meta = load_capture(args.capture)
@@ -163,6 +166,8 @@ def main(argv=None):
         kwargs["light_samples"] = args.light_samples
     if args.shadow_rays or args.shadow_maps:
         kwargs["shadow_rays"] = bool(args.shadow_rays)
+    if args.filter_splat:
+        kwargs["filter_splat"] = args.filter_splat == "on"
     kwargs["preview_interval_ms"] = -1
 
     info = dict(renderer.gl_info)
@@ -179,6 +184,7 @@ def main(argv=None):
     result = {"capture": os.path.abspath(args.capture), "gl_renderer": info.get("renderer"),
               "gl_version": info.get("version"), "size": [width, height], "samples": kwargs.get("samples"),
               "light_samples": kwargs.get("light_samples", 0), "shadow_rays": kwargs.get("shadow_rays", False),
+              "filter_splat": kwargs.get("filter_splat", True),
               "passes": sorted(images), "context_ms": t_context * 1e3, "scene_ms": t_scene * 1e3,
               "runs": runs, "warnings": warnings, "captured": meta}
     if args.json:

@@ -500,8 +500,9 @@ void declare_renderer(py::module_& m) {
                 int shadow_resolution, float shadow_quality, bool shadow_rays, float alpha_threshold,
                 const std::vector<std::string>& cryptomatte, int cryptomatte_levels,
                 const std::vector<std::pair<std::string, std::string>>& aovs, int light_groups,
-                int preview_interval_ms, const std::string& preview_pass, bool motion_blur) {
+                int preview_interval_ms, const std::string& preview_pass, bool motion_blur, bool filter_splat) {
                  RenderSettings s;
+                 s.filter_splat = filter_splat;
                  s.motion_blur = motion_blur;
                  s.preview_interval_ms = preview_interval_ms;
                  {
@@ -607,7 +608,7 @@ void declare_renderer(py::module_& m) {
              py::arg("cryptomatte") = std::vector<std::string>{}, py::arg("cryptomatte_levels") = 6,
              py::arg("aovs") = std::vector<std::pair<std::string, std::string>>{}, py::arg("light_groups") = 0,
              py::arg("preview_interval_ms") = -1, py::arg("preview_pass") = "Combined",
-             py::arg("motion_blur") = false)
+             py::arg("motion_blur") = false, py::arg("filter_splat") = true)
         .def("preview",
              [](const PyRenderer& self, std::uint64_t since) -> py::object {
                  if (!self.renderer) throw Error("the renderer was closed");

@@ -38,6 +38,36 @@ float PixelFilter::offset(float u) const {
     return inverse_cdf_[i] * (1.0f - t) + inverse_cdf_[i + 1] * t;
 }
 
+int PixelFilter::splat_margin() const {
+    // Taps d with |d - o| < h (the support) for |o| <= h: |d| < 2h.
+    const int margin = int(std::ceil(2.0 * double(half_width_))) - 1;
+    // At most ceil(2h) taps per axis are non-zero for one offset.
+    if (margin <= 0 || int(std::ceil(2.0 * double(half_width_))) > kMaxSplatTaps) return 0;
+    return margin;
+}
+
+SplatTaps PixelFilter::splat_taps(float offset) const {
+    SplatTaps taps;
+    const int margin = splat_margin();
+    if (margin == 0) return taps;  // the pixel's own sample, weight 1
+    const double h = double(half_width_), o = double(offset), width = 2.0 * h;
+    // Every d in (o - h, o + h); f(d - o) as blackman_harris (the density's
+    // constant cancels in the normalisation).
+    const int first = std::max(int(std::floor(o - h)) + 1, -margin);
+    const int last = std::min(int(std::ceil(o + h)) - 1, margin);
+    taps.first = first;
+    taps.count = 0;
+    double sum = 0.0;
+    std::array<double, kMaxSplatTaps> w{};
+    for (int d = first; d <= last && taps.count < kMaxSplatTaps; ++d) {
+        w[std::size_t(taps.count)] = std::max(blackman_harris(double(d) - o, width), 0.0);
+        sum += w[std::size_t(taps.count++)];
+    }
+    if (taps.count == 0 || !(sum > 0.0)) return SplatTaps{};
+    for (int k = 0; k < taps.count; ++k) taps.weight[std::size_t(k)] = float(w[std::size_t(k)] / sum);
+    return taps;
+}
+
 std::array<float, 4> sample_point(int sample) {
     // alpha_i = phi^-i, phi = 1.16730... the real root of x^5 = x + 1.
     static constexpr double alpha[4] = {0.8566748838545029, 0.733891856627126, 0.6287067210378086,

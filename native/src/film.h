@@ -17,6 +17,16 @@ namespace deferred {
 // Cycles' filter_func_blackman_harris(v, width), v in [-width/2, width/2].
 double blackman_harris(double v, double width);
 
+// The taps one film sample adds to a pixel from its neighbours (the film's
+// filter splatting, below). Tap k is the pixel `first + k` pixels away
+// (per axis), weighted by weight[k]; the weights of an axis sum to 1.
+constexpr int kMaxSplatTaps = 8;
+struct SplatTaps {
+    int first = 0;
+    int count = 1;
+    std::array<float, kMaxSplatTaps> weight{1.0f};
+};
+
 class PixelFilter {
 public:
     // filter_width: Blender's render.filter_size (Cycles filter_width), pixels.
@@ -24,6 +34,31 @@ public:
     // Inverse CDF of the 1D filter: u in [0,1) -> offset in pixels; u = 0.5 -> 0.
     float offset(float u) const;
     float support() const { return half_width_; }  // offsets lie in [-support, support]
+
+    // Filter splatting with importance-sampled offsets. Sample s is drawn
+    // with every pixel's point jittered by the same offset o ~ f (the
+    // filter's density, above; the projection moves by +o, so pixel q sees
+    // the point q + 0.5 - o). Pixel p's estimate from it is
+    //     E_p = sum_d a_d(o) L(p + d + 0.5 - o),  a_d(o) = f(d - o) / F(-o),
+    // F(x) = sum_k f(x + k), the density folded onto one pixel: the weighted
+    // neighbours' own samples, nine at Blender's default width. Unbiased:
+    // E_o[E_p] = sum_d int f(o) f(d - o) / F(-o) L(p + 0.5 + d - o) do, and
+    // with x = d - o, F(-o) = F(x - d) = F(x), sum_d f(x - d) = F(x), so
+    // E_o[E_p] = int f(x) L(p + 0.5 + x) dx, Cycles' filtered pixel, the
+    // same as the pixel's own sample alone (weight 1; Cycles' estimator). The
+    // weights sum to 1 per axis. Why: a small, very bright feature that only
+    // the filter's tail reaches is hit by a pixel's own jitter with the
+    // tail's small probability and then counts fully (a firefly, as in
+    // Cycles); here it is seen by a neighbour's sample each time one lands
+    // on it and counts with the tail's weight (issue 15's box_room, beside
+    // the chrome ball's highlight).
+    // The taps for offset o (the jitter, pixels) on one axis.
+    SplatTaps splat_taps(float offset) const;
+    // The farthest tap for any offset, pixels: a pixel nearer than this to
+    // the image's edge keeps its own sample (its estimator may not depend on
+    // o, or it would be biased). 0 (a filter under half a pixel wide, or
+    // one wider than the taps reach): no splatting.
+    int splat_margin() const;
 
 private:
     float half_width_;

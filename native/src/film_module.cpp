@@ -2,73 +2,93 @@
 
 #include "parallel.h"
 
+#include <algorithm>
+
 #include "../../shaders/shader_defines.h"
 
 namespace deferred {
 
-namespace {
-Texture accumulation(int width, int height, const char* name, const float* value) {
-    Texture t = make_texture_2d(GL_RGBA32F, width, height, name);
-    glClearTexImage(t.get(), 0, GL_RGBA, GL_FLOAT, value);
-    return t;
+FilmModule::Accumulation FilmModule::accumulation(const char* name, const float* value, bool splat,
+                                                  int layers) const {
+    const int w = layout_.width, h = layout_.height;
+    const float zero[4] = {0, 0, 0, 0};
+    auto make = [&](const char* what, const float* clear) {
+        Texture t;
+        if (layers > 0) {
+            GLuint id = 0;
+            glCreateTextures(GL_TEXTURE_2D_ARRAY, 1, &id);
+            t = Texture(id);
+            glTextureStorage3D(id, 1, GL_RGBA32F, w, h, layers);
+            check_gl(what);
+        } else {
+            t = make_texture_2d(GL_RGBA32F, w, h, what);
+        }
+        glClearTexImage(t.get(), 0, GL_RGBA, GL_FLOAT, clear);
+        return t;
+    };
+    Accumulation a;
+    a.total = make(name, value);
+    if (splat && layout_.splat_margin > 0) a.sample = make(name, zero);
+    return a;
 }
-}  // namespace
+
+bool FilmModule::splatted(Pass p) {
+    // The sample-0 passes are written once; Vector has its own count;
+    // Shadow and Shadow Catcher are resolved from other accumulations.
+    return p != Pass::Combined && p != Pass::Depth && p != Pass::Position && p != Pass::IndexOB &&
+           p != Pass::IndexMA && p != Pass::Vector && p != Pass::Shadow && p != Pass::ShadowCatcher;
+}
 
 void FilmModule::allocate(const Layout& layout) {
     release();
     layout_ = layout;
-    const int w = layout.width, h = layout.height;
     const float zero[4] = {0, 0, 0, 0};
-    film_ = accumulation(w, h, "film (Combined)", zero);
+    film_ = accumulation("film (Combined)", zero, true);
     if (layout.light_split) {
-        diffuse_light_ = accumulation(w, h, "diffuse light", zero);
-        glossy_light_ = accumulation(w, h, "glossy light", zero);
+        diffuse_light_ = accumulation("diffuse light", zero, true);
+        glossy_light_ = accumulation("glossy light", zero, true);
     }
-    if (layout.shadow_pass) shadow_light_ = accumulation(w, h, "shadow light", zero);
+    if (layout.shadow_pass) shadow_light_ = accumulation("shadow light", zero, true);
     if (layout.catchers) {
-        catcher_hit_ = accumulation(w, h, "shadow catcher light", zero);
-        catcher_pass_ = accumulation(w, h, "shadow catcher light without the other objects", zero);
+        catcher_hit_ = accumulation("shadow catcher light", zero, true);
+        catcher_pass_ = accumulation("shadow catcher light without the other objects", zero, true);
     }
-    if (layout.light_groups > 0) {
-        GLuint t = 0;
-        glCreateTextures(GL_TEXTURE_2D_ARRAY, 1, &t);
-        group_light_ = Texture(t);
-        glTextureStorage3D(t, 1, GL_RGBA32F, w, h, layout.light_groups);
-        glClearTexImage(t, 0, GL_RGBA, GL_FLOAT, zero);
-        check_gl("allocating the light groups' layers");
-    }
+    if (layout.light_groups > 0)
+        group_light_ = accumulation("light groups", zero, true, layout.light_groups);
     // The Shadow Catcher pass is 1 where no catcher is seen (RESOLVE_CATCHER
     // writes the rest).
     const float one[4] = {1, 1, 1, 0};
     for (Pass p : layout.passes)
-        if (p != Pass::Combined)
-            pass_images_.emplace_back(p, accumulation(w, h, pass_info(p).name, p == Pass::ShadowCatcher ? one : zero));
+        if (p != Pass::Combined) {
+            Accumulation a = accumulation(pass_info(p).name, p == Pass::ShadowCatcher ? one : zero, splatted(p));
+            pass_images_.emplace_back(p, std::move(a.total));
+            pass_samples_.push_back(std::move(a.sample));
+        }
 }
 
 void FilmModule::release() {
-    film_.reset();
-    diffuse_light_.reset();
-    glossy_light_.reset();
-    shadow_light_.reset();
-    catcher_hit_.reset();
-    catcher_pass_.reset();
-    group_light_.reset();
+    for (Accumulation* a : {&film_, &diffuse_light_, &glossy_light_, &shadow_light_, &catcher_hit_, &catcher_pass_,
+                            &group_light_}) {
+        a->total.reset();
+        a->sample.reset();
+    }
     pass_images_.clear();
+    pass_samples_.clear();
 }
 
 void FilmModule::bind_for_lighting() const {
-    glBindImageTexture(IMG_FILM, film_.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
-    if (shadow_light_) glBindImageTexture(IMG_SHADOW, shadow_light_.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
+    glBindImageTexture(IMG_FILM, film_.target(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
+    if (shadow_light_) glBindImageTexture(IMG_SHADOW, shadow_light_.target(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
     if (catcher_hit_) {
-        glBindImageTexture(IMG_CATCHER_HIT, catcher_hit_.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
-        glBindImageTexture(IMG_CATCHER_PASS, catcher_pass_.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
+        glBindImageTexture(IMG_CATCHER_HIT, catcher_hit_.target(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
+        glBindImageTexture(IMG_CATCHER_PASS, catcher_pass_.target(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
     }
-    if (const GLuint ao = image(Pass::AO)) glBindImageTexture(IMG_AO, ao, 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
+    if (const GLuint ao = sample_target(Pass::AO)) glBindImageTexture(IMG_AO, ao, 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
     if (group_light_)
-        glBindImageTexture(IMG_LIGHT_GROUPS, group_light_.get(), 0, GL_TRUE, 0, GL_READ_WRITE, GL_RGBA32F);
+        glBindImageTexture(IMG_LIGHT_GROUPS, group_light_.target(), 0, GL_TRUE, 0, GL_READ_WRITE, GL_RGBA32F);
     if (diffuse_light_) {
-        glBindImageTexture(IMG_DIFF_LIGHT, diffuse_light_.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
-        glBindImageTexture(IMG_GLOSS_LIGHT, glossy_light_.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
+        glBindImageTexture(IMG_DIFF_LIGHT, diffuse_light_.target(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
+        glBindImageTexture(IMG_GLOSS_LIGHT, glossy_light_.target(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
     }
 }
 
@@ -78,16 +98,79 @@ GLuint FilmModule::image(Pass p) const {
     return 0;
 }
 
+GLuint FilmModule::sample_target(Pass p) const {
+    for (std::size_t k = 0; k < pass_images_.size(); ++k)
+        if (pass_images_[k].first == p)
+            return pass_samples_[k] ? pass_samples_[k].get() : pass_images_[k].second.get();
+    return 0;
+}
+
+// f(sample, total, layers) for each splatted accumulation.
+template <typename F> void FilmModule::for_each_splatted(F&& f) const {
+    for (const Accumulation* a : {&film_, &diffuse_light_, &glossy_light_, &shadow_light_, &catcher_hit_,
+                                  &catcher_pass_})
+        if (a->sample) f(a->sample.get(), a->total.get(), 0);
+    if (group_light_.sample) f(group_light_.sample.get(), group_light_.total.get(), layout_.light_groups);
+    for (std::size_t k = 0; k < pass_images_.size(); ++k)
+        if (pass_samples_[k]) f(pass_samples_[k].get(), pass_images_[k].second.get(), 0);
+}
+
+void FilmModule::prefetch(ShaderLibrary& shaders) const {
+    if (!splatting()) return;
+    shaders.prefetch_compute("film_splat_comp.glsl", ShaderVariant{});
+    if (group_light_.sample) shaders.prefetch_compute("film_splat_comp.glsl", ShaderVariant{{"SPLAT_LAYERS"}});
+}
+
+void FilmModule::begin_sample() const {
+    if (!splatting()) return;
+    // The last splat's reads of these images come first.
+    glMemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+    const float zero[4] = {0, 0, 0, 0};
+    for_each_splatted([&](GLuint sample, GLuint, int) { glClearTexImage(sample, 0, GL_RGBA, GL_FLOAT, zero); });
+}
+
+void FilmModule::splat(ShaderLibrary& shaders, const SplatTaps& x, const SplatTaps& y) const {
+    if (!splatting()) return;
+    glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+    const unsigned groups_x = unsigned((layout_.width + LIGHTING_GROUP_SIZE - 1) / LIGHTING_GROUP_SIZE);
+    const unsigned groups_y = unsigned((layout_.height + LIGHTING_GROUP_SIZE - 1) / LIGHTING_GROUP_SIZE);
+    GLuint programs[2] = {0, 0};  // 2D, layers
+    for_each_splatted([&](GLuint sample, GLuint total, int layers) {
+        GLuint& program = programs[layers > 0 ? 1 : 0];
+        if (!program) {
+            program = shaders.compute_program("film_splat_comp.glsl",
+                                              layers > 0 ? ShaderVariant{{"SPLAT_LAYERS"}} : ShaderVariant{});
+            glProgramUniform4i(program, LOC_SPLAT_TAPS, x.first, y.first, x.count, y.count);
+            glProgramUniform1i(program, LOC_SPLAT_MARGIN, layout_.splat_margin);
+            glProgramUniform1fv(program, LOC_SPLAT_WEIGHTS_X, SPLAT_MAX_TAPS, x.weight.data());
+            glProgramUniform1fv(program, LOC_SPLAT_WEIGHTS_Y, SPLAT_MAX_TAPS, y.weight.data());
+            glUseProgram(program);
+        } else {
+            glUseProgram(program);
+        }
+        const GLboolean layered = layers > 0 ? GL_TRUE : GL_FALSE;
+        glBindImageTexture(IMG_SPLAT_SAMPLE, sample, 0, layered, 0, GL_READ_ONLY, GL_RGBA32F);
+        glBindImageTexture(IMG_SPLAT_FILM, total, 0, layered, 0, GL_READ_WRITE, GL_RGBA32F);
+        glDispatchCompute(groups_x, groups_y, unsigned(std::max(layers, 1)));
+    });
+    check_gl("film splat");
+    // The preview, the next sample's writes, the resolves and the readback
+    // read the accumulations.
+    glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT | GL_TEXTURE_UPDATE_BARRIER_BIT |
+                    GL_PIXEL_BUFFER_BARRIER_BIT);
+}
+
 std::size_t FilmModule::bytes() const {
     const std::size_t pixels = std::size_t(layout_.width) * std::size_t(layout_.height);
-    const std::size_t images = 1 + pass_images_.size() + (diffuse_light_ ? 2 : 0) + (shadow_light_ ? 1 : 0) +
-                               (catcher_hit_ ? 2 : 0) + std::size_t(layout_.light_groups);
+    std::size_t images = 1 + pass_images_.size() + (diffuse_light_ ? 2 : 0) + (shadow_light_ ? 1 : 0) +
+                         (catcher_hit_ ? 2 : 0) + std::size_t(layout_.light_groups);
+    for_each_splatted([&](GLuint, GLuint, int layers) { images += std::size_t(std::max(layers, 1)); });
     return pixels * 16 * images;
 }
 
 std::vector<PassImage> FilmModule::read_passes() const {
     const std::size_t pixels = std::size_t(layout_.width) * std::size_t(layout_.height);
-    std::vector<std::pair<Pass, GLuint>> reads{{Pass::Combined, film_.get()}};
+    std::vector<std::pair<Pass, GLuint>> reads{{Pass::Combined, film_.total.get()}};
     for (const auto& [p, image] : pass_images_) reads.emplace_back(p, image.get());
     std::vector<std::size_t> offsets;
     std::size_t bytes = 0;
@@ -144,7 +227,7 @@ std::vector<std::vector<float>> FilmModule::read_light_groups() const {
     // together outgrow at 4K from 17 groups (2 GiB).
     const std::size_t layer_bytes = layer * sizeof(float);
     for (int g = 0; g < layout_.light_groups; ++g)
-        glGetTextureSubImage(group_light_.get(), 0, 0, 0, g, layout_.width, layout_.height, 1, GL_RGBA, GL_FLOAT,
+        glGetTextureSubImage(group_light_.total.get(), 0, 0, 0, g, layout_.width, layout_.height, 1, GL_RGBA, GL_FLOAT,
                              GLsizei(layer_bytes), reinterpret_cast<void*>(layer_bytes * std::size_t(g)));
     glBindBuffer(GL_PIXEL_PACK_BUFFER, 0);
     check_gl("reading the light groups");

@@ -76,7 +76,8 @@ void PassStage::run(int sample, bool data, const GBuffer& gbuffer) const {
         glUseProgram(program(p, sample_mode(p)));
         gbuffer.bind_textures();
         if (p == Pass::Env) world_->bind();
-        glBindImageTexture(IMG_PASS_OUT, image.get(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
+        // The sample's scratch image where the film splats it (film_module.h).
+        glBindImageTexture(IMG_PASS_OUT, film_->sample_target(p), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
         glDispatchCompute(groups_x_, groups_y_, 1);
     }
     glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);

@@ -662,7 +662,11 @@ void Renderer::Impl::sync_film(Frame& f) {
     layout.shadow_pass = f.plan.shadow_pass;
     layout.catchers = f.plan.catchers;
     layout.light_groups = settings.light_groups;
+    // Filter splatting from the second sample on (one sample is the pixel
+    // centre, unjittered and unsplatted, as without it).
+    layout.splat_margin = settings.samples > 1 && settings.filter_splat ? f.filter.splat_margin() : 0;
     f.film.allocate(layout);
+    f.film.prefetch(*shaders);
     f.result.timings.gbuffer_bytes = gbuffer.bytes() + f.film.bytes();
     f.preview_image = settings.preview_pass == Pass::Combined ? f.film.combined() : f.film.image(settings.preview_pass);
 }
@@ -858,6 +862,8 @@ void Renderer::Impl::render_sample(Frame& f, int sample) {
         f.scene.draw_culled(in_view, false);
         motion.end_draws();
     };
+    // The sample's scratch images, where the film splats (film_module.h).
+    f.film.begin_sample();
     // The data passes' own G-buffer (Alpha Threshold coverage).
     if (f.passes.data_gbuffer() && (sample == 0 || f.passes.data_every_sample())) {
         f.geometry.set_alpha_mode(true, settings.alpha_threshold);
@@ -938,6 +944,9 @@ void Renderer::Impl::render_sample(Frame& f, int sample) {
         cryptomatte.accumulate(*shaders, settings.samples, unsigned((settings.width + LIGHTING_GROUP_SIZE - 1) / LIGHTING_GROUP_SIZE),
                                unsigned((settings.height + LIGHTING_GROUP_SIZE - 1) / LIGHTING_GROUP_SIZE));
     }
+    // This sample's values into the accumulations, each pixel from its
+    // neighbours' samples with the filter's weights for this jitter.
+    f.film.splat(*shaders, f.filter.splat_taps(float(ox)), f.filter.splat_taps(float(oy)));
     check_gl("passes");
     gpu_timer.lap(f.passes_ms);
     preview.publish(f.preview_image, sample + 1, !pass_from_first_sample(settings.preview_pass),

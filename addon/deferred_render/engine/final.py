@@ -71,6 +71,13 @@ def _filter_width(scene):
     return float(width if width is not None else scene.render.filter_size)
 
 
+def _filter_splat(scene):
+    """Whether the film splats each sample into its neighbours (native
+    RenderSettings.filter_splat; on unless the setting turns it off)."""
+    settings = getattr(scene, "deferred_render", None)
+    return bool(getattr(settings, "filter_splat", True)) if settings is not None else True
+
+
 def _light_settings(scene):
     """Culling switch and threshold (the threshold is relative to what the
     view shows, so a brighter exposure lowers it: radiance x 2^exposure),
@@ -368,7 +375,7 @@ class FinalRender:
                       cryptomatte=crypto_layers, cryptomatte_levels=crypto_levels or 6,
                       aovs=requested_aovs(self.view_layer),
                       light_groups=len(light_groups), motion_blur=self._motion_blur,
-                      samples=samples, filter_width=_filter_width(scene),
+                      samples=samples, filter_width=_filter_width(scene), filter_splat=_filter_splat(scene),
                       alpha_threshold=_alpha_threshold(self.view_layer),
                       **_light_settings(scene), **mist)
         try:

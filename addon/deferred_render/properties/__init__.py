@@ -40,6 +40,16 @@ class DeferredRenderSettings(bpy.types.PropertyGroup):
         max=4096,
         update=_redraw_views,
     )
+    filter_splat: BoolProperty(
+        name="Filter Splatting",
+        description=(
+            "Each pixel also takes its neighbours' samples, weighted by the pixel filter: the same "
+            "converged image, with much less noise where the filter's edge reaches a small, very "
+            "bright feature (a highlight). Off: each pixel its own samples only, as Cycles"
+        ),
+        default=True,
+        update=_redraw_views,
+    )
     light_culling: BoolProperty(
         name="Light Culling",
         description=(

@@ -75,6 +75,13 @@ struct RenderSettings {
     // unjittered pixel centre.
     int samples = 1;
     float filter_width = 1.5f;
+    // Filter splatting (film.h PixelFilter::splat_taps): with more than one
+    // sample, each pixel adds its neighbours' samples weighted by the filter
+    // for the sample's jitter (weights summing to 1), which converges to the
+    // same filtered pixel with less variance where the filter's tail meets
+    // a small bright feature. Off: each pixel its own sample only, as
+    // Cycles. Filters under 0.5 or over 4 px wide are never splatted.
+    bool filter_splat = true;
     // Light culling (tiled, 2.5D depth masks). Blender's lights reach to
     // infinity; a light is cut off where even a white Lambertian surface
     // facing it would reflect less than `light_threshold` (scene-linear

@@ -66,6 +66,7 @@ int main(int argc, char** argv) {
             int samples;
             PassSet passes;
             bool rays = false;  // shadow rays instead of maps
+            bool splat = true;  // the film's filter splatting (film.h)
         };
         struct Split {  // one frame of a case: its timings, wall and CPU time
             const char* label;
@@ -91,6 +92,7 @@ int main(int argc, char** argv) {
                 s.samples = c.samples;
                 s.passes = c.passes;
                 s.shadow_rays = c.rays;
+                s.filter_splat = c.splat;
                 auto timed = [&] {
                     Split x{c.label, {}, 0, 0};
                     const double cpu0 = deferred::bench::process_cpu_ms();
@@ -156,8 +158,14 @@ int main(int argc, char** argv) {
         const char* blocks_env = std::getenv("DEFERRED_BENCH_FRAME_BLOCKS");
         const std::string blocks = blocks_env ? blocks_env : "maps rays";
         if (blocks.find("maps") != std::string::npos)
+            // The film's splat beside each pixel's own samples: its cost per
+            // sample with one splatted image (Combined) and with fourteen.
             run_cases("shadow maps", {Case{"64 samples, Combined read back", 64, PassSet{Pass::Combined}},
-                                      Case{"1 sample, 16 passes (Combined..AO) read back", 1, sixteen}});
+                                      Case{"64 samples, Combined, no filter splatting", 64, PassSet{Pass::Combined},
+                                           false, false},
+                                      Case{"1 sample, 16 passes (Combined..AO) read back", 1, sixteen},
+                                      Case{"8 samples, 16 passes", 8, sixteen},
+                                      Case{"8 samples, 16 passes, no filter splatting", 8, sixteen, false, false}});
         // Shadow rays apart and last: on an H200 tests with rays took minutes
         // where llvmpipe takes seconds (bench/gpu/results/nvidia_h200_2026-11-26);
         // one sample first, so its cost per sample shows before 64 of them.

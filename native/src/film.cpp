@@ -38,13 +38,16 @@ float PixelFilter::offset(float u) const {
     return inverse_cdf_[i] * (1.0f - t) + inverse_cdf_[i + 1] * t;
 }
 
-int PixelFilter::splat_margin() const {
-    // Taps d with |d - o| < h (the support) for |o| <= h: |d| < 2h.
-    const int margin = int(std::ceil(2.0 * double(half_width_))) - 1;
-    // At most ceil(2h) taps per axis are non-zero for one offset.
-    if (margin <= 0 || int(std::ceil(2.0 * double(half_width_))) > kMaxSplatTaps) return 0;
-    return margin;
+int PixelFilter::splat_margin(float filter_width) {
+    // The support h is the filter width (Cycles doubles Blackman-Harris's).
+    // Taps d with |d - o| < h for |o| <= h: |d| < 2h; at most ceil(2h) of
+    // them are non-zero for one offset.
+    const double h = std::max(double(filter_width), 0.01);
+    if (!(h <= 0.5 * kMaxSplatTaps)) return 0;  // also NaN
+    return std::max(int(std::ceil(2.0 * h)) - 1, 0);
 }
+
+int PixelFilter::splat_margin() const { return splat_margin(half_width_); }
 
 SplatTaps PixelFilter::splat_taps(float offset) const {
     SplatTaps taps;

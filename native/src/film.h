@@ -59,6 +59,8 @@ public:
     // o, or it would be biased). 0 (a filter under half a pixel wide, or
     // one wider than the taps reach): no splatting.
     int splat_margin() const;
+    // The same for Blender's filter width, without building the filter.
+    static int splat_margin(float filter_width);
 
 private:
     float half_width_;

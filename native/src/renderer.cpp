@@ -436,7 +436,8 @@ Renderer::Impl::FramePlan Renderer::Impl::plan_frame(const RenderSettings& setti
     // Memory: G-buffer (depth 4, emission 16, base 8, params0 8, normal 4,
     // optional params1 8, ids 8, uv 8, geometry 16), the Combined
     // accumulation (16), light split (32), Shadow (16), one RGBA32F image per
-    // other pass (16) and the CPU copies of the passes.
+    // other pass (16), the splat's scratch images and the CPU copies of the
+    // passes.
     const std::size_t pixels = std::size_t(settings.width > 0 ? settings.width : 0) *
                                std::size_t(settings.height > 0 ? settings.height : 0);
     std::size_t per_pixel = 4 + 16 + 8 + 8 + 4 + (features.params1 ? 8 : 0) + (features.ids ? 8 : 0) +
@@ -446,6 +447,14 @@ Renderer::Impl::FramePlan Renderer::Impl::plan_frame(const RenderSettings& setti
     if (features.instance_ids) per_pixel += 16;  // the ids target grows to RGBA32UI
     per_pixel += 16 * std::size_t(settings.light_groups) + (settings.light_groups > 0 ? 16 : 0);
     if (plan.catchers) per_pixel += 32;
+    // Filter splatting: a scratch image beside each accumulation the samples
+    // add to (film_module.h).
+    if (settings.samples > 1 && settings.filter_splat && PixelFilter::splat_margin(settings.filter_width) > 0) {
+        per_pixel += 16 + (plan.light_split ? 32 : 0) + (plan.shadow_pass ? 16 : 0) + (plan.catchers ? 32 : 0) +
+                     16 * std::size_t(settings.light_groups);
+        for (Pass p : wanted.list())
+            if (FilmModule::splatted(p)) per_pixel += 16;
+    }
     check_settings(settings, pixels * per_pixel + 2 * CryptomatteModule::bytes(settings) + AovModule::bytes(settings) +
                                  (wanted.contains(Pass::Vector) ? MotionModule::bytes(settings) : 0));
     return plan;

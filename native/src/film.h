@@ -56,8 +56,8 @@ public:
     SplatTaps splat_taps(float offset) const;
     // The farthest tap for any offset, pixels: a pixel nearer than this to
     // the image's edge keeps its own sample (its estimator may not depend on
-    // o, or it would be biased). 0 (a filter under half a pixel wide, or
-    // one wider than the taps reach): no splatting.
+    // o, or it would be biased). 0 (a filter half a pixel wide or
+    // narrower, or one wider than the taps reach): no splatting.
     int splat_margin() const;
     // The same for Blender's filter width, without building the filter.
     static int splat_margin(float filter_width);

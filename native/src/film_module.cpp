@@ -3,10 +3,13 @@
 #include "parallel.h"
 
 #include <algorithm>
+#include <string>
 
 #include "../../shaders/shader_defines.h"
 
 namespace deferred {
+
+static_assert(kMaxSplatTaps == SPLAT_MAX_TAPS, "film.h's taps and film_splat_comp.glsl's uniform arrays");
 
 FilmModule::Accumulation FilmModule::accumulation(const char* name, const float* value, bool splat,
                                                   int layers) const {
@@ -28,7 +31,7 @@ FilmModule::Accumulation FilmModule::accumulation(const char* name, const float*
     };
     Accumulation a;
     a.total = make(name, value);
-    if (splat && layout_.splat_margin > 0) a.sample = make(name, zero);
+    if (splat && layout_.splat_margin > 0) a.sample = make((std::string(name) + " (this sample)").c_str(), zero);
     return a;
 }
 

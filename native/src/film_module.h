@@ -49,7 +49,7 @@ public:
     // this sample's targets.
     void bind_for_lighting() const;
 
-    // Whether each sample is splatted (a margin, and something to splat).
+    // Whether each sample is splatted (the layout has a margin).
     bool splatting() const { return layout_.splat_margin > 0; }
     // Starts the splat program's compile (ShaderLibrary::prefetch_compute).
     void prefetch(ShaderLibrary& shaders) const;
@@ -74,8 +74,9 @@ public:
     // Where this sample's shaders add pass p (0 when not asked for): its
     // scratch image when splatted, else its image.
     GLuint sample_target(Pass p) const;
-    // Whether a pass's samples go through the splat (written every sample
-    // and accumulated).
+    // Whether pass p's image (one of pass_images(), so never Combined,
+    // whose film is splatted whenever the layout splats) goes through the
+    // splat: written every sample and accumulated.
     static bool splatted(Pass p);
 
     // Bytes of the accumulations (the frame's memory estimate counts them).

@@ -230,6 +230,8 @@ struct Renderer::Impl {
         bool light_split = false;  // DiffDir / GlossDir
         bool shadow_pass = false;
         bool catchers = false;     // some visible shadow catcher
+        bool splat = false;        // filter splatting (film_module.h)
+        std::string splat_dropped; // why it is off where it was asked for (a warning)
     };
     FramePlan plan_frame(const RenderSettings& settings) const;
 
@@ -447,16 +449,26 @@ Renderer::Impl::FramePlan Renderer::Impl::plan_frame(const RenderSettings& setti
     if (features.instance_ids) per_pixel += 16;  // the ids target grows to RGBA32UI
     per_pixel += 16 * std::size_t(settings.light_groups) + (settings.light_groups > 0 ? 16 : 0);
     if (plan.catchers) per_pixel += 32;
+    const std::size_t frame_bytes = pixels * per_pixel + 2 * CryptomatteModule::bytes(settings) +
+                                    AovModule::bytes(settings) +
+                                    (wanted.contains(Pass::Vector) ? MotionModule::bytes(settings) : 0);
+    check_settings(settings, frame_bytes);
     // Filter splatting: a scratch image beside each accumulation the samples
-    // add to (film_module.h).
+    // add to (film_module.h: Combined, the light split, Shadow's sums, the
+    // catchers', the light groups, the filtered passes). Where only they
+    // would go over the budget, the frame renders without them, warned.
     if (settings.samples > 1 && settings.filter_splat && PixelFilter::splat_margin(settings.filter_width) > 0) {
-        per_pixel += 16 + (plan.light_split ? 32 : 0) + (plan.shadow_pass ? 16 : 0) + (plan.catchers ? 32 : 0) +
-                     16 * std::size_t(settings.light_groups);
+        std::size_t scratch = 16 + (plan.light_split ? 32 : 0) + (plan.shadow_pass ? 16 : 0) +
+                              (plan.catchers ? 32 : 0) + 16 * std::size_t(settings.light_groups);
         for (Pass p : wanted.list())
-            if (FilmModule::splatted(p)) per_pixel += 16;
+            if (FilmModule::splatted(p)) scratch += 16;
+        plan.splat = frame_bytes + pixels * scratch <= memory_budget_bytes();
+        if (!plan.splat)
+            plan.splat_dropped = "Filter Splatting is off for this frame: its scratch images (" +
+                                 std::to_string((pixels * scratch) >> 20) + " MiB) would take the frame over the " +
+                                 std::to_string(memory_budget_bytes() >> 20) +
+                                 " MiB budget (DEFERRED_MEMORY_BUDGET_MB); each pixel keeps its own samples";
     }
-    check_settings(settings, pixels * per_pixel + 2 * CryptomatteModule::bytes(settings) + AovModule::bytes(settings) +
-                                 (wanted.contains(Pass::Vector) ? MotionModule::bytes(settings) : 0));
     return plan;
 }
 
@@ -673,7 +685,8 @@ void Renderer::Impl::sync_film(Frame& f) {
     layout.light_groups = settings.light_groups;
     // Filter splatting from the second sample on (one sample is the pixel
     // centre, unjittered and unsplatted, as without it).
-    layout.splat_margin = settings.samples > 1 && settings.filter_splat ? f.filter.splat_margin() : 0;
+    layout.splat_margin = f.plan.splat ? f.filter.splat_margin() : 0;
+    if (!f.plan.splat_dropped.empty()) f.result.warnings.push_back(f.plan.splat_dropped);
     f.film.allocate(layout);
     f.film.prefetch(*shaders);
     f.result.timings.gbuffer_bytes = gbuffer.bytes() + f.film.bytes();

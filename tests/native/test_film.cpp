@@ -9,6 +9,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
+#include <string>
 #include <vector>
 
 using namespace deferred;
@@ -287,4 +289,46 @@ TEST(Film, SplattingTamesASmallBrightFeatureInTheFilterTail) {
         EXPECT_LT(splat.tail, 0.25 * own.tail) << samples;
         EXPECT_LT(splat.core, own.core) << samples;
     }
+}
+
+TEST(Film, SplattingStepsAsideWhereItsImagesWouldExceedTheMemoryBudget) {
+    // 512x512, Combined: ~22 MiB of targets (G-buffer, the accumulation,
+    // the CPU copy: 88 bytes a pixel) and 4 MiB of splat scratch. A 24 MiB
+    // budget holds the frame but not the scratch: the frame renders each pixel's own samples,
+    // warned, exactly as with the setting off.
+    const char* before = std::getenv("DEFERRED_MEMORY_BUDGET_MB");
+    const std::string user = before ? before : "";
+    Renderer r;
+    Material m;
+    m.base_color = {0.5f, 0.5f, 0.5f};
+    deferred::testing::add_plane(r, m);
+    Light lamp;
+    lamp.type = LightType::Point;
+    lamp.matrix = tools::translation(0.3, 0.2, 2.0);
+    lamp.radius = 0.2f;
+    lamp.energy = 400.0f;
+    r.add_light(lamp);
+    RenderSettings s;
+    s.width = s.height = 512;
+    s.samples = 2;
+    const Camera cam = deferred::testing::top_down_ortho(5.0, 4.0f);
+    auto mentions_splat = [](const FrameResult& f) {
+        for (const std::string& w : f.warnings)
+            if (w.find("Filter Splatting is off") != std::string::npos) return true;
+        return false;
+    };
+    setenv("DEFERRED_MEMORY_BUDGET_MB", "24", 1);
+    const FrameResult dropped = r.render(cam, s);
+    s.filter_splat = false;
+    const FrameResult off = r.render(cam, s);
+    setenv("DEFERRED_MEMORY_BUDGET_MB", "128", 1);
+    s.filter_splat = true;
+    const FrameResult on = r.render(cam, s);
+    if (before) setenv("DEFERRED_MEMORY_BUDGET_MB", user.c_str(), 1);
+    else unsetenv("DEFERRED_MEMORY_BUDGET_MB");
+    EXPECT_TRUE(mentions_splat(dropped));
+    EXPECT_FALSE(mentions_splat(off));
+    EXPECT_FALSE(mentions_splat(on));
+    EXPECT_EQ(dropped.find(Pass::Combined)->pixels, off.find(Pass::Combined)->pixels);
+    EXPECT_GT(on.timings.gbuffer_bytes, dropped.timings.gbuffer_bytes);
 }

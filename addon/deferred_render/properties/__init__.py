@@ -45,7 +45,8 @@ class DeferredRenderSettings(bpy.types.PropertyGroup):
         description=(
             "Each pixel also takes its neighbours' samples, weighted by the pixel filter: the same "
             "converged image, with much less noise where the filter's edge reaches a small, very "
-            "bright feature (a highlight). Off: each pixel its own samples only, as Cycles"
+            "bright feature (a highlight). Neighbouring pixels' noise becomes correlated, which "
+            "denoisers handle less well. Off: each pixel its own samples only, as Cycles"
         ),
         default=True,
         update=_redraw_views,

@@ -80,7 +80,9 @@ struct RenderSettings {
     // for the sample's jitter (weights summing to 1), which converges to the
     // same filtered pixel with less variance where the filter's tail meets
     // a small bright feature. Off: each pixel its own sample only, as
-    // Cycles. Filters under 0.5 or over 4 px wide are never splatted.
+    // Cycles. Filters 0.5 px wide or narrower, or over 4 px, are never
+    // splatted; where the splat's scratch images alone would exceed the
+    // memory budget, the frame is rendered without, warned.
     bool filter_splat = true;
     // Light culling (tiled, 2.5D depth masks). Blender's lights reach to
     // infinity; a light is cut off where even a white Lambertian surface

@@ -36,10 +36,16 @@ FilmModule::Accumulation FilmModule::accumulation(const char* name, const float*
 }
 
 bool FilmModule::splatted(Pass p) {
-    // The sample-0 passes are written once; Vector has its own count;
-    // Shadow and Shadow Catcher are resolved from other accumulations.
-    return p != Pass::Combined && p != Pass::Depth && p != Pass::Position && p != Pass::IndexOB &&
-           p != Pass::IndexMA && p != Pass::Vector && p != Pass::Shadow && p != Pass::ShadowCatcher;
+    // The passes that carry light, where a small bright feature makes the
+    // filter tail's fireflies: Emission and Environment (Combined, the
+    // light split, Shadow's and the catchers' sums and the light groups are
+    // the film's own accumulations, all splatted). The colour passes stay
+    // each pixel's own: DiffDir/GlossDir divide the splatted light by them,
+    // so DiffDir x DiffCol is still exactly the splatted light and the
+    // passes add up to Combined; data passes (Normal, UV, Mist, AO, the
+    // sample-0 ones, Vector) have no such features, and splatting them
+    // would only cost (on llvmpipe a 9-tap gather per image and sample).
+    return p == Pass::Emit || p == Pass::Env;
 }
 
 void FilmModule::allocate(const Layout& layout) {

@@ -159,7 +159,7 @@ int main(int argc, char** argv) {
         const std::string blocks = blocks_env ? blocks_env : "maps rays";
         if (blocks.find("maps") != std::string::npos)
             // The film's splat beside each pixel's own samples: its cost per
-            // sample with one splatted image (Combined) and with six (16 passes).
+            // sample with one splatted image (Combined) and with ten (16 passes).
             run_cases("shadow maps", {Case{"64 samples, Combined read back", 64, PassSet{Pass::Combined}},
                                       Case{"64 samples, Combined, no filter splatting", 64, PassSet{Pass::Combined},
                                            false, false},

@@ -36,16 +36,20 @@ FilmModule::Accumulation FilmModule::accumulation(const char* name, const float*
 }
 
 bool FilmModule::splatted(Pass p) {
-    // The passes that carry light, where a small bright feature makes the
-    // filter tail's fireflies: Emission and Environment (Combined, the
-    // light split, Shadow's and the catchers' sums and the light groups are
-    // the film's own accumulations, all splatted). The colour passes stay
-    // each pixel's own: DiffDir/GlossDir divide the splatted light by them,
-    // so DiffDir x DiffCol is still exactly the splatted light and the
-    // passes add up to Combined; data passes (Normal, UV, Mist, AO, the
-    // sample-0 ones, Vector) have no such features, and splatting them
+    // The passes Combined is made of: Emission and Environment, where a
+    // small bright feature makes the filter tail's fireflies, and the
+    // colours DiffDir/GlossDir divide the splatted light by (their images
+    // accumulate the colour until the resolve). Splatted like the light, a
+    // pixel whose own samples all saw the background but whose neighbours'
+    // saw a surface has that surface's colour as well as its light, so
+    // DiffDir x DiffCol is exactly the light there too and the passes add
+    // up to Combined. (Combined, the light split, Shadow's and the
+    // catchers' sums and the light groups are the film's own
+    // accumulations, all splatted.) Data passes (Normal, UV, Mist, AO, the
+    // sample-0 ones, Vector) keep each pixel's own samples: splatting them
     // would only cost (on llvmpipe a 9-tap gather per image and sample).
-    return p == Pass::Emit || p == Pass::Env;
+    return p == Pass::Emit || p == Pass::Env || p == Pass::DiffCol || p == Pass::GlossCol || p == Pass::DiffDir ||
+           p == Pass::GlossDir;
 }
 
 void FilmModule::allocate(const Layout& layout) {

@@ -9,9 +9,10 @@
 // divide the accumulations stay with the frame (they need its programs).
 //
 // Filter splatting (film.h PixelFilter::splat_taps): with a margin, every
-// accumulation of light the samples add to (Combined, the light split,
-// Shadow's and the catchers' sums, the light groups, Emission and
-// Environment; splatted()) has a scratch image of the sample's values: the sample's shaders add to it
+// accumulation Combined is made of (Combined, the light split, Shadow's and
+// the catchers' sums, the light groups, Emission, Environment and the
+// colours the light split is divided by; splatted()) has a scratch image
+// of the sample's values: the sample's shaders add to it
 // (sample_target, bind_for_lighting) as they would to the accumulation,
 // and splat() adds it to the accumulation, each pixel from its neighbours
 // with the filter's weights for the sample's jitter.
@@ -76,7 +77,7 @@ public:
     GLuint sample_target(Pass p) const;
     // Whether pass p's image (one of pass_images(), so never Combined,
     // whose film is splatted whenever the layout splats) goes through the
-    // splat: the passes of light (Emission, Environment).
+    // splat: the passes Combined is made of.
     static bool splatted(Pass p);
 
     // Bytes of the accumulations (the frame's memory estimate counts them).

@@ -453,10 +453,11 @@ Renderer::Impl::FramePlan Renderer::Impl::plan_frame(const RenderSettings& setti
                                     AovModule::bytes(settings) +
                                     (wanted.contains(Pass::Vector) ? MotionModule::bytes(settings) : 0);
     check_settings(settings, frame_bytes);
-    // Filter splatting: a scratch image beside each accumulation the samples
-    // add to (film_module.h: Combined, the light split, Shadow's sums, the
-    // catchers', the light groups, the filtered passes). Where only they
-    // would go over the budget, the frame renders without them, warned.
+    // Filter splatting: a scratch image beside each accumulation Combined
+    // is made of (film_module.h: Combined, the light split, Shadow's and the
+    // catchers' sums, the light groups, FilmModule::splatted's passes).
+    // Where only they would go over the budget, the frame renders without
+    // them, warned.
     if (settings.samples > 1 && settings.filter_splat && PixelFilter::splat_margin(settings.filter_width) > 0) {
         std::size_t scratch = 16 + (plan.light_split ? 32 : 0) + (plan.shadow_pass ? 16 : 0) +
                               (plan.catchers ? 32 : 0) + 16 * std::size_t(settings.light_groups);
@@ -683,8 +684,9 @@ void Renderer::Impl::sync_film(Frame& f) {
     layout.shadow_pass = f.plan.shadow_pass;
     layout.catchers = f.plan.catchers;
     layout.light_groups = settings.light_groups;
-    // Filter splatting from the second sample on (one sample is the pixel
-    // centre, unjittered and unsplatted, as without it).
+    // Filter splatting with more than one sample, every sample splatted (a
+    // one-sample render is the pixel centre, unjittered and unsplatted, as
+    // without it).
     layout.splat_margin = f.plan.splat ? f.filter.splat_margin() : 0;
     if (!f.plan.splat_dropped.empty()) f.result.warnings.push_back(f.plan.splat_dropped);
     f.film.allocate(layout);

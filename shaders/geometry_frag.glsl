@@ -9,7 +9,29 @@
  * of the opaque depth, and blended over the forward layer with its alpha.
  * EMISSION_BAKE (node materials whose emission varies, emitter_module.h):
  * the radiance the surface emits towards a light sample, drawn into each
- * emitting triangle's tile of the bake target (geometry_vert.glsl). */
+ * emitting triangle's tile of the bake target (geometry_vert.glsl).
+ * GBUFFER_RESOLVE (visibility_stage.h): not a fragment shader at all, but
+ * this file included by gbuffer_resolve_comp.glsl, which computes what the
+ * varyings, the fragment's position and facing and their screen
+ * derivatives would be (from the visibility buffer's triangle and the
+ * pixel's ray) and stores the outputs into the G-buffer's images: the same
+ * surface code, out of the raster pipeline. */
+#ifdef GBUFFER_RESOLVE
+/* Globals the resolve sets (gbuffer_resolve_comp.glsl), not varyings. */
+#define VARYING
+#define FLAT_VARYING
+#define GBUF_OUT(slot)
+#define FRAG_COORD g_frag_coord
+#define FRONT_FACING g_front_facing
+vec4 g_frag_coord;
+bool g_front_facing;
+#else
+#define VARYING in
+#define FLAT_VARYING flat in
+#define GBUF_OUT(slot) layout(location = slot) out
+#define FRAG_COORD gl_FragCoord
+#define FRONT_FACING gl_FrontFacing
+#endif
 #include "frame_lib.glsl"
 #include "octahedral_lib.glsl"
 #include "gbuffer_lib.glsl"
@@ -19,14 +41,14 @@
 
 layout(std430, binding = SSBO_MATERIALS) readonly buffer Materials { GpuMaterial materials[]; };
 
-in vec3 v_position;
-in vec3 v_normal;
-in vec2 v_uv;
-flat in uint v_material;
-flat in uint v_object_index;
-flat in uint v_mirrored;
-flat in uint v_instance;
-flat in uint v_triangle;
+VARYING vec3 v_position;
+VARYING vec3 v_normal;
+VARYING vec2 v_uv;
+FLAT_VARYING uint v_material;
+FLAT_VARYING uint v_object_index;
+FLAT_VARYING uint v_mirrored;
+FLAT_VARYING uint v_instance;
+FLAT_VARYING uint v_triangle;
 
 #ifdef SHADOW_PASS
 /* As shadow_frag.glsl's shadow_origin and shadow_axis (other locations: 3..12
@@ -52,33 +74,33 @@ layout(location = 0) out vec4 out_bake;
  * ZERO, ONE_MINUS_SRC_ALPHA), so the target's a is the transmittance. */
 layout(location = 0) out vec4 out_forward;
 #else
-layout(location = OUT_EMISSION) out vec4 out_emission;
-layout(location = OUT_BASE) out vec4 out_base;
-layout(location = OUT_PARAMS0) out vec4 out_params0;
-layout(location = OUT_NORMAL) out uint out_normal; /* packUnorm2x16 (gbuffer.cpp) */
+GBUF_OUT(OUT_EMISSION) vec4 out_emission;
+GBUF_OUT(OUT_BASE) vec4 out_base;
+GBUF_OUT(OUT_PARAMS0) vec4 out_params0;
+GBUF_OUT(OUT_NORMAL) uint out_normal; /* packUnorm2x16 (gbuffer.cpp) */
 #endif
 #if !defined(FORWARD_PASS) && !defined(AOV_PASS) && !defined(EMISSION_BAKE)
 #ifdef GBUF_PARAMS1
-layout(location = OUT_PARAMS1) out vec4 out_params1;
+GBUF_OUT(OUT_PARAMS1) vec4 out_params1;
 #endif
 #ifdef GBUF_INSTANCE_IDS
-layout(location = OUT_IDS) out uvec4 out_ids; /* + instance and material id for Cryptomatte */
+GBUF_OUT(OUT_IDS) uvec4 out_ids; /* + instance and material id for Cryptomatte */
 #elif defined(GBUF_IDS)
-layout(location = OUT_IDS) out uvec2 out_ids;
+GBUF_OUT(OUT_IDS) uvec2 out_ids;
 #endif
 #ifdef GBUF_UV
-layout(location = OUT_UV) out vec2 out_uv;
+GBUF_OUT(OUT_UV) vec2 out_uv;
 #endif
 #endif
 #if defined(GBUF_GEOMETRY) && !defined(SHADOW_PASS) && !defined(FORWARD_PASS) && !defined(AOV_PASS) && \
     !defined(EMISSION_BAKE)
 #define GEOMETRY_OUT
-layout(location = OUT_GEOMETRY) out uvec4 out_geometry;
-flat in vec3 v_term_a;
-flat in vec3 v_term_b;
-in vec3 v_term_dir;
-in vec2 v_term_bary;
-flat in float v_term_cutoff;
+GBUF_OUT(OUT_GEOMETRY) uvec4 out_geometry;
+FLAT_VARYING vec3 v_term_a;
+FLAT_VARYING vec3 v_term_b;
+VARYING vec3 v_term_dir;
+VARYING vec2 v_term_bary;
+FLAT_VARYING float v_term_cutoff;
 
 /* Cycles 3.4's shadow_ray_smooth_surface_offset (kernel/light/sample.h;
  * Hanika 2021, "Hacking the Shadow Terminator", Ray Tracing Gems II ch. 4):
@@ -118,18 +140,18 @@ vec3 terminator_offset(vec3 Ng) {
  * was laid down by the pre-pass: test before shading (no depth write here),
  * so hidden fragments cost nothing. A graph that drives alpha
  * (MATERIAL_ALPHA) discards, and draws the pre-pass itself: late tests. */
-#ifndef MATERIAL_ALPHA
+#if !defined(MATERIAL_ALPHA) && !defined(GBUFFER_RESOLVE)
 layout(early_fragment_tests) in;
 #endif
-in vec3 v_object_position;
-in vec3 v_object_normal;
-flat in vec3 v_true_normal;
-in vec2 v_barycentric;
+VARYING vec3 v_object_position;
+VARYING vec3 v_object_normal;
+FLAT_VARYING vec3 v_true_normal;
+VARYING vec2 v_barycentric;
 #if MATERIAL_ATTRIBUTE_COUNT > 0
-in vec4 v_attr[MATERIAL_ATTRIBUTE_COUNT];
+VARYING vec4 v_attr[MATERIAL_ATTRIBUTE_COUNT];
 #endif
 #ifdef MATERIAL_FLAT_ATTRIBUTE
-flat in vec4 v_attr_flat;
+FLAT_VARYING vec4 v_attr_flat;
 #endif
 layout(std430, binding = SSBO_INSTANCES) readonly buffer Instances { GpuInstance instances[]; };
 layout(location = 11) uniform vec3 texspace_location;
@@ -139,6 +161,55 @@ layout(binding = TEX_MATERIAL_IMAGE0) uniform sampler2D material_images[MATERIAL
 #endif
 /* Generated: includes material_lib.glsl and nodes/node_lib.glsl, then the graph. */
 #include "material_graph.glsl"
+#endif
+
+/* One-pixel screen derivatives of the varyings. The fragment stage takes
+ * them from its quad (dFdxFine); the resolve computes them exactly, as the
+ * change of the varyings between this pixel's ray and its right and upper
+ * neighbours' rays met on the triangle's plane (gbuffer_resolve_comp.glsl),
+ * which is what Cycles' ray differentials describe. */
+#ifdef GBUFFER_RESOLVE
+vec3 g_dposition_dx, g_dposition_dy;  /* camera-relative world */
+vec3 g_dobject_dx, g_dobject_dy;      /* object-space position */
+vec2 g_duv_dx, g_duv_dy;
+vec4 g_dattr_dx[8], g_dattr_dy[8];
+vec3 ddx_position() { return g_dposition_dx; }
+vec3 ddy_position() { return g_dposition_dy; }
+/* The true normal's direction (either side): the plane the two differentials span. */
+vec3 screen_plane_normal() { return cross(g_dposition_dx, g_dposition_dy); }
+#else
+vec3 ddx_position() { return dFdxFine(v_position); }
+vec3 ddy_position() { return dFdyFine(v_position); }
+vec3 screen_plane_normal() { return cross(dFdx(v_position), dFdy(v_position)); }
+#endif
+#ifdef MATERIAL_GRAPH
+#ifdef GBUFFER_RESOLVE
+/* The camera ray's direction changes by the difference of the neighbours' unit directions. */
+vec3 ddx_view_dir() {
+    return normalize(v_position + g_dposition_dx - frame.motion.xyz) - normalize(v_position - frame.motion.xyz);
+}
+vec3 ddy_view_dir() {
+    return normalize(v_position + g_dposition_dy - frame.motion.xyz) - normalize(v_position - frame.motion.xyz);
+}
+/* Generated coordinates are affine in the object position: (P - (loc - size)) / (2 size). */
+vec3 ddx_generated(vec3 generated, vec3 size) { return g_dobject_dx / (2.0 * size); }
+vec3 ddy_generated(vec3 generated, vec3 size) { return g_dobject_dy / (2.0 * size); }
+vec3 ddx_uv() { return vec3(g_duv_dx, 0.0); }
+vec3 ddy_uv() { return vec3(g_duv_dy, 0.0); }
+vec4 ddx_attr(int k) { return g_dattr_dx[k]; }
+vec4 ddy_attr(int k) { return g_dattr_dy[k]; }
+#else
+vec3 ddx_view_dir() { return dFdxFine(normalize(v_position - frame.motion.xyz)); }
+vec3 ddy_view_dir() { return dFdyFine(normalize(v_position - frame.motion.xyz)); }
+vec3 ddx_generated(vec3 generated, vec3 size) { return dFdxFine(generated); }
+vec3 ddy_generated(vec3 generated, vec3 size) { return dFdyFine(generated); }
+vec3 ddx_uv() { return dFdxFine(vec3(v_uv, 0.0)); }
+vec3 ddy_uv() { return dFdyFine(vec3(v_uv, 0.0)); }
+#if MATERIAL_ATTRIBUTE_COUNT > 0
+vec4 ddx_attr(int k) { return dFdxFine(v_attr[k]); }
+vec4 ddy_attr(int k) { return dFdyFine(v_attr[k]); }
+#endif
+#endif
 #endif
 
 /* A per-pixel value in [0, 1) (integer hash, Jarzynski & Olano 2020, pcg). */
@@ -152,11 +223,11 @@ layout(binding = TEX_MATERIAL_IMAGE0) uniform sampler2D material_images[MATERIAL
 layout(location = 22) uniform vec2 alpha_mode;
 bool transparent_here(float alpha) {
     if (alpha_mode.x > 0.5) return alpha < alpha_mode.y;
-    return transparency_random(uvec2(gl_FragCoord.xy), v_instance, v_triangle) >= alpha;
+    return transparency_random(uvec2(FRAG_COORD.xy), v_instance, v_triangle) >= alpha;
 }
 #else
 bool transparent_here(float alpha) {
-    return transparency_random(uvec2(gl_FragCoord.xy), v_instance, v_triangle) >= alpha;
+    return transparency_random(uvec2(FRAG_COORD.xy), v_instance, v_triangle) >= alpha;
 }
 #endif
 
@@ -172,7 +243,7 @@ float pixel_hash(uvec2 p) {
  * pixel, so each pixel's choices are stratified over the samples). */
 GpuMaterial pick_material(uint id) {
     GpuMaterial m = materials[id];
-    float u = fract(pixel_hash(uvec2(gl_FragCoord.xy)) + frame.sample_shift.z);
+    float u = fract(pixel_hash(uvec2(FRAG_COORD.xy)) + frame.sample_shift.z);
     for (int k = 0; k < 16 && m.mix.x >= 0.0; ++k) {
         float p = m.mix.y;
         if (u >= p) break;
@@ -221,11 +292,11 @@ void shading_point_init(vec3 N, vec3 Ng, vec3 V, bool back) {
     vec4 clip = frame.projection * (frame.view * vec4(v_position, 1.0));
     g_sd.window = clip.w != 0.0 ? clip.xy / clip.w * 0.5 + 0.5 : vec2(0.0);
 #else
-    vec2 ndc = gl_FragCoord.xy * frame.viewport.zw * 2.0 - 1.0 - frame.jitter.xy;
+    vec2 ndc = FRAG_COORD.xy * frame.viewport.zw * 2.0 - 1.0 - frame.jitter.xy;
     g_sd.window = ndc * 0.5 + 0.5;
 #endif
-    g_sd.dPdx = dFdxFine(v_position);
-    g_sd.dPdy = dFdyFine(v_position);
+    g_sd.dPdx = ddx_position();
+    g_sd.dPdy = ddy_position();
     for (int k = 0; k < 8; ++k) g_sd.attr[k] = vec4(0.0);
 #if MATERIAL_ATTRIBUTE_COUNT > 0
     for (int k = 0; k < MATERIAL_ATTRIBUTE_COUNT; ++k) g_sd.attr[k] = v_attr[k];
@@ -241,21 +312,20 @@ void shading_point_init(vec3 N, vec3 Ng, vec3 V, bool back) {
         g_sd.bump_dP = 0.5 * (2.0 / (abs(frame.projection[0][0]) * frame.viewport.x) +
                               2.0 / (abs(frame.projection[1][1]) * frame.viewport.y));
     } else {
-        vec3 D = normalize(v_position - frame.motion.xyz);
-        g_sd.bump_dP = frame_eye_distance(v_position) * 0.5 * (length(dFdxFine(D)) + length(dFdyFine(D)));
+        g_sd.bump_dP = frame_eye_distance(v_position) * 0.5 * (length(ddx_view_dir()) + length(ddy_view_dir()));
     }
-    g_sd.dgenerated_dx = dFdxFine(g_sd.generated);
-    g_sd.dgenerated_dy = dFdyFine(g_sd.generated);
-    g_sd.duv_dx = dFdxFine(g_sd.uv);
-    g_sd.duv_dy = dFdyFine(g_sd.uv);
+    g_sd.dgenerated_dx = ddx_generated(g_sd.generated, size);
+    g_sd.dgenerated_dy = ddy_generated(g_sd.generated, size);
+    g_sd.duv_dx = ddx_uv();
+    g_sd.duv_dy = ddy_uv();
     for (int k = 0; k < 8; ++k) {
         g_sd.dattr_dx[k] = vec4(0.0);
         g_sd.dattr_dy[k] = vec4(0.0);
     }
 #if MATERIAL_ATTRIBUTE_COUNT > 0
     for (int k = 0; k < MATERIAL_ATTRIBUTE_COUNT; ++k) {
-        g_sd.dattr_dx[k] = dFdxFine(v_attr[k]);
-        g_sd.dattr_dy[k] = dFdyFine(v_attr[k]);
+        g_sd.dattr_dx[k] = ddx_attr(k);
+        g_sd.dattr_dy[k] = ddy_attr(k);
     }
 #endif
 #ifdef MATERIAL_FLAT_ATTRIBUTE
@@ -287,7 +357,7 @@ vec3 forward_light(vec4 emission, vec4 base, vec4 params0, vec4 params1, vec3 N,
     PrincipledWeights w = principled_weights(s);
     vec3 P = v_position;
     vec3 V = frame_view_vector(P);
-    ivec2 pixel = ivec2(gl_FragCoord.xy);
+    ivec2 pixel = ivec2(FRAG_COORD.xy);
     float ao;
     LightContribution total = world_light(w, s, P, N, V, pixel, ao);
     for (uint i = 0u; i < min(frame.counts.x, uint(FORWARD_MAX_LIGHTS)); ++i) {
@@ -300,13 +370,17 @@ vec3 forward_light(vec4 emission, vec4 base, vec4 params0, vec4 params1, vec3 N,
 }
 #endif
 
+#ifdef GBUFFER_RESOLVE
+void geometry_surface() {
+#else
 void main() {
+#endif
 #ifdef FORWARD_PASS
     /* In front of this sample's opaque surfaces only (reversed Z; the same
      * jittered projection drew them). The depth test is done here, by hand:
      * the opaque depth is read as a texture, so it cannot also be this
      * pass's depth attachment. */
-    if (gl_FragCoord.z <= texelFetch(gbuf_depth, ivec2(gl_FragCoord.xy), 0).r) discard;
+    if (FRAG_COORD.z <= texelFetch(gbuf_depth, ivec2(FRAG_COORD.xy), 0).r) discard;
 #endif
 #ifndef MATERIAL_GRAPH
     GpuMaterial m = pick_material(v_material);
@@ -326,9 +400,9 @@ void main() {
      * along the true normal: the bake's winding is the tile's, not a view's. */
     const bool back = false;
 #else
-    const bool back = gl_FrontFacing == ((v_mirrored & 1u) != 0u);
+    const bool back = FRONT_FACING == ((v_mirrored & 1u) != 0u);
 #endif
-    vec3 Ng = normalize(cross(dFdx(v_position), dFdy(v_position)));
+    vec3 Ng = normalize(screen_plane_normal());
 #ifdef MATERIAL_GRAPH
     /* Node materials read Ng (True Normal, flat Normal Map): exact from the
      * triangle's vertices rather than from screen derivatives. */
@@ -352,7 +426,7 @@ void main() {
      * neutral value, never a G-buffer NaN. */
     shading_point_init(N, Ng, V, back);
     g_const_base = int(materials[v_material].mix.z);
-    g_mix_u = fract(pixel_hash(uvec2(gl_FragCoord.xy)) + frame.sample_shift.z);
+    g_mix_u = fract(pixel_hash(uvec2(FRAG_COORD.xy)) + frame.sample_shift.z);
     Closure c;
     material_graph_eval(c);
 #if defined(MATERIAL_ALPHA) && !defined(FORWARD_PASS) && !defined(EMISSION_BAKE)

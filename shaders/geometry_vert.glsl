@@ -94,6 +94,12 @@ flat out uint v_object_index;
 flat out uint v_mirrored;
 flat out uint v_instance;  /* the instance drawn (transparency_random, node materials) */
 flat out uint v_triangle;  /* the triangle of the mesh (transparency_random) */
+#ifdef VISIBILITY_PASS
+/* The visibility buffer (visibility_frag.glsl): the batch's slot-table
+ * entry (instance ids.y + slot) the triangle is drawn with, which names its
+ * mesh and material for the resolve (visibility_stage.h). */
+flat out uint v_slot_key;
+#endif
 
 void main() {
     const uint corner = uint(gl_VertexID);
@@ -204,6 +210,9 @@ void main() {
     int slot = (mesh_flags & 4u) != 0u ? material_indices[triangle] : 0;
     uint s = min(uint(max(slot, 0)), max(inst.ids.z, 1u) - 1u);
     v_material = material_slots[inst.ids.y + s];
+#ifdef VISIBILITY_PASS
+    v_slot_key = inst.ids.y + s;
+#endif
     v_object_index = inst.ids.x;
     v_mirrored = inst.ids.w;
     v_instance = instance;

@@ -35,6 +35,8 @@
 #define SSBO_INSTANCE_MOTION 25   /* Vector pass: each instance's previous and next model matrix (motion_module.h) */
 #define SSBO_MOTION_POSITIONS 26  /* ... a deforming mesh's previous, then next vertex positions */
 #define SSBO_RECEIVERS 27         /* shadow map sizing: sample 0's depth range and grid (receivers_comp.glsl) */
+#define SSBO_VIS_KEYS 28          /* visibility buffer: per slot key, its indirect dispatch, count, offset, cursor */
+#define SSBO_VIS_PIXELS 29        /* ... the covered pixels, grouped by key (visibility_classify_comp.glsl) */
 
 /* Textures sampled by compute passes (G-buffer inputs) */
 #define TEX_DEPTH 0
@@ -65,6 +67,10 @@
 #define TEX_CATCHER_HIT 8
 #define TEX_CATCHER_PASS 9
 #define TEX_CATCHER_FILM 11
+/* The visibility buffer (instance, triangle, slot key + 1), read by the
+ * G-buffer's resolve (gbuffer_resolve_comp.glsl), which runs before any
+ * pass that binds TEX_DIFF_LIGHT's unit. */
+#define TEX_VISIBILITY 8
 /* Node materials: image slot k of the drawn material at unit TEX_MATERIAL_IMAGE0 + k */
 #define TEX_MATERIAL_IMAGE0 16
 
@@ -132,6 +138,20 @@
 #define OUT_IDS 5
 #define OUT_UV 6
 #define OUT_GEOMETRY 7
+
+/* The visibility buffer's classification and resolve (visibility_stage.h):
+ * uints per slot key in SSBO_VIS_KEYS (a DispatchIndirectCommand, then the
+ * key's pixel count, first index in SSBO_VIS_PIXELS, and fill cursor), the
+ * resolve's workgroup, and its uniform naming the key it resolves. */
+#define VIS_KEY_STRIDE 8
+#define VIS_KEY_COUNT 3
+#define VIS_KEY_OFFSET 4
+#define VIS_KEY_CURSOR 5
+#define VIS_CLASSIFY_SIZE 8
+#define VIS_SCAN_SIZE 256
+#define VIS_RESOLVE_SIZE 64
+#define LOC_VIS_KEY 40
+#define LOC_VIS_KEY_COUNT 41
 
 /* Pass ids (deferred::Pass; static_assert'ed in native/src/passes.cpp) */
 #define PASS_COMBINED 0

@@ -188,6 +188,7 @@ void declare_renderer(py::module_& m) {
             d["shadowed_lights"] = self.last.shadowed_lights;
             d["shadow_lights_dropped"] = self.last.shadow_lights_dropped;
             d["shadow_rays"] = self.last.shadow_rays;
+            d["visibility_buffer"] = self.last.visibility_buffer;
             d["ray_build_ms"] = self.last.ray_build_ms;
             d["ray_scene_bytes"] = self.last.ray_scene_bytes;
             d["ray_triangles"] = self.last.ray_triangles;
@@ -500,9 +501,11 @@ void declare_renderer(py::module_& m) {
                 int shadow_resolution, float shadow_quality, bool shadow_rays, float alpha_threshold,
                 const std::vector<std::string>& cryptomatte, int cryptomatte_levels,
                 const std::vector<std::pair<std::string, std::string>>& aovs, int light_groups,
-                int preview_interval_ms, const std::string& preview_pass, bool motion_blur, bool filter_splat) {
+                int preview_interval_ms, const std::string& preview_pass, bool motion_blur, bool filter_splat,
+                bool visibility_buffer) {
                  RenderSettings s;
                  s.filter_splat = filter_splat;
+                 s.visibility_buffer = visibility_buffer;
                  s.motion_blur = motion_blur;
                  s.preview_interval_ms = preview_interval_ms;
                  {
@@ -608,7 +611,7 @@ void declare_renderer(py::module_& m) {
              py::arg("cryptomatte") = std::vector<std::string>{}, py::arg("cryptomatte_levels") = 6,
              py::arg("aovs") = std::vector<std::pair<std::string, std::string>>{}, py::arg("light_groups") = 0,
              py::arg("preview_interval_ms") = -1, py::arg("preview_pass") = "Combined",
-             py::arg("motion_blur") = false, py::arg("filter_splat") = true)
+             py::arg("motion_blur") = false, py::arg("filter_splat") = true, py::arg("visibility_buffer") = false)
         .def("preview",
              [](const PyRenderer& self, std::uint64_t since) -> py::object {
                  if (!self.renderer) throw Error("the renderer was closed");

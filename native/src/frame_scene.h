@@ -123,6 +123,8 @@ public:
     std::uint64_t draw_culled(const Test& keep, bool casters_only);
     // The material drawing slot s of a batch.
     std::uint32_t slot_material(const Draw& d, std::size_t s) const;
+    // Entries in the slot table (every batch's slots, one after the other).
+    std::size_t slot_count() const { return slots_.size(); }
 
     // The tables' buffers (the emission bake binds them itself).
     GLuint instance_buffer() const { return instance_buffer_.get(); }

@@ -85,4 +85,18 @@ void GBuffer::bind_textures() const {
     if (geometry_) glBindTextureUnit(TEX_GBUF_GEOMETRY, geometry_.get());
 }
 
+void GBuffer::bind_images() const {
+    auto bind = [](const Texture& t, int unit, GLenum format) {
+        if (t) glBindImageTexture(GLuint(unit), t.get(), 0, GL_FALSE, 0, GL_WRITE_ONLY, format);
+    };
+    bind(emission_, OUT_EMISSION, GL_RGBA32F);
+    bind(base_, OUT_BASE, GL_RGBA16F);
+    bind(params0_, OUT_PARAMS0, GL_RGBA16F);
+    bind(normal_, OUT_NORMAL, GL_R32UI);
+    bind(params1_, OUT_PARAMS1, GL_RGBA16F);
+    bind(ids_, OUT_IDS, features_.instance_ids ? GL_RGBA32UI : GL_RG32UI);
+    bind(uv_, OUT_UV, GL_RG32F);
+    bind(geometry_, OUT_GEOMETRY, GL_RGBA32UI);
+}
+
 }  // namespace deferred

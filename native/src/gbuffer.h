@@ -27,6 +27,9 @@ public:
     void ensure(int width, int height, const GBufferFeatures& features);
     void bind_for_geometry() const;   // binds the FBO, clears (depth 0 = far, reversed Z)
     void bind_textures() const;       // binds every target to its TEX_* unit
+    // Binds every colour target to image unit OUT_* (write only): the
+    // visibility buffer's resolve (gbuffer_resolve_comp.glsl) stores there.
+    void bind_images() const;
 
     std::size_t bytes() const { return bytes_; }
     GLuint depth_texture() const { return depth_.get(); }

@@ -75,8 +75,11 @@ public:
     // world occlusion map. Returns how many instances were kept.
     std::uint64_t draw_casters(FrameScene& scene, const FrameScene::Test& casts, bool world_map) const;
 
-private:
     bool is_forward(std::uint32_t id) const { return id < forward_.size() && forward_[id]; }
+    // Per material id: drawn by the forward pass (left out of the G-buffer).
+    const std::vector<bool>& forward() const { return forward_; }
+
+private:
 
     const MaterialModule* materials_ = nullptr;
     GLuint geometry_ = 0;

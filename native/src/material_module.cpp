@@ -158,6 +158,21 @@ void MaterialModule::prefetch(ShaderLibrary& shaders, std::uint32_t graph, const
     }
 }
 
+GLuint MaterialModule::resolve_program(ShaderLibrary& shaders, std::uint32_t graph, const ShaderVariant& base) {
+    return shaders.compute_program("gbuffer_resolve_comp.glsl", program_variant(graph, base),
+                                   {{kMaterialGraphFile, graph_source(shaders, graph)}});
+}
+
+void MaterialModule::prefetch_resolve(ShaderLibrary& shaders, std::uint32_t graph, const ShaderVariant& base) {
+    if (!shaders.parallel_compile()) return;
+    try {
+        shaders.prefetch_compute("gbuffer_resolve_comp.glsl", program_variant(graph, base),
+                                 {{kMaterialGraphFile, graph_source(shaders, graph)}});
+    } catch (const std::exception&) {
+        // resolve_program() reports it.
+    }
+}
+
 ShaderVariant MaterialModule::program_variant(std::uint32_t graph, const ShaderVariant& base) const {
     const StoredGraph& g = graphs_.at(graph);
     ShaderVariant v = base;

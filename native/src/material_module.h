@@ -66,6 +66,11 @@ public:
     // at location 2, origin at 20, axis at 21 (shadow_frag.glsl's 2, 3, 4).
     GLuint caster_program(ShaderLibrary& shaders, std::uint32_t graph, bool world_map);
     static ShaderVariant caster_variant(bool world_map);
+    // The graph's G-buffer resolve for the visibility buffer
+    // (gbuffer_resolve_comp.glsl: the same surface code in compute), and its
+    // prefetch (never throws).
+    GLuint resolve_program(ShaderLibrary& shaders, std::uint32_t graph, const ShaderVariant& base);
+    void prefetch_resolve(ShaderLibrary& shaders, std::uint32_t graph, const ShaderVariant& base);
     // Starts compiling program(shaders, graph, base) on the driver's threads
     // (ShaderLibrary::prefetch_graphics): prefetch every graph a frame needs,
     // then ask for each, and the compiles overlap. Never throws.

@@ -6,7 +6,8 @@
 //             bake, EmitterModule, LightModule, FilmModule's accumulations
 //   programs  GeometryStage, ForwardModule, LightingStage, PassStage
 //   per film sample:
-//     geometry   GeometryStage -> GBuffer (+ AOVs, Vector's motion)
+//     geometry   GeometryStage -> GBuffer (+ AOVs, Vector's motion), or
+//                VisibilityBuffer: ids raster, then the G-buffer in compute
 //     shadows    ShadowModule's maps (or rays: nothing to draw)
 //     culling    LightCulling's tile lists (sample 0)
 //     forward    ForwardModule's Blend-mode layer
@@ -42,6 +43,7 @@
 #include "shader_library.h"
 #include "ray_scene.h"
 #include "shadow_module.h"
+#include "visibility_module.h"
 #include "world_module.h"
 
 #include "../../shaders/shader_defines.h"
@@ -136,6 +138,7 @@ struct Renderer::Impl {
     SceneStore scene;
     MaterialModule materials;
     GBuffer gbuffer;
+    VisibilityBuffer visibility;  // the G-buffer in compute (RenderSettings::visibility_buffer)
     LightModule lights;
     LightCulling culling;
     ShadowModule shadows;
@@ -166,6 +169,7 @@ struct Renderer::Impl {
         thread.run([this] {
             // Release every GL object while the context is still current.
             gbuffer = GBuffer();
+            visibility = VisibilityBuffer();
             lights = LightModule();
             culling = LightCulling();
             shadows = ShadowModule();
@@ -261,6 +265,7 @@ struct Renderer::Impl {
         bool camera_moves = false;
         bool culled = false;        // tile light lists
         bool scene_alpha = false;   // a constant material partly transparent
+        bool visibility = false;    // the G-buffer from the visibility buffer
         ShaderVariant base_variant;  // the G-buffer's targets
         std::vector<std::string> caster_defines;
         GLuint motion_program = 0;   // the Vector pass's
@@ -448,6 +453,7 @@ Renderer::Impl::FramePlan Renderer::Impl::plan_frame(const RenderSettings& setti
     for (Pass p : wanted.list()) per_pixel += (p == Pass::Combined ? 0 : 16) + 4 * std::size_t(pass_info(p).channels);
     if (features.instance_ids) per_pixel += 16;  // the ids target grows to RGBA32UI
     per_pixel += 16 * std::size_t(settings.light_groups) + (settings.light_groups > 0 ? 16 : 0);
+    if (settings.visibility_buffer) per_pixel += VisibilityBuffer::kBytesPerPixel;
     if (plan.catchers) per_pixel += 32;
     const std::size_t frame_bytes = pixels * per_pixel + 2 * CryptomatteModule::bytes(settings) +
                                     AovModule::bytes(settings) +
@@ -770,6 +776,25 @@ void Renderer::Impl::prepare_programs(Frame& f) {
         result.timings.gbuffer_bytes += forward.bytes();
     }
 
+    // The visibility buffer: every program it resolves with, compiled now.
+    if (settings.visibility_buffer) {
+        const std::string why_not =
+            VisibilityBuffer::unsupported(f.geometry.stochastic_alpha(), settings.width, settings.height);
+        if (why_not.empty()) {
+            std::vector<std::pair<std::uint32_t, std::uint32_t>> graphs;
+            for (auto& [id, program] : f.geometry.graph_programs())
+                if (!f.geometry.is_forward(id)) graphs.emplace_back(id, std::uint32_t(scene.materials()[id].graph));
+            visibility.prepare(*shaders, materials, base, graphs);
+            visibility.ensure(settings.width, settings.height, f.scene.slot_count(), gbuffer.depth_texture());
+            result.timings.gbuffer_bytes += visibility.bytes();
+            f.visibility = true;
+        } else {
+            result.warnings.push_back("The visibility buffer is not used for this frame (the G-buffer is drawn by "
+                                      "the raster pipeline, the same image): " + why_not);
+        }
+    }
+    result.timings.visibility_buffer = f.visibility;
+
     lighting.forward_layer = forward.active();
     f.lighting.prepare(*shaders, base, lights, world_module, lighting, result.warnings);
 
@@ -874,7 +899,12 @@ void Renderer::Impl::render_sample(Frame& f, int sample) {
         glDepthMask(GL_TRUE);
         glDisable(GL_CULL_FACE);  // two-sided, as Cycles
         glDisable(GL_BLEND);
-        f.camera_instances_drawn += f.geometry.draw(f.scene, in_view);
+        if (f.visibility) {
+            f.camera_instances_drawn += f.scene.cull(in_view, false);
+            visibility.draw(f.scene, materials, gbuffer, f.geometry.forward());
+        } else {
+            f.camera_instances_drawn += f.geometry.draw(f.scene, in_view);
+        }
         glBindFramebuffer(GL_FRAMEBUFFER, 0);
     };
     // The Vector pass's share of this sample: the visible instances again,

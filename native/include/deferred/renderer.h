@@ -84,6 +84,13 @@ struct RenderSettings {
     // splatted; where the splat's scratch images alone would exceed the
     // memory budget, the frame is rendered without, warned.
     bool filter_splat = true;
+    // The visibility buffer (visibility_module.h): the raster pipeline
+    // decides only which triangle each pixel sees, and the G-buffer is
+    // written in compute (the materials evaluated there), which data-centre
+    // GPUs run far faster than fragment shading. The image is the raster
+    // path's up to rounding. A frame with stochastic transparency (partly
+    // transparent materials) takes the raster path, warned.
+    bool visibility_buffer = false;
     // Light culling (tiled, 2.5D depth masks). Blender's lights reach to
     // infinity; a light is cut off where even a white Lambertian surface
     // facing it would reflect less than `light_threshold` (scene-linear
@@ -207,6 +214,7 @@ struct FrameTimings {
     std::uint64_t camera_instances_drawn = 0;  // instances in the view frustum, over all samples
     std::size_t shadow_lights_dropped = 0;  // would cast shadows, over the layer/memory limits
     bool shadow_rays = false;              // visibility came from shadow rays (settings.shadow_rays)
+    bool visibility_buffer = false;        // the G-buffer came from the visibility buffer (settings.visibility_buffer)
     double ray_build_ms = 0;               // building the ray hierarchies (meshes new to them, instances)
     std::size_t ray_scene_bytes = 0;       // the ray scene's buffer
     std::size_t ray_triangles = 0;         // triangles the rays are traced against (over instances)

@@ -1,0 +1,159 @@
+#include "visibility_module.h"
+
+#include "material_module.h"
+#include "scene_store.h"
+
+#include "../../shaders/shader_defines.h"
+
+#include <deferred/renderer.h>
+
+#include <algorithm>
+
+namespace deferred {
+
+std::string VisibilityBuffer::unsupported(bool stochastic_alpha, int width, int height) {
+    if (stochastic_alpha)
+        return "the scene has partly transparent materials, whose stochastic coverage is decided in the raster "
+               "pipeline";
+    // The classification packs a pixel's x and y into 16 bits each.
+    if (width > 65535 || height > 65535) return "the image is wider or taller than 65535 pixels";
+    return {};
+}
+
+void VisibilityBuffer::prepare(ShaderLibrary& shaders, MaterialModule& materials, const ShaderVariant& base,
+                               const std::vector<std::pair<std::uint32_t, std::uint32_t>>& graphs) {
+    ShaderVariant raster;
+    raster.defines.push_back("VISIBILITY_PASS");
+    raster_ = shaders.graphics_program("geometry_vert.glsl", "visibility_frag.glsl", raster);
+    ShaderVariant v;
+    v.defines = {"VIS_COUNT"};
+    count_ = shaders.compute_program("visibility_classify_comp.glsl", v);
+    v.defines = {"VIS_SCAN"};
+    scan_ = shaders.compute_program("visibility_classify_comp.glsl", v);
+    v.defines = {"VIS_SCATTER"};
+    scatter_ = shaders.compute_program("visibility_classify_comp.glsl", v);
+    // The node materials' resolves compile on the driver's threads together.
+    for (auto& [id, graph] : graphs) materials.prefetch_resolve(shaders, graph, base);
+    resolve_ = shaders.compute_program("gbuffer_resolve_comp.glsl", base);
+    graph_resolves_.clear();
+    graph_of_.clear();
+    for (auto& [id, graph] : graphs) {
+        graph_resolves_.emplace_back(id, materials.resolve_program(shaders, graph, base));
+        if (graph_of_.size() <= id) graph_of_.resize(std::size_t(id) + 1, ~0u);
+        graph_of_[id] = graph;
+    }
+}
+
+void VisibilityBuffer::ensure(int width, int height, std::size_t slot_count, GLuint depth) {
+    slot_count = std::max<std::size_t>(slot_count, 1);
+    if (width != width_ || height != height_) {
+        ids_ = make_texture_2d(GL_RGBA32UI, width, height, "visibility buffer");
+        GLuint fbo = 0;
+        glCreateFramebuffers(1, &fbo);
+        fbo_ = Framebuffer(fbo);
+        glNamedFramebufferTexture(fbo, GL_COLOR_ATTACHMENT0, ids_.get(), 0);
+        glNamedFramebufferDrawBuffer(fbo, GL_COLOR_ATTACHMENT0);
+        pixels_ = make_storage_buffer(nullptr, std::size_t(width) * std::size_t(height) * sizeof(std::uint32_t),
+                                      "visibility buffer pixels");
+        width_ = width;
+        height_ = height;
+    }
+    // Attached every frame: a G-buffer reallocated since may have been given
+    // the old depth texture's name for a new texture.
+    glNamedFramebufferTexture(fbo_.get(), GL_DEPTH_ATTACHMENT, depth, 0);
+    const GLenum status = glCheckNamedFramebufferStatus(fbo_.get(), GL_FRAMEBUFFER);
+    if (status != GL_FRAMEBUFFER_COMPLETE)
+        throw Error("visibility buffer framebuffer incomplete (status 0x" + std::to_string(status) + ")");
+    if (slot_count > slot_capacity_) {
+        keys_ = make_storage_buffer(nullptr, slot_count * VIS_KEY_STRIDE * sizeof(std::uint32_t),
+                                    "visibility buffer keys");
+        slot_capacity_ = slot_count;
+    }
+    bytes_ = std::size_t(width_) * std::size_t(height_) * kBytesPerPixel +
+             slot_capacity_ * VIS_KEY_STRIDE * sizeof(std::uint32_t);
+    check_gl("allocating the visibility buffer");
+}
+
+GLuint VisibilityBuffer::program_for(std::uint32_t material) const {
+    if (material < graph_of_.size() && graph_of_[material] != ~0u)
+        for (auto& [id, program] : graph_resolves_)
+            if (id == material) return program;
+    return resolve_;
+}
+
+void VisibilityBuffer::draw(const FrameScene& scene, const MaterialModule& materials, const GBuffer& gbuffer,
+                            const std::vector<bool>& skip) const {
+    auto skipped = [&](std::uint32_t id) { return id < skip.size() && skip[id]; };
+    const bool any_skipped = std::find(skip.begin(), skip.end(), true) != skip.end();
+    const GLuint key_count = GLuint(scene.slot_count());
+
+    // Raster: depth and ids. The G-buffer's targets were cleared by its
+    // bind_for_geometry(), depth included; the ids are cleared to 0 (none).
+    glBindFramebuffer(GL_FRAMEBUFFER, fbo_.get());
+    glViewport(0, 0, width_, height_);
+    const GLuint none[4] = {0, 0, 0, 0};
+    glClearNamedFramebufferuiv(fbo_.get(), GL_COLOR, 0, none);
+    glUseProgram(raster_);
+    for (const FrameScene::Culled& c : scene.visible()) {
+        const GpuMesh& mesh = scene.mesh(*c.draw);
+        if (!any_skipped) {
+            scene.draw_range(c, 0, mesh.triangle_count);
+            continue;
+        }
+        for (std::size_t s = 0; s < mesh.slot_ranges.size(); ++s)
+            if (!skipped(scene.slot_material(*c.draw, s)))
+                scene.draw_range(c, mesh.slot_ranges[s].first, mesh.slot_ranges[s].second);
+    }
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+
+    // Classify: the covered pixels grouped by key.
+    glClearNamedBufferData(keys_.get(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, nullptr);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_VIS_KEYS, keys_.get());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_VIS_PIXELS, pixels_.get());
+    glBindTextureUnit(TEX_VISIBILITY, ids_.get());
+    const GLuint groups_x = GLuint((width_ + VIS_CLASSIFY_SIZE - 1) / VIS_CLASSIFY_SIZE);
+    const GLuint groups_y = GLuint((height_ + VIS_CLASSIFY_SIZE - 1) / VIS_CLASSIFY_SIZE);
+    glUseProgram(count_);
+    glUniform1ui(LOC_VIS_KEY_COUNT, key_count);
+    glDispatchCompute(groups_x, groups_y, 1);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    glUseProgram(scan_);
+    glUniform1ui(LOC_VIS_KEY_COUNT, key_count);
+    glDispatchCompute(1, 1, 1);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    glUseProgram(scatter_);
+    glUniform1ui(LOC_VIS_KEY_COUNT, key_count);
+    glDispatchCompute(groups_x, groups_y, 1);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
+
+    // Resolve: one indirect dispatch per key drawn, over its pixels.
+    gbuffer.bind_images();
+    materials.bind_constants();
+    glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, keys_.get());
+    std::vector<bool> done(key_count, false);
+    for (const FrameScene::Culled& c : scene.visible()) {
+        const FrameScene::Draw& d = *c.draw;
+        const GpuMesh& mesh = scene.mesh(d);
+        for (std::size_t s = 0; s < mesh.slot_ranges.size(); ++s) {
+            if (mesh.slot_ranges[s].second == 0) continue;
+            const std::uint32_t id = scene.slot_material(d, s);
+            // The key the vertex stage gave these triangles (geometry_vert.glsl).
+            const std::uint32_t key = d.slot_offset + std::uint32_t(std::min<std::size_t>(s, std::max(d.slot_count, 1u) - 1));
+            if (skipped(id) || key >= key_count || done[key]) continue;
+            done[key] = true;
+            const GLuint program = program_for(id);
+            glUseProgram(program);
+            scene.bind_mesh(mesh);
+            scene.bind_attributes(mesh);
+            if (program != resolve_) materials.bind_for_draw(graph_of_[id], mesh);
+            glUniform1ui(1, mesh.flags);
+            glUniform1ui(LOC_VIS_KEY, key);
+            glDispatchComputeIndirect(GLintptr(std::size_t(key) * VIS_KEY_STRIDE * sizeof(std::uint32_t)));
+        }
+    }
+    glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, 0);
+    glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+    check_gl("visibility buffer");
+}
+
+}  // namespace deferred

@@ -1,0 +1,225 @@
+/* The visibility buffer's resolve (visibility_stage.h): the G-buffer
+ * written in compute. One dispatch per slot key (a mesh batch's material
+ * slot) over the pixels the classification gave it; each invocation
+ * rebuilds what the geometry pass's vertex stage and rasteriser would have
+ * handed its fragment (geometry_vert.glsl), from the instance and triangle
+ * the visibility buffer holds:
+ *   - the barycentric weights where the pixel's ray (through its centre,
+ *     under this sample's jittered projection) meets the triangle's plane
+ *     (Moeller and Trumbore 1997): the rasteriser's perspective-correct
+ *     interpolation is that same point;
+ *   - every varying as those weights of the corners' values, fetched from
+ *     the mesh's buffers as the vertex stage fetches them;
+ *   - their screen derivatives from the right and upper neighbours' rays
+ *     met on the same plane (the quad's dFdxFine, without the quad);
+ *   - the facing from the winding in clip space, as the rasteriser decides
+ *     it (the sign of the homogeneous 2D determinant, Olano and Greer 1997).
+ * Then geometry_frag.glsl's own surface code runs (GBUFFER_RESOLVE) and its
+ * outputs are stored into the G-buffer's images. */
+#define GBUFFER_RESOLVE
+#include "geometry_frag.glsl"
+
+layout(local_size_x = VIS_RESOLVE_SIZE) in;
+
+layout(std430, binding = SSBO_POSITIONS) readonly buffer Positions { float positions[]; };
+layout(std430, binding = SSBO_INDICES) readonly buffer Indices { uint indices[]; };
+layout(std430, binding = SSBO_NORMALS) readonly buffer Normals { float corner_normals[]; };
+layout(std430, binding = SSBO_UVS) readonly buffer Uvs { vec2 corner_uvs[]; };
+layout(std430, binding = SSBO_MATERIAL_SLOTS) readonly buffer Slots { uint material_slots[]; };
+layout(std430, binding = SSBO_MOTION_POSITIONS) readonly buffer MotionPositions { float motion_positions[]; };
+#ifndef MATERIAL_GRAPH
+layout(std430, binding = SSBO_INSTANCES) readonly buffer Instances { GpuInstance instances[]; };
+#else
+layout(std430, binding = SSBO_ATTRIBUTES) readonly buffer Attributes { float corner_attributes[]; };
+layout(location = 3) uniform ivec4 attribute_layout[8];
+#endif
+layout(std430, binding = SSBO_VIS_KEYS) readonly buffer VisKeys { uint key_data[]; };
+layout(std430, binding = SSBO_VIS_PIXELS) readonly buffer VisPixels { uint vis_pixels[]; };
+layout(binding = TEX_VISIBILITY) uniform usampler2D visibility;
+layout(location = 1) uniform uint mesh_flags;  /* geometry_vert.glsl's */
+layout(location = LOC_VIS_KEY) uniform uint resolve_key;
+
+layout(binding = OUT_EMISSION, rgba32f) writeonly uniform image2D img_emission;
+layout(binding = OUT_BASE, rgba16f) writeonly uniform image2D img_base;
+layout(binding = OUT_PARAMS0, rgba16f) writeonly uniform image2D img_params0;
+layout(binding = OUT_NORMAL, r32ui) writeonly uniform uimage2D img_normal;
+#ifdef GBUF_PARAMS1
+layout(binding = OUT_PARAMS1, rgba16f) writeonly uniform image2D img_params1;
+#endif
+#ifdef GBUF_INSTANCE_IDS
+layout(binding = OUT_IDS, rgba32ui) writeonly uniform uimage2D img_ids;
+#elif defined(GBUF_IDS)
+layout(binding = OUT_IDS, rg32ui) writeonly uniform uimage2D img_ids;
+#endif
+#ifdef GBUF_UV
+layout(binding = OUT_UV, rg32f) writeonly uniform image2D img_uv;
+#endif
+#ifdef GEOMETRY_OUT
+layout(binding = OUT_GEOMETRY, rgba32ui) writeonly uniform uimage2D img_geometry;
+#endif
+
+vec3 vertex_position(uint vi) {  /* object space, at this sample's shutter time (geometry_vert.glsl) */
+    vec3 p = vec3(positions[3u * vi], positions[3u * vi + 1u], positions[3u * vi + 2u]);
+    if ((mesh_flags & 8u) != 0u && frame.motion.w != 0.0) {
+        const float r = frame.motion.w;
+        const uint base = (r < 0.0 ? 0u : 1u) * (uint(motion_positions.length()) / 2u) + 3u * vi;
+        p = mix(p, vec3(motion_positions[base], motion_positions[base + 1u], motion_positions[base + 2u]), abs(r));
+    }
+    return p;
+}
+
+vec3 corner_normal(uint corner) {
+    return vec3(corner_normals[3u * corner], corner_normals[3u * corner + 1u], corner_normals[3u * corner + 2u]);
+}
+
+/* Camera-relative world point of window position `frag` (pixels) at depth d. */
+vec3 window_point(vec2 frag, float d) {
+    vec4 view = frame.inv_projection * vec4(frag * frame.viewport.zw * 2.0 - 1.0, d, 1.0);
+    return (frame.inv_view * vec4(view.xyz / view.w, 1.0)).xyz;
+}
+
+/* Weights of corners 1 and 2 where the ray through window position `frag`
+ * meets the plane of (p0, p1, p2) (Moeller-Trumbore, unclamped). */
+vec2 plane_weights(vec2 frag, vec3 p0, vec3 e1, vec3 e2) {
+    const vec3 o = window_point(frag, 1.0);            /* the near plane (reversed Z) */
+    const vec3 d = window_point(frag, 0.5) - o;        /* further along the same ray */
+    const vec3 pvec = cross(d, e2);
+    const float det = dot(e1, pvec);
+    if (abs(det) < 1e-30 || isnan(det)) return vec2(1.0 / 3.0);  /* edge-on: the centroid */
+    const vec3 tvec = o - p0;
+    const vec3 qvec = cross(tvec, e1);
+    return vec2(dot(tvec, pvec), dot(d, qvec)) / det;
+}
+
+void main() {
+    const uint base = resolve_key * VIS_KEY_STRIDE;
+    if (gl_GlobalInvocationID.x >= key_data[base + VIS_KEY_COUNT]) return;
+    const uint pixel_bits = vis_pixels[key_data[base + VIS_KEY_OFFSET] + gl_GlobalInvocationID.x];
+    const ivec2 pixel = ivec2(pixel_bits & 0xFFFFu, pixel_bits >> 16u);
+    const uvec4 vis = texelFetch(visibility, pixel, 0);
+    const uint instance = vis.x, triangle = vis.y;
+    const GpuInstance inst = instances[instance];
+
+    uint vi[3];
+    vec3 object_p[3], world[3];
+    for (uint k = 0u; k < 3u; ++k) {
+        vi[k] = indices[3u * triangle + k];
+        object_p[k] = vertex_position(vi[k]);
+        world[k] = (inst.model * vec4(object_p[k], 1.0)).xyz;
+    }
+    /* Facing as the rasteriser saw it: counter-clockwise in the window is
+     * front (glFrontFace's default). */
+    {
+        mat4 vp = frame.projection * frame.view;
+        vec4 c0 = vp * vec4(world[0], 1.0), c1 = vp * vec4(world[1], 1.0), c2 = vp * vec4(world[2], 1.0);
+        g_front_facing = determinant(mat3(c0.xyw, c1.xyw, c2.xyw)) > 0.0;
+    }
+    const vec2 frag = vec2(pixel) + 0.5;
+    g_frag_coord = vec4(frag, 0.0, 1.0);
+    const vec3 e1 = world[1] - world[0], e2 = world[2] - world[0];
+    const vec2 w12 = plane_weights(frag, world[0], e1, e2);
+    const vec2 w12_dx = plane_weights(frag + vec2(1.0, 0.0), world[0], e1, e2) - w12;
+    const vec2 w12_dy = plane_weights(frag + vec2(0.0, 1.0), world[0], e1, e2) - w12;
+    const vec3 b = vec3(1.0 - w12.x - w12.y, w12);
+    const vec3 db_dx = vec3(-w12_dx.x - w12_dx.y, w12_dx), db_dy = vec3(-w12_dy.x - w12_dy.y, w12_dy);
+
+    v_position = b.x * world[0] + b.y * world[1] + b.z * world[2];
+    g_dposition_dx = db_dx.x * world[0] + db_dx.y * world[1] + db_dx.z * world[2];
+    g_dposition_dy = db_dy.x * world[0] + db_dy.y * world[1] + db_dy.z * world[2];
+
+    const uint c0 = 3u * triangle;
+    vec3 n[3] = vec3[3](vec3(0.0), vec3(0.0), vec3(0.0));
+    v_normal = vec3(0.0);
+    if ((mesh_flags & 1u) != 0u) {
+        for (uint k = 0u; k < 3u; ++k) {
+            n[k] = corner_normal(c0 + k);
+            vec3 world_n = mat3(inst.normal_matrix) * n[k];
+#ifdef MATERIAL_GRAPH
+            world_n = normalize(world_n);  /* as geometry_vert.glsl, per vertex */
+#endif
+            v_normal += b[k] * world_n;
+        }
+    }
+    v_uv = vec2(0.0);
+    if ((mesh_flags & 2u) != 0u) {
+        const vec2 uv0 = corner_uvs[c0], uv1 = corner_uvs[c0 + 1u], uv2 = corner_uvs[c0 + 2u];
+        v_uv = b.x * uv0 + b.y * uv1 + b.z * uv2;
+        g_duv_dx = db_dx.x * uv0 + db_dx.y * uv1 + db_dx.z * uv2;
+        g_duv_dy = db_dy.x * uv0 + db_dy.y * uv1 + db_dy.z * uv2;
+    } else {
+        g_duv_dx = g_duv_dy = vec2(0.0);
+    }
+    v_material = material_slots[resolve_key];
+    v_object_index = inst.ids.x;
+    v_mirrored = inst.ids.w;
+    v_instance = instance;
+    v_triangle = triangle;
+#ifdef MATERIAL_GRAPH
+    {
+        /* The undeformed corners, as the vertex stage's true normal. */
+        vec3 q[3];
+        for (uint k = 0u; k < 3u; ++k) q[k] = vec3(positions[3u * vi[k]], positions[3u * vi[k] + 1u], positions[3u * vi[k] + 2u]);
+        v_true_normal = mat3(inst.normal_matrix) * cross(q[1] - q[0], q[2] - q[0]);
+    }
+    v_barycentric = b.xy;
+    v_object_position = b.x * object_p[0] + b.y * object_p[1] + b.z * object_p[2];
+    g_dobject_dx = db_dx.x * object_p[0] + db_dx.y * object_p[1] + db_dx.z * object_p[2];
+    g_dobject_dy = db_dy.x * object_p[0] + db_dy.y * object_p[1] + db_dy.z * object_p[2];
+    v_object_normal = b.x * n[0] + b.y * n[1] + b.z * n[2];
+    for (int k = 0; k < 8; ++k) g_dattr_dx[k] = g_dattr_dy[k] = vec4(0.0);
+#if MATERIAL_ATTRIBUTE_COUNT > 0
+    for (int k = 0; k < MATERIAL_ATTRIBUTE_COUNT; ++k) {
+        const ivec4 layout_k = attribute_layout[k];
+        vec4 a[3] = vec4[3](vec4(0.0), vec4(0.0), vec4(0.0));
+        if (layout_k.x >= 0) {
+            for (uint j = 0u; j < 3u; ++j) {
+                a[j] = vec4(0.0, 0.0, 0.0, 1.0);
+                const int at = layout_k.x + int(c0 + j) * layout_k.y;
+                for (int c = 0; c < layout_k.y; ++c) a[j][c] = corner_attributes[at + c];
+                if (layout_k.y == 1) a[j].xyz = vec3(a[j].x);
+            }
+        }
+        v_attr[k] = b.x * a[0] + b.y * a[1] + b.z * a[2];
+        g_dattr_dx[k] = db_dx.x * a[0] + db_dx.y * a[1] + db_dx.z * a[2];
+        g_dattr_dy[k] = db_dy.x * a[0] + db_dy.y * a[1] + db_dy.z * a[2];
+#ifdef MATERIAL_FLAT_ATTRIBUTE
+        /* Flat: the provoking (last) corner's value, exactly. */
+        if (k == MATERIAL_FLAT_ATTRIBUTE) v_attr_flat = a[2];
+#endif
+    }
+#endif
+#endif
+#ifdef GEOMETRY_OUT
+    {
+        /* geometry_vert.glsl's terminator terms, from the undeformed corners. */
+        vec3 V[3];
+        for (uint k = 0u; k < 3u; ++k) V[k] = vec3(positions[3u * vi[k]], positions[3u * vi[k] + 1u], positions[3u * vi[k] + 2u]);
+        v_term_a = vec3(dot(V[1] - V[0], n[0]), dot(V[2] - V[0], n[0]), dot(V[0] - V[1], n[1]));
+        v_term_b = vec3(dot(V[2] - V[1], n[1]), dot(V[0] - V[2], n[2]), dot(V[1] - V[2], n[2]));
+        v_term_dir = mat3(inst.model) * (b.x * n[0] + b.y * n[1] + b.z * n[2]);
+        v_term_bary = b.xy;
+        v_term_cutoff = (mesh_flags & 1u) != 0u ? inst.info.y : 0.0;
+    }
+#endif
+
+    geometry_surface();
+
+    imageStore(img_emission, pixel, out_emission);
+    imageStore(img_base, pixel, out_base);
+    imageStore(img_params0, pixel, out_params0);
+    imageStore(img_normal, pixel, uvec4(out_normal));
+#ifdef GBUF_PARAMS1
+    imageStore(img_params1, pixel, out_params1);
+#endif
+#ifdef GBUF_INSTANCE_IDS
+    imageStore(img_ids, pixel, out_ids);
+#elif defined(GBUF_IDS)
+    imageStore(img_ids, pixel, uvec4(out_ids, 0u, 0u));
+#endif
+#ifdef GBUF_UV
+    imageStore(img_uv, pixel, vec4(out_uv, 0.0, 0.0));
+#endif
+#ifdef GEOMETRY_OUT
+    imageStore(img_geometry, pixel, out_geometry);
+#endif
+}

@@ -131,6 +131,9 @@ def main(argv=None):
     ap.add_argument("--filter-splat", choices=["on", "off"],
                     help="the film's filter splatting (native RenderSettings.filter_splat) instead of the captured "
                          "setting")
+    ap.add_argument("--visibility-buffer", choices=["on", "off"],
+                    help="the G-buffer from the visibility buffer, in compute (native "
+                         "RenderSettings.visibility_buffer), or the raster path, instead of the captured setting")
     args = ap.parse_args(argv)
 
     data, calls, meta = load_capture(args.capture)
@@ -168,6 +171,8 @@ def main(argv=None):
         kwargs["shadow_rays"] = bool(args.shadow_rays)
     if args.filter_splat:
         kwargs["filter_splat"] = args.filter_splat == "on"
+    if args.visibility_buffer:
+        kwargs["visibility_buffer"] = args.visibility_buffer == "on"
     kwargs["preview_interval_ms"] = -1
 
     info = dict(renderer.gl_info)
@@ -178,13 +183,15 @@ def main(argv=None):
         images = renderer.render(camera, width, height, **kwargs)
         wall = time.perf_counter() - t0
         timings = dict(renderer.last_timings)
-        runs.append({"wall_ms": wall * 1e3, **{k: timings.get(k) for k in STAGES}})
+        runs.append({"wall_ms": wall * 1e3, **{k: timings.get(k) for k in STAGES},
+                     "visibility_buffer": bool(timings.get("visibility_buffer"))})
     warnings = list(renderer.last_warnings)
 
     result = {"capture": os.path.abspath(args.capture), "gl_renderer": info.get("renderer"),
               "gl_version": info.get("version"), "size": [width, height], "samples": kwargs.get("samples"),
               "light_samples": kwargs.get("light_samples", 0), "shadow_rays": kwargs.get("shadow_rays", False),
               "filter_splat": kwargs.get("filter_splat", True),
+              "visibility_buffer": bool(runs and runs[-1].get("visibility_buffer")),
               "passes": sorted(images), "context_ms": t_context * 1e3, "scene_ms": t_scene * 1e3,
               "runs": runs, "warnings": warnings, "captured": meta}
     if args.json:

@@ -49,6 +49,7 @@ set(DEFERRED_BLENDER_TESTS
     glossy_highlights
     capture_replay
     tangents
+    visibility_buffer
 )
 
 foreach(_name IN LISTS DEFERRED_BLENDER_TESTS)

@@ -78,6 +78,13 @@ def _filter_splat(scene):
     return bool(getattr(settings, "filter_splat", True)) if settings is not None else True
 
 
+def _visibility_buffer(scene):
+    """Whether the G-buffer comes from the visibility buffer (native
+    RenderSettings.visibility_buffer; off unless the setting turns it on)."""
+    settings = getattr(scene, "deferred_render", None)
+    return bool(getattr(settings, "visibility_buffer", False)) if settings is not None else False
+
+
 def _light_settings(scene):
     """Culling switch and threshold (the threshold is relative to what the
     view shows, so a brighter exposure lowers it: radiance x 2^exposure),
@@ -376,6 +383,7 @@ class FinalRender:
                       aovs=requested_aovs(self.view_layer),
                       light_groups=len(light_groups), motion_blur=self._motion_blur,
                       samples=samples, filter_width=_filter_width(scene), filter_splat=_filter_splat(scene),
+                      visibility_buffer=_visibility_buffer(scene),
                       alpha_threshold=_alpha_threshold(self.view_layer),
                       **_light_settings(scene), **mist)
         try:

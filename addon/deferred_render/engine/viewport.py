@@ -318,6 +318,7 @@ class ViewportSession:
         return dict(passes=passes, film_transparent=bool(scene.render.film_transparent),
                     samples=max(1, samples), filter_width=final._filter_width(scene),
                     filter_splat=final._filter_splat(scene),
+                    visibility_buffer=final._visibility_buffer(scene),
                     preview_interval_ms=PREVIEW_INTERVAL_MS, preview_pass=shown,
                     **final._light_settings(scene))
 

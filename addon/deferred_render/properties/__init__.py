@@ -51,6 +51,16 @@ class DeferredRenderSettings(bpy.types.PropertyGroup):
         default=True,
         update=_redraw_views,
     )
+    visibility_buffer: BoolProperty(
+        name="Visibility Buffer",
+        description=(
+            "The raster pipeline only finds which triangle each pixel sees; materials are evaluated "
+            "and the G-buffer written by compute shaders, which data-centre GPUs run far faster "
+            "than fragment shading. The same image. Scenes with partly transparent materials use "
+            "the raster path (a warning says so)"
+        ),
+        default=False,
+    )
     light_culling: BoolProperty(
         name="Light Culling",
         description=(

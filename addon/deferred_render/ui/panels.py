@@ -82,6 +82,7 @@ class DEFERRED_RENDER_PT_device(_EnginePanel, bpy.types.Panel):
     def draw(self, context):
         layout = self.split_layout()
         layout.prop(context.scene.deferred_render, "device_index")
+        layout.prop(context.scene.deferred_render, "visibility_buffer")
         # Cycles' option, same meaning: keep the renderer (GL context,
         # programs, images) between renders and animation frames.
         layout.prop(context.scene.render, "use_persistent_data", text="Persistent Data")

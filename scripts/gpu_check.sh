@@ -109,7 +109,7 @@ export DEFERRED_BENCH_PROFILE=1
 # shellcheck disable=SC2086
 [[ "$benches_to_run" == *" raster "* ]] && run bench_raster 30 "$benches" "$stage/bin/deferred_bench_raster" $size
 # shellcheck disable=SC2086
-[[ "$benches_to_run" == *" materials "* ]] && run bench_materials 80 "$benches" "$stage/bin/deferred_bench_materials" $size 16 3
+[[ "$benches_to_run" == *" materials "* ]] && run bench_materials 100 "$benches" "$stage/bin/deferred_bench_materials" $size 16 3
 [[ "$benches_to_run" == *" raycompile "* ]] && run bench_ray_compile 50 "$benches" "$stage/bin/deferred_bench_ray_compile" 16
 # shellcheck disable=SC2086
 [[ "$benches_to_run" == *" frame "* ]] && run bench_frame 100 "$benches" stdbuf -oL "$stage/bin/deferred_bench_frame" $size
@@ -119,6 +119,6 @@ export DEFERRED_BENCH_PROFILE=1
 # shellcheck disable=SC2086
 [[ "$benches_to_run" == *" outputs "* ]] && run bench_outputs 60 "$benches" "$stage/bin/deferred_bench_outputs" $size
 # shellcheck disable=SC2086
-[[ "$benches_to_run" == *" shadows "* ]] && run bench_shadows 70 "$benches" stdbuf -oL "$stage/bin/deferred_bench_shadows" $size
+[[ "$benches_to_run" == *" shadows "* ]] && run bench_shadows 50 "$benches" stdbuf -oL "$stage/bin/deferred_bench_shadows" $size
 cat "$summary"
 exit "$failed"

@@ -1,6 +1,8 @@
-/* The visibility buffer's resolve (visibility_stage.h): the G-buffer
+/* The visibility buffer's resolve (visibility_module.h): the G-buffer
  * written in compute. One dispatch per slot key (a mesh batch's material
- * slot) over the pixels the classification gave it; each invocation
+ * slot), a workgroup per screen tile where the classification found the key
+ * (visibility_classify_comp.glsl), an invocation per pixel of the tile that
+ * sees the key; each
  * rebuilds what the geometry pass's vertex stage and rasteriser would have
  * handed its fragment (geometry_vert.glsl), from the instance and triangle
  * the visibility buffer holds:
@@ -19,7 +21,7 @@
 #define GBUFFER_RESOLVE
 #include "geometry_frag.glsl"
 
-layout(local_size_x = VIS_RESOLVE_SIZE) in;
+layout(local_size_x = VIS_TILE, local_size_y = VIS_TILE) in;
 
 layout(std430, binding = SSBO_POSITIONS) readonly buffer Positions { float positions[]; };
 layout(std430, binding = SSBO_INDICES) readonly buffer Indices { uint indices[]; };
@@ -34,7 +36,7 @@ layout(std430, binding = SSBO_ATTRIBUTES) readonly buffer Attributes { float cor
 layout(location = 3) uniform ivec4 attribute_layout[8];
 #endif
 layout(std430, binding = SSBO_VIS_KEYS) readonly buffer VisKeys { uint key_data[]; };
-layout(std430, binding = SSBO_VIS_PIXELS) readonly buffer VisPixels { uint vis_pixels[]; };
+layout(std430, binding = SSBO_VIS_TILES) readonly buffer VisTiles { uint vis_tiles[]; };
 layout(binding = TEX_VISIBILITY) uniform usampler2D visibility;
 layout(location = 1) uniform uint mesh_flags;  /* geometry_vert.glsl's */
 layout(location = LOC_VIS_KEY) uniform uint resolve_key;
@@ -93,10 +95,13 @@ vec2 plane_weights(vec2 frag, vec3 p0, vec3 e1, vec3 e2) {
 
 void main() {
     const uint base = resolve_key * VIS_KEY_STRIDE;
-    if (gl_GlobalInvocationID.x >= key_data[base + VIS_KEY_COUNT]) return;
-    const uint pixel_bits = vis_pixels[key_data[base + VIS_KEY_OFFSET] + gl_GlobalInvocationID.x];
-    const ivec2 pixel = ivec2(pixel_bits & 0xFFFFu, pixel_bits >> 16u);
+    const uint index = gl_WorkGroupID.y * uint(VIS_DISPATCH_ROW) + gl_WorkGroupID.x;
+    if (index >= key_data[base + VIS_KEY_COUNT]) return;
+    const uint tile = vis_tiles[key_data[base + VIS_KEY_OFFSET] + index];
+    const ivec2 pixel = ivec2(tile & 0xFFFFu, tile >> 16u) * VIS_TILE + ivec2(gl_LocalInvocationID.xy);
+    if (any(greaterThanEqual(pixel, textureSize(visibility, 0)))) return;
     const uvec4 vis = texelFetch(visibility, pixel, 0);
+    if (vis.z != resolve_key + 1u) return;  /* another key's pixel of a shared tile, or none */
     const uint instance = vis.x, triangle = vis.y;
     const GpuInstance inst = instances[instance];
 

@@ -10,7 +10,11 @@
  * EMISSION_BAKE (node materials whose emission varies, emitter_module.h):
  * the radiance the surface emits towards a light sample, drawn into each
  * emitting triangle's tile of the bake target (geometry_vert.glsl).
- * GBUFFER_RESOLVE (visibility_stage.h): not a fragment shader at all, but
+ * VISIBILITY_PASS (visibility_module.h, for the surfaces whose coverage is
+ * stochastic: a partly transparent constant material, a node material that
+ * drives alpha): the visibility buffer's ids where the surface is kept, the
+ * G-buffer's values left unwritten (gbuffer_resolve_comp.glsl makes them).
+ * GBUFFER_RESOLVE (visibility_module.h): not a fragment shader at all, but
  * this file included by gbuffer_resolve_comp.glsl, which computes what the
  * varyings, the fragment's position and facing and their screen
  * derivatives would be (from the visibility buffer's triangle and the
@@ -28,7 +32,14 @@ bool g_front_facing;
 #else
 #define VARYING in
 #define FLAT_VARYING flat in
+#ifdef VISIBILITY_PASS
+/* The G-buffer's values stay in globals: this pass writes ids only. */
+#define GBUF_OUT(slot)
+layout(location = 0) out uvec4 out_visibility;
+flat in uint v_slot_key;
+#else
 #define GBUF_OUT(slot) layout(location = slot) out
+#endif
 #define FRAG_COORD gl_FragCoord
 #define FRONT_FACING gl_FrontFacing
 #endif
@@ -390,6 +401,10 @@ void main() {
      * averaged), the stochastic pass the picked component's. */
     if (transparent_here(alpha_mode.x > 0.5 ? material_chain_alpha(v_material) : m.mix.w)) discard;
 #endif
+#ifdef VISIBILITY_PASS
+    out_visibility = uvec4(v_instance, v_triangle, v_slot_key + 1u, 0u);  /* as visibility_frag.glsl */
+    return;
+#endif
 #endif
 
     /* Geometric normal from the triangle's winding, in world space. Cycles
@@ -429,8 +444,13 @@ void main() {
     g_mix_u = fract(pixel_hash(uvec2(FRAG_COORD.xy)) + frame.sample_shift.z);
     Closure c;
     material_graph_eval(c);
-#if defined(MATERIAL_ALPHA) && !defined(FORWARD_PASS) && !defined(EMISSION_BAKE)
+#if defined(MATERIAL_ALPHA) && !defined(FORWARD_PASS) && !defined(EMISSION_BAKE) && !defined(GBUFFER_RESOLVE)
+    /* (The resolve's pixels were kept by the visibility pass's same test.) */
     if (transparent_here(clamp(finite_or(c.alpha, 1.0), 0.0, 1.0))) discard;
+#endif
+#ifdef VISIBILITY_PASS
+    out_visibility = uvec4(v_instance, v_triangle, v_slot_key + 1u, 0u);
+    return;
 #endif
 #ifdef EMISSION_BAKE
     /* What a light sample receives: the closure's emission weighted by its

@@ -36,7 +36,7 @@
 #define SSBO_MOTION_POSITIONS 26  /* ... a deforming mesh's previous, then next vertex positions */
 #define SSBO_RECEIVERS 27         /* shadow map sizing: sample 0's depth range and grid (receivers_comp.glsl) */
 #define SSBO_VIS_KEYS 28          /* visibility buffer: per slot key, its indirect dispatch, count, offset, cursor */
-#define SSBO_VIS_PIXELS 29        /* ... the covered pixels, grouped by key (visibility_classify_comp.glsl) */
+#define SSBO_VIS_TILES 29         /* ... the screen tiles where each key appears, grouped by key (visibility_classify_comp.glsl) */
 
 /* Textures sampled by compute passes (G-buffer inputs) */
 #define TEX_DEPTH 0
@@ -139,17 +139,19 @@
 #define OUT_UV 6
 #define OUT_GEOMETRY 7
 
-/* The visibility buffer's classification and resolve (visibility_stage.h):
+/* The visibility buffer's classification and resolve (visibility_module.h):
  * uints per slot key in SSBO_VIS_KEYS (a DispatchIndirectCommand, then the
- * key's pixel count, first index in SSBO_VIS_PIXELS, and fill cursor), the
- * resolve's workgroup, and its uniform naming the key it resolves. */
+ * key's tile count, first index in SSBO_VIS_TILES, and fill cursor), the
+ * tile (the resolve's workgroup: VIS_TILE^2 pixels), the workgroups per row
+ * of its dispatch, and its uniforms naming the key it resolves and the
+ * number of keys. */
 #define VIS_KEY_STRIDE 8
 #define VIS_KEY_COUNT 3
 #define VIS_KEY_OFFSET 4
 #define VIS_KEY_CURSOR 5
-#define VIS_CLASSIFY_SIZE 8
+#define VIS_TILE 8
 #define VIS_SCAN_SIZE 256
-#define VIS_RESOLVE_SIZE 64
+#define VIS_DISPATCH_ROW 32768
 #define LOC_VIS_KEY 40
 #define LOC_VIS_KEY_COUNT 41
 

@@ -1,15 +1,17 @@
-/* The visibility buffer's classification (visibility_stage.h): the covered
- * pixels grouped by slot key (one mesh batch's slot: its mesh and material),
- * so that the resolve runs one indirect dispatch per key over exactly its
- * pixels, with the mesh's buffers and the material's program bound.
- *   VIS_COUNT    each key's pixel count
+/* The visibility buffer's classification (visibility_stage.h): the screen's
+ * 8 x 8 tiles listed by slot key (one mesh batch's slot: its mesh and
+ * material), so that the resolve runs one indirect dispatch per key over
+ * exactly the tiles where it appears, with the mesh's buffers and the
+ * material's program bound; a tile two keys share is in both lists, and
+ * each dispatch resolves its own key's pixels there.
+ *   VIS_COUNT    each key's tile count
  *   VIS_SCAN     each key's first index (an exclusive prefix sum, one
  *                workgroup) and its indirect dispatch
- *   VIS_SCATTER  each pixel's index into its key's range
- * A workgroup first aggregates its 64 pixels' keys in shared memory (a small
- * open-addressing table), so a large surface costs one global atomic per
- * workgroup, not per pixel. The order within a key is not deterministic; the
- * resolve writes each pixel by itself, so the image is. */
+ *   VIS_SCATTER  each (tile, key) pair into its key's range
+ * The first pixel of each distinct key in a tile does one global atomic
+ * for it: a surface's interior costs one atomic per 64 pixels. Per-pixel atomics cost more than the
+ * raster on llvmpipe (about 35 ns each). The order of a key's tiles is not
+ * deterministic; each pixel is resolved by itself, so the image is. */
 #include "shader_defines.h"
 
 layout(std430, binding = SSBO_VIS_KEYS) coherent buffer VisKeys { uint key_data[]; };
@@ -37,8 +39,10 @@ void main() {
     uint offset = s_sums[t] - sum;
     for (uint k = first; k < last; ++k) {
         const uint base = k * VIS_KEY_STRIDE, n = key_data[base + VIS_KEY_COUNT];
-        key_data[base + 0u] = (n + uint(VIS_RESOLVE_SIZE) - 1u) / uint(VIS_RESOLVE_SIZE);
-        key_data[base + 1u] = 1u;
+        /* One workgroup per tile, rows of VIS_DISPATCH_ROW (a dimension's
+         * count may be as small as 65535: an 8K image has 518 400 tiles). */
+        key_data[base + 0u] = min(n, uint(VIS_DISPATCH_ROW));
+        key_data[base + 1u] = (n + uint(VIS_DISPATCH_ROW) - 1u) / uint(VIS_DISPATCH_ROW);
         key_data[base + 2u] = 1u;
         key_data[base + VIS_KEY_OFFSET] = offset;
         key_data[base + VIS_KEY_CURSOR] = 0u;
@@ -46,48 +50,35 @@ void main() {
     }
 }
 #else
-layout(local_size_x = VIS_CLASSIFY_SIZE, local_size_y = VIS_CLASSIFY_SIZE) in;
+layout(local_size_x = VIS_TILE, local_size_y = VIS_TILE) in;
 layout(binding = TEX_VISIBILITY) uniform usampler2D visibility;
 #ifdef VIS_SCATTER
-layout(std430, binding = SSBO_VIS_PIXELS) writeonly buffer VisPixels { uint vis_pixels[]; };
-shared uint s_base[VIS_CLASSIFY_SIZE * VIS_CLASSIFY_SIZE];
+layout(std430, binding = SSBO_VIS_TILES) writeonly buffer VisTiles { uint vis_tiles[]; };
 #endif
-#define TABLE_SIZE (VIS_CLASSIFY_SIZE * VIS_CLASSIFY_SIZE)
-shared uint s_keys[TABLE_SIZE];   /* key + 1, 0: empty */
-shared uint s_counts[TABLE_SIZE];
+shared uint s_keys[VIS_TILE * VIS_TILE]; /* key + 1, 0: none */
 
 void main() {
     const uint t = gl_LocalInvocationIndex;
-    s_keys[t] = 0u;
-    s_counts[t] = 0u;
-    barrier();
     const ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
     const ivec2 size = textureSize(visibility, 0);
     uint key = 0u;
     if (all(lessThan(pixel, size))) key = texelFetch(visibility, pixel, 0).z;
-    if (key > key_count) key = 0u;  /* never written by the raster; a guard only */
-    uint slot = 0u, local = 0u;
-    if (key != 0u) {
-        /* At most 64 distinct keys in 64 slots: the probe always ends. */
-        slot = key % uint(TABLE_SIZE);
-        for (int i = 0; i < TABLE_SIZE; ++i) {
-            const uint previous = atomicCompSwap(s_keys[slot], 0u, key);
-            if (previous == 0u || previous == key) break;
-            slot = (slot + 1u) % uint(TABLE_SIZE);
-        }
-        local = atomicAdd(s_counts[slot], 1u);
-    }
+    s_keys[t] = key <= key_count ? key : 0u; /* larger: never written by the raster; a guard only */
     barrier();
+    /* The first pixel of each distinct key in the tile leads it: one global
+     * atomic per (tile, key). Most tiles see one key, so most pixels stop
+     * at the first comparison. (Without shared memory, each pixel fetching
+     * the others' keys, llvmpipe took 60 ms more at 1080p.) */
+    if (key == 0u || key > key_count) return;
+    if (t != 0u && key == s_keys[0]) return;
+    for (uint u = 1u; u < t; ++u)
+        if (s_keys[u] == key) return;
+    const uint base = (key - 1u) * VIS_KEY_STRIDE;
 #ifdef VIS_COUNT
-    if (s_keys[t] != 0u) atomicAdd(key_data[(s_keys[t] - 1u) * VIS_KEY_STRIDE + VIS_KEY_COUNT], s_counts[t]);
+    atomicAdd(key_data[base + VIS_KEY_COUNT], 1u);
 #else
-    if (s_keys[t] != 0u)
-        s_base[t] = atomicAdd(key_data[(s_keys[t] - 1u) * VIS_KEY_STRIDE + VIS_KEY_CURSOR], s_counts[t]);
-    barrier();
-    if (key != 0u) {
-        const uint base = (key - 1u) * VIS_KEY_STRIDE;
-        vis_pixels[key_data[base + VIS_KEY_OFFSET] + s_base[slot] + local] = uint(pixel.x) | (uint(pixel.y) << 16u);
-    }
+    const uint at = key_data[base + VIS_KEY_OFFSET] + atomicAdd(key_data[base + VIS_KEY_CURSOR], 1u);
+    vis_tiles[at] = gl_WorkGroupID.x | (gl_WorkGroupID.y << 16u);
 #endif
 }
 #endif

@@ -778,13 +778,13 @@ void Renderer::Impl::prepare_programs(Frame& f) {
 
     // The visibility buffer: every program it resolves with, compiled now.
     if (settings.visibility_buffer) {
-        const std::string why_not =
-            VisibilityBuffer::unsupported(f.geometry.stochastic_alpha(), settings.width, settings.height);
+        const std::string why_not = VisibilityBuffer::unsupported(settings.width, settings.height);
         if (why_not.empty()) {
-            std::vector<std::pair<std::uint32_t, std::uint32_t>> graphs;
+            std::vector<VisibilityBuffer::GraphMaterial> graphs;
             for (auto& [id, program] : f.geometry.graph_programs())
-                if (!f.geometry.is_forward(id)) graphs.emplace_back(id, std::uint32_t(scene.materials()[id].graph));
-            visibility.prepare(*shaders, materials, base, graphs);
+                if (!f.geometry.is_forward(id))
+                    graphs.push_back({id, std::uint32_t(scene.materials()[id].graph), f.geometry.is_alpha_graph(id)});
+            visibility.prepare(*shaders, materials, base, graphs, f.scene_alpha);
             visibility.ensure(settings.width, settings.height, f.scene.slot_count(), gbuffer.depth_texture());
             result.timings.gbuffer_bytes += visibility.bytes();
             f.visibility = true;
@@ -812,6 +812,7 @@ void Renderer::Impl::prepare_programs(Frame& f) {
     f.passes.prepare(*shaders, base, f.film, world_module, f.geometry.stochastic_alpha(), settings.width,
                      settings.height);
     f.geometry.set_alpha_mode(false, settings.alpha_threshold);
+    if (f.visibility) visibility.set_alpha_mode(false, settings.alpha_threshold);
     // The caster programs of node materials that drive alpha.
     if (f.geometry.alpha_graphs() && !shadows.empty()) {
         f.geometry.prepare_casters(*shaders, materials, f.scene, false, result.warnings);
@@ -921,12 +922,14 @@ void Renderer::Impl::render_sample(Frame& f, int sample) {
     // The data passes' own G-buffer (Alpha Threshold coverage).
     if (f.passes.data_gbuffer() && (sample == 0 || f.passes.data_every_sample())) {
         f.geometry.set_alpha_mode(true, settings.alpha_threshold);
+        if (f.visibility) visibility.set_alpha_mode(true, settings.alpha_threshold);
         draw_gbuffer();
         draw_motion();
         glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
         gpu_timer.lap(f.geometry_ms);
         f.passes.run(sample, true, gbuffer);
         f.geometry.set_alpha_mode(false, settings.alpha_threshold);
+        if (f.visibility) visibility.set_alpha_mode(false, settings.alpha_threshold);
         gpu_timer.lap(f.passes_ms);
     }
 

@@ -11,20 +11,30 @@
 
 namespace deferred {
 
-std::string VisibilityBuffer::unsupported(bool stochastic_alpha, int width, int height) {
-    if (stochastic_alpha)
-        return "the scene has partly transparent materials, whose stochastic coverage is decided in the raster "
-               "pipeline";
-    // The classification packs a pixel's x and y into 16 bits each.
-    if (width > 65535 || height > 65535) return "the image is wider or taller than 65535 pixels";
+std::string VisibilityBuffer::unsupported(int width, int height) {
+    // The classification packs a tile's x and y into 16 bits each.
+    if (width > 65535 * VIS_TILE || height > 65535 * VIS_TILE) return "the image is too large";
     return {};
 }
 
 void VisibilityBuffer::prepare(ShaderLibrary& shaders, MaterialModule& materials, const ShaderVariant& base,
-                               const std::vector<std::pair<std::uint32_t, std::uint32_t>>& graphs) {
+                               const std::vector<GraphMaterial>& graphs, bool scene_alpha) {
     ShaderVariant raster;
     raster.defines.push_back("VISIBILITY_PASS");
-    raster_ = shaders.graphics_program("geometry_vert.glsl", "visibility_frag.glsl", raster);
+    // The node materials' programs compile on the driver's threads together.
+    for (const GraphMaterial& g : graphs) {
+        if (g.alpha) materials.prefetch(shaders, g.graph, raster);
+        materials.prefetch_resolve(shaders, g.graph, base);
+    }
+    scene_alpha_ = scene_alpha;
+    if (scene_alpha) {
+        // The constant materials' alpha test (pick_material, transparent_here).
+        ShaderVariant alpha = raster;
+        alpha.defines.push_back("SCENE_ALPHA");
+        raster_ = shaders.graphics_program("geometry_vert.glsl", "geometry_frag.glsl", alpha);
+    } else {
+        raster_ = shaders.graphics_program("geometry_vert.glsl", "visibility_frag.glsl", raster);
+    }
     ShaderVariant v;
     v.defines = {"VIS_COUNT"};
     count_ = shaders.compute_program("visibility_classify_comp.glsl", v);
@@ -32,16 +42,22 @@ void VisibilityBuffer::prepare(ShaderLibrary& shaders, MaterialModule& materials
     scan_ = shaders.compute_program("visibility_classify_comp.glsl", v);
     v.defines = {"VIS_SCATTER"};
     scatter_ = shaders.compute_program("visibility_classify_comp.glsl", v);
-    // The node materials' resolves compile on the driver's threads together.
-    for (auto& [id, graph] : graphs) materials.prefetch_resolve(shaders, graph, base);
     resolve_ = shaders.compute_program("gbuffer_resolve_comp.glsl", base);
     graph_resolves_.clear();
+    graph_rasters_.clear();
     graph_of_.clear();
-    for (auto& [id, graph] : graphs) {
-        graph_resolves_.emplace_back(id, materials.resolve_program(shaders, graph, base));
-        if (graph_of_.size() <= id) graph_of_.resize(std::size_t(id) + 1, ~0u);
-        graph_of_[id] = graph;
+    for (const GraphMaterial& g : graphs) {
+        graph_resolves_.emplace_back(g.id, materials.resolve_program(shaders, g.graph, base));
+        if (g.alpha) graph_rasters_.emplace_back(g.id, materials.program(shaders, g.graph, raster));
+        if (graph_of_.size() <= g.id) graph_of_.resize(std::size_t(g.id) + 1, ~0u);
+        graph_of_[g.id] = g.graph;
     }
+}
+
+void VisibilityBuffer::set_alpha_mode(bool data, float threshold) const {
+    const float mode = data ? 1.0f : 0.0f;
+    if (scene_alpha_) glProgramUniform2f(raster_, 22, mode, threshold);
+    for (auto& [id, program] : graph_rasters_) glProgramUniform2f(program, 22, mode, threshold);
 }
 
 void VisibilityBuffer::ensure(int width, int height, std::size_t slot_count, GLuint depth) {
@@ -53,8 +69,8 @@ void VisibilityBuffer::ensure(int width, int height, std::size_t slot_count, GLu
         fbo_ = Framebuffer(fbo);
         glNamedFramebufferTexture(fbo, GL_COLOR_ATTACHMENT0, ids_.get(), 0);
         glNamedFramebufferDrawBuffer(fbo, GL_COLOR_ATTACHMENT0);
-        pixels_ = make_storage_buffer(nullptr, std::size_t(width) * std::size_t(height) * sizeof(std::uint32_t),
-                                      "visibility buffer pixels");
+        tiles_x_ = (width + VIS_TILE - 1) / VIS_TILE;
+        tiles_y_ = (height + VIS_TILE - 1) / VIS_TILE;
         width_ = width;
         height_ = height;
     }
@@ -69,16 +85,29 @@ void VisibilityBuffer::ensure(int width, int height, std::size_t slot_count, GLu
                                     "visibility buffer keys");
         slot_capacity_ = slot_count;
     }
-    bytes_ = std::size_t(width_) * std::size_t(height_) * kBytesPerPixel +
-             slot_capacity_ * VIS_KEY_STRIDE * sizeof(std::uint32_t);
+    // Each (tile, key) pair has a pixel of its own: at most one per pixel,
+    // and at most every key in every tile.
+    const std::size_t pixels = std::size_t(width_) * std::size_t(height_);
+    const std::size_t pairs = std::min(pixels, std::size_t(tiles_x_) * std::size_t(tiles_y_) * slot_capacity_);
+    if (pairs > tile_capacity_) {
+        tiles_ = make_storage_buffer(nullptr, pairs * sizeof(std::uint32_t), "visibility buffer tiles");
+        tile_capacity_ = pairs;
+    }
+    bytes_ = pixels * 16 + tile_capacity_ * sizeof(std::uint32_t) + slot_capacity_ * VIS_KEY_STRIDE * sizeof(std::uint32_t);
     check_gl("allocating the visibility buffer");
 }
 
-GLuint VisibilityBuffer::program_for(std::uint32_t material) const {
+GLuint VisibilityBuffer::resolve_for(std::uint32_t material) const {
     if (material < graph_of_.size() && graph_of_[material] != ~0u)
         for (auto& [id, program] : graph_resolves_)
             if (id == material) return program;
     return resolve_;
+}
+
+GLuint VisibilityBuffer::raster_for(std::uint32_t material) const {
+    for (auto& [id, program] : graph_rasters_)
+        if (id == material) return program;
+    return 0;
 }
 
 void VisibilityBuffer::draw(const FrameScene& scene, const MaterialModule& materials, const GBuffer& gbuffer,
@@ -96,23 +125,42 @@ void VisibilityBuffer::draw(const FrameScene& scene, const MaterialModule& mater
     glUseProgram(raster_);
     for (const FrameScene::Culled& c : scene.visible()) {
         const GpuMesh& mesh = scene.mesh(*c.draw);
-        if (!any_skipped) {
+        if (!any_skipped && graph_rasters_.empty()) {
             scene.draw_range(c, 0, mesh.triangle_count);
             continue;
         }
-        for (std::size_t s = 0; s < mesh.slot_ranges.size(); ++s)
-            if (!skipped(scene.slot_material(*c.draw, s)))
+        for (std::size_t s = 0; s < mesh.slot_ranges.size(); ++s) {
+            const std::uint32_t id = scene.slot_material(*c.draw, s);
+            if (!skipped(id) && raster_for(id) == 0)
                 scene.draw_range(c, mesh.slot_ranges[s].first, mesh.slot_ranges[s].second);
+        }
+    }
+    // Node materials that drive alpha: each with its own program (the graph
+    // evaluated for its alpha test), as GeometryStage::draw_material.
+    if (!graph_rasters_.empty()) materials.bind_constants();
+    for (auto& [material, program] : graph_rasters_) {
+        if (skipped(material)) continue;
+        bool bound = false;
+        for (const FrameScene::Culled& c : scene.visible()) {
+            const GpuMesh& mesh = scene.mesh(*c.draw);
+            for (std::size_t s = 0; s < mesh.slot_ranges.size(); ++s) {
+                if (scene.slot_material(*c.draw, s) != material || mesh.slot_ranges[s].second == 0) continue;
+                if (!bound) glUseProgram(program);
+                bound = true;
+                materials.bind_for_draw(graph_of_[material], mesh);
+                scene.bind_attributes(mesh);
+                scene.draw_range(c, mesh.slot_ranges[s].first, mesh.slot_ranges[s].second);
+            }
+        }
     }
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
 
-    // Classify: the covered pixels grouped by key.
+    // Classify: the tiles listed by the keys they see.
     glClearNamedBufferData(keys_.get(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, nullptr);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_VIS_KEYS, keys_.get());
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_VIS_PIXELS, pixels_.get());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_VIS_TILES, tiles_.get());
     glBindTextureUnit(TEX_VISIBILITY, ids_.get());
-    const GLuint groups_x = GLuint((width_ + VIS_CLASSIFY_SIZE - 1) / VIS_CLASSIFY_SIZE);
-    const GLuint groups_y = GLuint((height_ + VIS_CLASSIFY_SIZE - 1) / VIS_CLASSIFY_SIZE);
+    const GLuint groups_x = GLuint(tiles_x_), groups_y = GLuint(tiles_y_);
     glUseProgram(count_);
     glUniform1ui(LOC_VIS_KEY_COUNT, key_count);
     glDispatchCompute(groups_x, groups_y, 1);
@@ -126,7 +174,7 @@ void VisibilityBuffer::draw(const FrameScene& scene, const MaterialModule& mater
     glDispatchCompute(groups_x, groups_y, 1);
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
 
-    // Resolve: one indirect dispatch per key drawn, over its pixels.
+    // Resolve: one indirect dispatch per key drawn, over its tiles.
     gbuffer.bind_images();
     materials.bind_constants();
     glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, keys_.get());
@@ -141,7 +189,7 @@ void VisibilityBuffer::draw(const FrameScene& scene, const MaterialModule& mater
             const std::uint32_t key = d.slot_offset + std::uint32_t(std::min<std::size_t>(s, std::max(d.slot_count, 1u) - 1));
             if (skipped(id) || key >= key_count || done[key]) continue;
             done[key] = true;
-            const GLuint program = program_for(id);
+            const GLuint program = resolve_for(id);
             glUseProgram(program);
             scene.bind_mesh(mesh);
             scene.bind_attributes(mesh);

@@ -11,22 +11,25 @@
 //   raster     depth + (instance, triangle, slot key + 1) per pixel, one
 //              program for every material (geometry_vert.glsl VISIBILITY_PASS,
 //              visibility_frag.glsl)
-//   classify   the covered pixels grouped by slot key (a mesh batch's
-//              material slot: one mesh, one material): counts, an exclusive
-//              scan with each key's indirect dispatch, a scatter
-//              (visibility_classify_comp.glsl)
+//   classify   the 8 x 8 tiles listed by the slot keys they see (a key: a
+//              mesh batch's material slot, one mesh and one material):
+//              counts, an exclusive scan with each key's indirect dispatch,
+//              a scatter (visibility_classify_comp.glsl); one atomic per
+//              tile and key, not per pixel
 //   resolve    per key, one indirect dispatch with the mesh's buffers and the
-//              material's program: geometry_frag.glsl's own surface code in
-//              compute (gbuffer_resolve_comp.glsl), into the G-buffer's images
+//              material's program, a workgroup per tile: geometry_frag.glsl's
+//              own surface code in compute (gbuffer_resolve_comp.glsl) for
+//              the tile's pixels of that key, into the G-buffer's images
 //
 // The G-buffer it writes is the raster path's up to floating-point rounding
 // (interpolation from the pixel's ray rather than the rasteriser's plane
 // equations; exact screen derivatives rather than a quad's differences):
 // tests/native/test_visibility.cpp holds the two paths against each other.
-// Stochastic transparency (a partly transparent constant material, a node
-// material that drives alpha) needs the material in the raster, where the
-// fragment is discarded: such frames take the raster path, said in a
-// warning when the setting asked for this one.
+// Stochastic transparency needs the material's alpha where the fragment is
+// discarded: a partly transparent constant material's and every node
+// material that drives alpha are drawn into the visibility buffer by their
+// own programs (geometry_frag.glsl VISIBILITY_PASS: the alpha test, then the
+// ids), the others by one program for all.
 #pragma once
 
 #include "gbuffer.h"
@@ -44,18 +47,28 @@ class MaterialModule;
 
 class VisibilityBuffer {
 public:
-    // Bytes per pixel it adds to a frame (the ids target and the pixel list).
+    // Bytes per pixel it adds to a frame at most (the ids target, and the
+    // tile list: at most one (tile, key) pair per pixel).
     static constexpr std::size_t kBytesPerPixel = 16 + 4;
 
     // Why a frame cannot take this path ("" if it can).
-    static std::string unsupported(bool stochastic_alpha, int width, int height);
+    static std::string unsupported(int width, int height);
 
-    // The raster, classification and constant-material resolve programs, and
-    // each node material's resolve program (`graphs`: material id -> graph,
-    // for the materials drawn with their graph; the others resolve as
-    // constant materials). Throws Error if one does not compile.
+    // A node material drawn with its graph: its id and graph, and whether
+    // the graph drives alpha (its own raster program).
+    struct GraphMaterial {
+        std::uint32_t id, graph;
+        bool alpha;
+    };
+    // The raster programs (SCENE_ALPHA: a constant material is partly
+    // transparent), the classification's, the constant-material resolve and
+    // each node material's (`graphs`; the materials not listed resolve as
+    // constant ones). Throws Error if one does not compile.
     void prepare(ShaderLibrary& shaders, MaterialModule& materials, const ShaderVariant& base,
-                 const std::vector<std::pair<std::uint32_t, std::uint32_t>>& graphs);
+                 const std::vector<GraphMaterial>& graphs, bool scene_alpha);
+    // Stochastic coverage (false) or the Alpha Threshold's (true, the data
+    // G-buffer), as GeometryStage::set_alpha_mode.
+    void set_alpha_mode(bool data, float threshold) const;
     // The targets for a frame (reallocated only when the size or the slot
     // table grows); `depth` is the G-buffer's depth texture.
     void ensure(int width, int height, std::size_t slot_count, GLuint depth);
@@ -69,16 +82,20 @@ public:
               const std::vector<bool>& skip) const;
 
 private:
-    GLuint program_for(std::uint32_t material) const;
+    GLuint resolve_for(std::uint32_t material) const;
+    GLuint raster_for(std::uint32_t material) const;  // 0: the shared raster program
 
     GLuint raster_ = 0, count_ = 0, scan_ = 0, scatter_ = 0, resolve_ = 0;
-    std::vector<std::pair<std::uint32_t, GLuint>> graph_resolves_;  // material id -> program
-    std::vector<std::uint32_t> graph_of_;                            // material id -> graph, or ~0u
+    bool scene_alpha_ = false;
+    std::vector<std::pair<std::uint32_t, GLuint>> graph_resolves_, graph_rasters_;  // material id -> program
+    std::vector<std::uint32_t> graph_of_;                                            // material id -> graph, or ~0u
     int width_ = 0, height_ = 0;
     std::size_t slot_capacity_ = 0, bytes_ = 0;
     Texture ids_;
     Framebuffer fbo_;
-    Buffer keys_, pixels_;
+    int tiles_x_ = 0, tiles_y_ = 0;
+    std::size_t tile_capacity_ = 0;
+    Buffer keys_, tiles_;
 };
 
 }  // namespace deferred

@@ -56,8 +56,7 @@ class DeferredRenderSettings(bpy.types.PropertyGroup):
         description=(
             "The raster pipeline only finds which triangle each pixel sees; materials are evaluated "
             "and the G-buffer written by compute shaders, which data-centre GPUs run far faster "
-            "than fragment shading. The same image. Scenes with partly transparent materials use "
-            "the raster path (a warning says so)"
+            "than fragment shading. The same image"
         ),
         default=False,
     )

@@ -87,9 +87,9 @@ struct RenderSettings {
     // The visibility buffer (visibility_module.h): the raster pipeline
     // decides only which triangle each pixel sees, and the G-buffer is
     // written in compute (the materials evaluated there), which data-centre
-    // GPUs run far faster than fragment shading. The image is the raster
-    // path's up to rounding. A frame with stochastic transparency (partly
-    // transparent materials) takes the raster path, warned.
+    // GPUs run far faster than fragment shading (materials that drive
+    // alpha are still tested in the raster, by their own programs). The
+    // image is the raster path's up to rounding.
     bool visibility_buffer = false;
     // Light culling (tiled, 2.5D depth masks). Blender's lights reach to
     // infinity; a light is cut off where even a white Lambertian surface

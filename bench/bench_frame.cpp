@@ -67,6 +67,7 @@ int main(int argc, char** argv) {
             PassSet passes;
             bool rays = false;  // shadow rays instead of maps
             bool splat = true;  // the film's filter splatting (film.h)
+            bool visibility = false;  // the G-buffer from the visibility buffer (visibility_module.h)
         };
         struct Split {  // one frame of a case: its timings, wall and CPU time
             const char* label;
@@ -93,6 +94,7 @@ int main(int argc, char** argv) {
                 s.passes = c.passes;
                 s.shadow_rays = c.rays;
                 s.filter_splat = c.splat;
+                s.visibility_buffer = c.visibility;
                 auto timed = [&] {
                     Split x{c.label, {}, 0, 0};
                     const double cpu0 = deferred::bench::process_cpu_ms();
@@ -160,7 +162,10 @@ int main(int argc, char** argv) {
         if (blocks.find("maps") != std::string::npos)
             // The film's splat beside each pixel's own samples: its cost per
             // sample with one splatted image (Combined) and with ten (16 passes).
+            // The visibility buffer's G-buffer (in compute) beside the raster's.
             run_cases("shadow maps", {Case{"64 samples, Combined read back", 64, PassSet{Pass::Combined}},
+                                      Case{"64 samples, Combined, visibility buffer", 64, PassSet{Pass::Combined},
+                                           false, true, true},
                                       Case{"64 samples, Combined, no filter splatting", 64, PassSet{Pass::Combined},
                                            false, false},
                                       Case{"1 sample, 16 passes (Combined..AO) read back", 1, sixteen},

@@ -328,9 +328,10 @@ public:
         s.light_culling = chance(0.7);
         const float thresholds[] = {0.0f, 1e-6f, 1e-3f, 0.1f, 10.0f};
         s.light_threshold = thresholds[pick(5)];
+        s.visibility_buffer = chance(0.3);  // the G-buffer in compute (visibility_module.h)
         log << " settings(" << s.width << "x" << s.height << " spp " << s.samples << " passes " << s.passes.bits()
             << " shadows " << s.shadows << "/" << s.shadow_resolution << " culling " << s.light_culling << "/"
-            << s.light_threshold << ")";
+            << s.light_threshold << " visibility buffer " << s.visibility_buffer << ")";
         return s;
     }
 };

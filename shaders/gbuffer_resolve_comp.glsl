@@ -115,8 +115,11 @@ void main() {
     /* Facing as the rasteriser saw it: counter-clockwise in the window is
      * front (glFrontFace's default). */
     {
-        mat4 vp = frame.projection * frame.view;
-        vec4 c0 = vp * vec4(world[0], 1.0), c1 = vp * vec4(world[1], 1.0), c2 = vp * vec4(world[2], 1.0);
+        /* In the vertex stage's order of operations, so a near-degenerate
+         * triangle's sign is the one the rasteriser saw. */
+        vec4 c0 = frame.projection * (frame.view * vec4(world[0], 1.0));
+        vec4 c1 = frame.projection * (frame.view * vec4(world[1], 1.0));
+        vec4 c2 = frame.projection * (frame.view * vec4(world[2], 1.0));
         g_front_facing = determinant(mat3(c0.xyw, c1.xyw, c2.xyw)) > 0.0;
     }
     const vec2 frag = vec2(pixel) + 0.5;

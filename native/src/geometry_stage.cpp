@@ -8,7 +8,8 @@
 namespace deferred {
 
 void GeometryStage::prepare(ShaderLibrary& shaders, MaterialModule& materials, const FrameScene& scene,
-                            const ShaderVariant& base, bool scene_alpha, std::vector<std::string>& warnings) {
+                            const ShaderVariant& base, bool scene_alpha, std::vector<std::string>& warnings,
+                            bool graph_programs) {
     *this = GeometryStage();
     materials_ = &materials;
     scene_alpha_ = scene_alpha;
@@ -22,12 +23,19 @@ void GeometryStage::prepare(ShaderLibrary& shaders, MaterialModule& materials, c
     // Every graph's compile started first, then each waited for: with the
     // driver's compiler threads (ShaderLibrary::prefetch_graphics) a scene's
     // node materials compile in parallel.
-    for (std::uint32_t id = 0; id < scene.material_count(); ++id)
-        if (scene.scene_material(id).graph >= 0)
-            materials.prefetch(shaders, std::uint32_t(scene.scene_material(id).graph), base);
+    if (graph_programs)
+        for (std::uint32_t id = 0; id < scene.material_count(); ++id)
+            if (scene.scene_material(id).graph >= 0)
+                materials.prefetch(shaders, std::uint32_t(scene.scene_material(id).graph), base);
     for (std::uint32_t id = 0; id < scene.material_count(); ++id) {
         const Material& m = scene.scene_material(id);
         if (m.graph < 0) continue;
+        if (!graph_programs) {
+            graph_programs_.emplace_back(id, 0);
+            alpha_[id] = materials.alpha(std::uint32_t(m.graph));
+            if (alpha_[id]) alpha_graphs_ = true;
+            continue;
+        }
         try {
             graph_programs_.emplace_back(id, materials.program(shaders, std::uint32_t(m.graph), base));
             alpha_[id] = materials.alpha(std::uint32_t(m.graph));
@@ -45,7 +53,7 @@ void GeometryStage::prepare(ShaderLibrary& shaders, MaterialModule& materials, c
 std::size_t GeometryStage::distinct_graph_programs() const {
     std::vector<GLuint> distinct;
     for (auto& [id, p] : graph_programs_)
-        if (std::find(distinct.begin(), distinct.end(), p) == distinct.end()) distinct.push_back(p);
+        if (p != 0 && std::find(distinct.begin(), distinct.end(), p) == distinct.end()) distinct.push_back(p);
     return distinct.size();
 }
 
@@ -124,7 +132,7 @@ void GeometryStage::set_alpha_mode(bool data, float threshold) const {
     const float mode = data ? 1.0f : 0.0f;
     if (scene_alpha_) glProgramUniform2f(geometry_, 22, mode, threshold);
     for (auto& [id, program] : graph_programs_)
-        if (is_alpha_graph(id)) glProgramUniform2f(program, 22, mode, threshold);
+        if (is_alpha_graph(id) && program != 0) glProgramUniform2f(program, 22, mode, threshold);
 }
 
 void GeometryStage::prepare_aovs(ShaderLibrary& shaders, MaterialModule& materials, const FrameScene& scene,

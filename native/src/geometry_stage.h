@@ -31,8 +31,12 @@ class GeometryStage {
 public:
     // The G-buffer program (SCENE_ALPHA when a constant material is partly
     // transparent) and every node material's program for `base`.
+    // `graph_programs` false (the visibility buffer resolves the G-buffer):
+    // the node materials' G-buffer programs are not compiled (their ids and
+    // alpha flags are still known; graph_programs() lists them with 0).
     void prepare(ShaderLibrary& shaders, MaterialModule& materials, const FrameScene& scene,
-                 const ShaderVariant& base, bool scene_alpha, std::vector<std::string>& warnings);
+                 const ShaderVariant& base, bool scene_alpha, std::vector<std::string>& warnings,
+                 bool graph_programs = true);
     // Materials drawn by the forward pass instead (forward_module.h): left
     // out of the G-buffer.
     void exclude(const std::vector<bool>& forward) { forward_ = forward; }

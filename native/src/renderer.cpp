@@ -738,7 +738,12 @@ void Renderer::Impl::prepare_programs(Frame& f) {
     for (const Material& m : scene.materials()) any_blend = any_blend || m.blend;
     if (!any_blend) LightingStage::prefetch(*shaders, base, lights, world_module, lighting);
 
-    f.geometry.prepare(*shaders, materials, f.scene, base, f.scene_alpha, result.warnings);
+    // With the visibility buffer the node materials' G-buffer programs are
+    // not compiled: their resolves (below) replace them.
+    std::string visibility_why_not;
+    if (settings.visibility_buffer) visibility_why_not = VisibilityBuffer::unsupported(settings.width, settings.height);
+    const bool want_visibility = settings.visibility_buffer && visibility_why_not.empty();
+    f.geometry.prepare(*shaders, materials, f.scene, base, f.scene_alpha, result.warnings, !want_visibility);
     result.timings.material_programs = f.geometry.distinct_graph_programs();
 
     // Blend-mode materials (Material::blend): drawn by the forward pass, not
@@ -777,22 +782,33 @@ void Renderer::Impl::prepare_programs(Frame& f) {
     }
 
     // The visibility buffer: every program it resolves with, compiled now.
-    if (settings.visibility_buffer) {
-        const std::string why_not = VisibilityBuffer::unsupported(settings.width, settings.height);
-        if (why_not.empty()) {
-            std::vector<VisibilityBuffer::GraphMaterial> graphs;
-            for (auto& [id, program] : f.geometry.graph_programs())
-                if (!f.geometry.is_forward(id))
-                    graphs.push_back({id, std::uint32_t(scene.materials()[id].graph), f.geometry.is_alpha_graph(id)});
-            visibility.prepare(*shaders, materials, base, graphs, f.scene_alpha);
+    if (want_visibility) {
+        std::vector<VisibilityBuffer::GraphMaterial> graphs;
+        for (auto& [id, program] : f.geometry.graph_programs())
+            if (!f.geometry.is_forward(id))
+                graphs.push_back({id, std::uint32_t(scene.materials()[id].graph), f.geometry.is_alpha_graph(id)});
+        try {
+            visibility.prepare(*shaders, materials, base, graphs, f.scene_alpha, result.warnings);
             visibility.ensure(settings.width, settings.height, f.scene.slot_count(), gbuffer.depth_texture());
             result.timings.gbuffer_bytes += visibility.bytes();
+            result.timings.material_programs = visibility.distinct_graph_programs();
             f.visibility = true;
-        } else {
-            result.warnings.push_back("The visibility buffer is not used for this frame (the G-buffer is drawn by "
-                                      "the raster pipeline, the same image): " + why_not);
+        } catch (const Error& e) {
+            // One of its own programs (not a material's) did not compile on
+            // this driver: the raster path, with the programs it needs.
+            visibility_why_not = std::string("its programs did not compile: ") + e.what();
+            const std::vector<bool> forward_materials = f.geometry.forward();
+            f.geometry.prepare(*shaders, materials, f.scene, base, f.scene_alpha, result.warnings);
+            f.geometry.exclude(forward_materials);
+            result.timings.material_programs = f.geometry.distinct_graph_programs();
         }
     }
+    if (settings.visibility_buffer && !f.visibility)
+        result.warnings.push_back("The visibility buffer is not used for this frame (the G-buffer is drawn by the "
+                                  "raster pipeline, the same image): " + visibility_why_not);
+    // Its targets are released when a frame does not use it (a viewport
+    // that turned it off keeps no 20 B per pixel).
+    if (!f.visibility) visibility = VisibilityBuffer();
     result.timings.visibility_buffer = f.visibility;
 
     lighting.forward_layer = forward.active();

@@ -18,7 +18,8 @@ std::string VisibilityBuffer::unsupported(int width, int height) {
 }
 
 void VisibilityBuffer::prepare(ShaderLibrary& shaders, MaterialModule& materials, const ShaderVariant& base,
-                               const std::vector<GraphMaterial>& graphs, bool scene_alpha) {
+                               const std::vector<GraphMaterial>& graphs, bool scene_alpha,
+                               std::vector<std::string>& warnings) {
     ShaderVariant raster;
     raster.defines.push_back("VISIBILITY_PASS");
     // The node materials' programs compile on the driver's threads together.
@@ -47,11 +48,30 @@ void VisibilityBuffer::prepare(ShaderLibrary& shaders, MaterialModule& materials
     graph_rasters_.clear();
     graph_of_.clear();
     for (const GraphMaterial& g : graphs) {
-        graph_resolves_.emplace_back(g.id, materials.resolve_program(shaders, g.graph, base));
-        if (g.alpha) graph_rasters_.emplace_back(g.id, materials.program(shaders, g.graph, raster));
+        GLuint resolve = 0, alpha_raster = 0;
+        try {
+            resolve = materials.resolve_program(shaders, g.graph, base);
+            if (g.alpha) alpha_raster = materials.program(shaders, g.graph, raster);
+        } catch (const Error& e) {
+            // Its GpuMaterial holds Material's defaults: the default surface,
+            // resolved and rasterised as a constant material.
+            const std::string& name = materials.name(g.graph);
+            warnings.push_back("Material '" + (name.empty() ? std::to_string(g.id) : name) +
+                               "': its node graph did not compile (default surface used): " + e.what());
+            continue;
+        }
+        graph_resolves_.emplace_back(g.id, resolve);
+        if (alpha_raster) graph_rasters_.emplace_back(g.id, alpha_raster);
         if (graph_of_.size() <= g.id) graph_of_.resize(std::size_t(g.id) + 1, ~0u);
         graph_of_[g.id] = g.graph;
     }
+}
+
+std::size_t VisibilityBuffer::distinct_graph_programs() const {
+    std::vector<GLuint> distinct;
+    for (auto& [id, p] : graph_resolves_)
+        if (std::find(distinct.begin(), distinct.end(), p) == distinct.end()) distinct.push_back(p);
+    return distinct.size();
 }
 
 void VisibilityBuffer::set_alpha_mode(bool data, float threshold) const {
@@ -200,7 +220,10 @@ void VisibilityBuffer::draw(const FrameScene& scene, const MaterialModule& mater
         }
     }
     glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, 0);
-    glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+    // Before the G-buffer is read, and before the next clears of it and of
+    // the key buffer (a framebuffer clear, a buffer clear).
+    glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_FRAMEBUFFER_BARRIER_BIT |
+                    GL_BUFFER_UPDATE_BARRIER_BIT);
     check_gl("visibility buffer");
 }
 

@@ -63,9 +63,13 @@ public:
     // The raster programs (SCENE_ALPHA: a constant material is partly
     // transparent), the classification's, the constant-material resolve and
     // each node material's (`graphs`; the materials not listed resolve as
-    // constant ones). Throws Error if one does not compile.
+    // constant ones). A node material whose programs do not compile takes
+    // the default surface, warned (as the raster path's); throws Error if
+    // one of the frame's own programs does not compile.
     void prepare(ShaderLibrary& shaders, MaterialModule& materials, const ShaderVariant& base,
-                 const std::vector<GraphMaterial>& graphs, bool scene_alpha);
+                 const std::vector<GraphMaterial>& graphs, bool scene_alpha, std::vector<std::string>& warnings);
+    // Distinct node-material resolve programs (FrameTimings::material_programs).
+    std::size_t distinct_graph_programs() const;
     // Stochastic coverage (false) or the Alpha Threshold's (true, the data
     // G-buffer), as GeometryStage::set_alpha_mode.
     void set_alpha_mode(bool data, float threshold) const;

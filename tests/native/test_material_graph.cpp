@@ -113,17 +113,24 @@ protected:
 TEST_F(MaterialGraphRender, GeneratedCoordinatesReachEmission) {
     set_world_color(r, 0, 0, 0);
     plane_with(r.add_graph_material(Material{}, emission_graph(shading_arg("generated"))));
-    FrameResult f = r.render(cam, small());
-    const PassImage& img = *f.find(Pass::Combined);
-    double worst = 0;
-    for (int y = 0; y < img.height; ++y)
-        for (int x = 0; x < img.width; ++x) {
-            // Pixel centre at P = (-1 + (x + 0.5) / 8, ...); texture space of the plane:
-            // location 0, size 1, so generated = (P + 1) / 2 (z = 0.5).
-            const glm::dvec3 want((x + 0.5) / img.width, (y + 0.5) / img.height, 0.5);
-            worst = std::max(worst, glm::length(pixel3(img, x, y) - want));
-        }
-    EXPECT_LT(worst, 1e-5);
+    // The graph in the fragment stage, and resolved in compute from the
+    // visibility buffer (visibility_module.h).
+    for (const bool visibility : {false, true}) {
+        RenderSettings s = small();
+        s.visibility_buffer = visibility;
+        FrameResult f = r.render(cam, s);
+        EXPECT_EQ(f.timings.visibility_buffer, visibility);
+        const PassImage& img = *f.find(Pass::Combined);
+        double worst = 0;
+        for (int y = 0; y < img.height; ++y)
+            for (int x = 0; x < img.width; ++x) {
+                // Pixel centre at P = (-1 + (x + 0.5) / 8, ...); texture space of the plane:
+                // location 0, size 1, so generated = (P + 1) / 2 (z = 0.5).
+                const glm::dvec3 want((x + 0.5) / img.width, (y + 0.5) / img.height, 0.5);
+                worst = std::max(worst, glm::length(pixel3(img, x, y) - want));
+            }
+        EXPECT_LT(worst, 1e-5) << (visibility ? "visibility buffer" : "raster");
+    }
 }
 
 TEST_F(MaterialGraphRender, ConstantPrincipledGraphEqualsTheConstantMaterial) {
@@ -274,12 +281,19 @@ TEST_F(MaterialGraphRender, AGraphThatDoesNotCompileFallsBackWithAWarning) {
     MaterialGraph g = constant_emission_graph(1, 1, 1);
     g.nodes[0].func = "node_not_in_the_library";
     plane_with(r.add_graph_material(Material{}, g));
-    FrameResult f;
-    ASSERT_NO_THROW(f = r.render(cam, small()));
-    ASSERT_EQ(f.warnings.size(), 1u);
-    EXPECT_NE(f.warnings[0].find("did not compile"), std::string::npos);
-    // The default surface emits nothing: black under a black world.
-    EXPECT_LT(glm::length(pixel3(*f.find(Pass::Combined), 8, 8)), 1e-6);
+    // Both G-buffer paths: the visibility buffer compiles the graph's
+    // resolve instead, and warns the same way.
+    for (const bool visibility : {false, true}) {
+        RenderSettings s = small();
+        s.visibility_buffer = visibility;
+        FrameResult f;
+        ASSERT_NO_THROW(f = r.render(cam, s));
+        EXPECT_EQ(f.timings.visibility_buffer, visibility);
+        ASSERT_EQ(f.warnings.size(), 1u);
+        EXPECT_NE(f.warnings[0].find("did not compile"), std::string::npos);
+        // The default surface emits nothing: black under a black world.
+        EXPECT_LT(glm::length(pixel3(*f.find(Pass::Combined), 8, 8)), 1e-6);
+    }
 }
 
 TEST_F(MaterialGraphRender, ImagesAreUploadedAsGivenAndRefusedWhenBroken) {
@@ -326,6 +340,10 @@ TEST_F(MaterialGraphRender, TransparencyCoversAsAlphaSays) {
     // Emission and a white Transparent BSDF at 0.75; MATERIAL_ALPHA) and as
     // a constant material of alpha 0.25 (SCENE_ALPHA). Per pixel, 256
     // Bernoulli(0.25) samples: the image mean's standard deviation is 0.0017.
+    // Both G-buffer paths (the visibility buffer tests alpha in its own
+    // raster programs, visibility_module.h).
+    for (const bool visibility : {false, true}) {
+    r.clear_scene();
     set_world_color(r, 0, 0, 0);
     MaterialGraph g;
     g.constants = {1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 0.75f};
@@ -342,6 +360,7 @@ TEST_F(MaterialGraphRender, TransparencyCoversAsAlphaSays) {
     RenderSettings s = small();
     s.samples = 256;
     s.filter_width = 0.01f;  // every sample inside the plane, which fills the frame
+    s.visibility_buffer = visibility;
     auto mean_of = [](const FrameResult& f) {
         const PassImage& img = *f.find(Pass::Combined);
         double sum = 0;
@@ -359,9 +378,11 @@ TEST_F(MaterialGraphRender, TransparencyCoversAsAlphaSays) {
     m.alpha = 0.25f;
     plane_with(r.add_material(m));
     const double constant_mean = mean_of(r.render(cam, s));
-    std::printf("coverage 0.25: node material %.4f, constant material %.4f\n", graph_mean, constant_mean);
+    std::printf("coverage 0.25 (%s): node material %.4f, constant material %.4f\n",
+                visibility ? "visibility buffer" : "raster", graph_mean, constant_mean);
     EXPECT_NEAR(graph_mean, 0.25, 0.006);
     EXPECT_NEAR(constant_mean, 0.25, 0.006);
+    }
 }
 
 TEST_F(MaterialGraphRender, KeyedImagesOutliveTheSceneThatUsesThem) {

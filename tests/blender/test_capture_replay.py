@@ -92,6 +92,23 @@ def main():
         combined = theirs["ViewLayer.Combined.R"]
         checks.check(float(combined.mean()) > 0.01, "and it is lit", f"mean R {combined.mean():.4f}")
 
+    # The same capture with the G-buffer from the visibility buffer (the
+    # benchmark's switch on a GPU server): taken, and the same image to
+    # rounding (materials.blend's node materials; tests/blender/
+    # test_visibility_buffer.py holds the two paths to their bounds).
+    code, stdout, stderr = replay(path, "--visibility-buffer", "on", "--json",
+                                  "--out", os.path.join(out, "replay_visibility.exr"))
+    checks.check(code == 0, "replay --visibility-buffer on exits 0", stderr.strip()[-300:])
+    if code == 0:
+        result = json.loads(stdout)
+        checks.check(result["visibility_buffer"] is True and result["runs"][-1]["visibility_buffer"] is True,
+                     "--visibility-buffer on takes the visibility buffer", str(result.get("visibility_buffer")))
+        raster = U.read_exr(os.path.join(out, "replay.exr"))["ViewLayer.Combined.R"].astype(np.float64)
+        vis = U.read_exr(os.path.join(out, "replay_visibility.exr"))["ViewLayer.Combined.R"].astype(np.float64)
+        diff = float(np.abs(raster - vis).mean())
+        checks.check(diff <= 2e-3 * max(float(raster.mean()), 1e-6), "the visibility buffer's replay is the same image",
+                     f"mean |difference| {diff:.3g} against a mean of {raster.mean():.3g}")
+
     # Overrides.
     code, stdout, stderr = replay(path, "--size", "80x44", "--samples", "2", "--passes", "Combined,Normal",
                                   "--repeat", "2", "--json", "--out", os.path.join(out, "small.npz"))

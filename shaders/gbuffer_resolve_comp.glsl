@@ -23,17 +23,10 @@
 
 layout(local_size_x = VIS_TILE, local_size_y = VIS_TILE) in;
 
-layout(std430, binding = SSBO_POSITIONS) readonly buffer Positions { float positions[]; };
-layout(std430, binding = SSBO_INDICES) readonly buffer Indices { uint indices[]; };
-layout(std430, binding = SSBO_NORMALS) readonly buffer Normals { float corner_normals[]; };
-layout(std430, binding = SSBO_UVS) readonly buffer Uvs { vec2 corner_uvs[]; };
+#include "mesh_lib.glsl"
 layout(std430, binding = SSBO_MATERIAL_SLOTS) readonly buffer Slots { uint material_slots[]; };
-layout(std430, binding = SSBO_MOTION_POSITIONS) readonly buffer MotionPositions { float motion_positions[]; };
 #ifndef MATERIAL_GRAPH
 layout(std430, binding = SSBO_INSTANCES) readonly buffer Instances { GpuInstance instances[]; };
-#else
-layout(std430, binding = SSBO_ATTRIBUTES) readonly buffer Attributes { float corner_attributes[]; };
-layout(location = 3) uniform ivec4 attribute_layout[8];
 #endif
 layout(std430, binding = SSBO_VIS_KEYS) readonly buffer VisKeys { uint key_data[]; };
 layout(std430, binding = SSBO_VIS_TILES) readonly buffer VisTiles { uint vis_tiles[]; };
@@ -59,20 +52,6 @@ layout(binding = OUT_UV, rg32f) writeonly uniform image2D img_uv;
 #ifdef GEOMETRY_OUT
 layout(binding = OUT_GEOMETRY, rgba32ui) writeonly uniform uimage2D img_geometry;
 #endif
-
-vec3 vertex_position(uint vi) {  /* object space, at this sample's shutter time (geometry_vert.glsl) */
-    vec3 p = vec3(positions[3u * vi], positions[3u * vi + 1u], positions[3u * vi + 2u]);
-    if ((mesh_flags & 8u) != 0u && frame.motion.w != 0.0) {
-        const float r = frame.motion.w;
-        const uint base = (r < 0.0 ? 0u : 1u) * (uint(motion_positions.length()) / 2u) + 3u * vi;
-        p = mix(p, vec3(motion_positions[base], motion_positions[base + 1u], motion_positions[base + 2u]), abs(r));
-    }
-    return p;
-}
-
-vec3 corner_normal(uint corner) {
-    return vec3(corner_normals[3u * corner], corner_normals[3u * corner + 1u], corner_normals[3u * corner + 2u]);
-}
 
 /* Camera-relative world point of window position `frag` (pixels) at depth d. */
 vec3 window_point(vec2 frag, float d) {
@@ -109,7 +88,7 @@ void main() {
     vec3 object_p[3], world[3];
     for (uint k = 0u; k < 3u; ++k) {
         vi[k] = indices[3u * triangle + k];
-        object_p[k] = vertex_position(vi[k]);
+        object_p[k] = mesh_position_at_shutter(vi[k], mesh_flags);
         world[k] = (inst.model * vec4(object_p[k], 1.0)).xyz;
     }
     /* Facing as the rasteriser saw it: counter-clockwise in the window is
@@ -140,7 +119,7 @@ void main() {
     v_normal = vec3(0.0);
     if ((mesh_flags & 1u) != 0u) {
         for (uint k = 0u; k < 3u; ++k) {
-            n[k] = corner_normal(c0 + k);
+            n[k] = mesh_corner_normal(c0 + k);
             vec3 world_n = mat3(inst.normal_matrix) * n[k];
 #ifdef MATERIAL_GRAPH
             world_n = normalize(world_n);  /* as geometry_vert.glsl, per vertex */
@@ -166,7 +145,7 @@ void main() {
     {
         /* The undeformed corners, as the vertex stage's true normal. */
         vec3 q[3];
-        for (uint k = 0u; k < 3u; ++k) q[k] = vec3(positions[3u * vi[k]], positions[3u * vi[k] + 1u], positions[3u * vi[k] + 2u]);
+        for (uint k = 0u; k < 3u; ++k) q[k] = mesh_position(vi[k]);
         v_true_normal = mat3(inst.normal_matrix) * cross(q[1] - q[0], q[2] - q[0]);
     }
     v_barycentric = b.xy;
@@ -177,16 +156,8 @@ void main() {
     for (int k = 0; k < 8; ++k) g_dattr_dx[k] = g_dattr_dy[k] = vec4(0.0);
 #if MATERIAL_ATTRIBUTE_COUNT > 0
     for (int k = 0; k < MATERIAL_ATTRIBUTE_COUNT; ++k) {
-        const ivec4 layout_k = attribute_layout[k];
-        vec4 a[3] = vec4[3](vec4(0.0), vec4(0.0), vec4(0.0));
-        if (layout_k.x >= 0) {
-            for (uint j = 0u; j < 3u; ++j) {
-                a[j] = vec4(0.0, 0.0, 0.0, 1.0);
-                const int at = layout_k.x + int(c0 + j) * layout_k.y;
-                for (int c = 0; c < layout_k.y; ++c) a[j][c] = corner_attributes[at + c];
-                if (layout_k.y == 1) a[j].xyz = vec3(a[j].x);
-            }
-        }
+        vec4 a[3];
+        for (uint j = 0u; j < 3u; ++j) a[j] = mesh_corner_attribute(k, c0 + j);
         v_attr[k] = b.x * a[0] + b.y * a[1] + b.z * a[2];
         g_dattr_dx[k] = db_dx.x * a[0] + db_dx.y * a[1] + db_dx.z * a[2];
         g_dattr_dy[k] = db_dy.x * a[0] + db_dy.y * a[1] + db_dy.z * a[2];
@@ -201,7 +172,7 @@ void main() {
     {
         /* geometry_vert.glsl's terminator terms, from the undeformed corners. */
         vec3 V[3];
-        for (uint k = 0u; k < 3u; ++k) V[k] = vec3(positions[3u * vi[k]], positions[3u * vi[k] + 1u], positions[3u * vi[k] + 2u]);
+        for (uint k = 0u; k < 3u; ++k) V[k] = mesh_position(vi[k]);
         v_term_a = vec3(dot(V[1] - V[0], n[0]), dot(V[2] - V[0], n[0]), dot(V[0] - V[1], n[1]));
         v_term_b = vec3(dot(V[2] - V[1], n[1]), dot(V[0] - V[2], n[2]), dot(V[1] - V[2], n[2]));
         v_term_dir = mat3(inst.model) * (b.x * n[0] + b.y * n[1] + b.z * n[2]);

@@ -5,10 +5,7 @@
  * material slot range when node materials are drawn. */
 #include "frame_lib.glsl"
 
-layout(std430, binding = SSBO_POSITIONS) readonly buffer Positions { float positions[]; };
-layout(std430, binding = SSBO_INDICES) readonly buffer Indices { uint indices[]; };
-layout(std430, binding = SSBO_NORMALS) readonly buffer Normals { float corner_normals[]; };
-layout(std430, binding = SSBO_UVS) readonly buffer Uvs { vec2 corner_uvs[]; };
+#include "mesh_lib.glsl"
 layout(std430, binding = SSBO_MATERIAL_INDICES) readonly buffer MaterialIndices { int material_indices[]; };
 layout(std430, binding = SSBO_INSTANCES) readonly buffer Instances { GpuInstance instances[]; };
 layout(std430, binding = SSBO_MATERIAL_SLOTS) readonly buffer Slots { uint material_slots[]; };
@@ -23,14 +20,6 @@ layout(std430, binding = SSBO_INSTANCE_REMAP) readonly buffer Remap { uint insta
 /* Shadow maps (shadow_frag.glsl): camera-relative world -> the face's clip space. */
 layout(location = 2) uniform mat4 shadow_view_projection;
 #endif
-/* A deforming mesh's previous then next vertex positions (mesh_flags 8;
- * object space): the Vector pass reads them, motion blur interpolates them
- * at the sample's shutter time (frame.motion.w). */
-layout(std430, binding = SSBO_MOTION_POSITIONS) readonly buffer MotionPositions { float motion_positions[]; };
-vec3 motion_position(uint vi, uint step) {  /* step 0 previous, 1 next */
-    const uint base = step * (uint(motion_positions.length()) / 2u) + 3u * vi;
-    return vec3(motion_positions[base], motion_positions[base + 1u], motion_positions[base + 2u]);
-}
 #ifdef MOTION_PASS
 /* The Vector pass (motion_module.h): each instance's previous and next model
  * matrix (camera-relative to this frame's camera). */
@@ -52,11 +41,7 @@ layout(location = 32) uniform ivec4 bake_layout;  /* tile size T, tiles per row,
 #endif
 
 #ifdef MATERIAL_GRAPH
-/* Node materials: the mesh's named per-corner attributes, one float array;
- * slot k of the material reads attribute_layout[k] = (offset in floats or -1
- * when the mesh lacks it, components). Values stay in object space. */
-layout(std430, binding = SSBO_ATTRIBUTES) readonly buffer Attributes { float corner_attributes[]; };
-layout(location = 3) uniform ivec4 attribute_layout[8];
+/* Node materials: the mesh's attribute slots (mesh_lib.glsl). */
 out vec3 v_object_position;
 out vec3 v_object_normal;
 flat out vec3 v_true_normal;  /* world, from the triangle's three vertices (Cycles' Ng) */
@@ -108,14 +93,10 @@ void main() {
     GpuInstance inst = instances[instance];
 
     const uint vi = indices[corner];
-    vec3 p = vec3(positions[3u * vi], positions[3u * vi + 1u], positions[3u * vi + 2u]);
-#ifndef MOTION_PASS
-    /* Motion blur: the vertices at this sample's shutter time, linear between
-     * the steps (Cycles' motion_triangle_verts_for_step). */
-    if ((mesh_flags & 8u) != 0u && frame.motion.w != 0.0) {
-        const float r = frame.motion.w;
-        p = mix(p, motion_position(vi, r < 0.0 ? 0u : 1u), abs(r));
-    }
+#ifdef MOTION_PASS
+    const vec3 p = mesh_position(vi);
+#else
+    const vec3 p = mesh_position_at_shutter(vi, mesh_flags);
 #endif
     vec4 world = inst.model * vec4(p, 1.0);
     v_position = world.xyz;
@@ -148,7 +129,7 @@ void main() {
     v_normal = vec3(0.0);
     vec3 n = vec3(0.0);
     if ((mesh_flags & 1u) != 0u) {
-        n = vec3(corner_normals[3u * corner], corner_normals[3u * corner + 1u], corner_normals[3u * corner + 2u]);
+        n = mesh_corner_normal(corner);
         v_normal = mat3(inst.normal_matrix) * n;
 #ifdef MATERIAL_GRAPH
         /* Cycles applies a single user's transform to the mesh and normalises
@@ -161,26 +142,14 @@ void main() {
 #ifdef MATERIAL_GRAPH
     {
         const uint t0 = indices[3u * triangle], t1 = indices[3u * triangle + 1u], t2 = indices[3u * triangle + 2u];
-        vec3 p0 = vec3(positions[3u * t0], positions[3u * t0 + 1u], positions[3u * t0 + 2u]);
-        vec3 p1 = vec3(positions[3u * t1], positions[3u * t1 + 1u], positions[3u * t1 + 2u]);
-        vec3 p2 = vec3(positions[3u * t2], positions[3u * t2 + 1u], positions[3u * t2 + 2u]);
+        const vec3 p0 = mesh_position(t0), p1 = mesh_position(t1), p2 = mesh_position(t2);
         v_true_normal = mat3(inst.normal_matrix) * cross(p1 - p0, p2 - p0);
     }
     v_barycentric = vec2(corner % 3u == 0u ? 1.0 : 0.0, corner % 3u == 1u ? 1.0 : 0.0);
     v_object_position = p;
     v_object_normal = n;
 #if MATERIAL_ATTRIBUTE_COUNT > 0
-    for (int k = 0; k < MATERIAL_ATTRIBUTE_COUNT; ++k) {
-        const ivec4 layout_k = attribute_layout[k];
-        vec4 a = vec4(0.0);
-        if (layout_k.x >= 0) {
-            a = vec4(0.0, 0.0, 0.0, 1.0);
-            const int base = layout_k.x + int(corner) * layout_k.y;
-            for (int c = 0; c < layout_k.y; ++c) a[c] = corner_attributes[base + c];
-            if (layout_k.y == 1) a.xyz = vec3(a.x);  /* a float attribute: every component */
-        }
-        v_attr[k] = a;
-    }
+    for (int k = 0; k < MATERIAL_ATTRIBUTE_COUNT; ++k) v_attr[k] = mesh_corner_attribute(k, corner);
 #endif
 #ifdef MATERIAL_FLAT_ATTRIBUTE
     v_attr_flat = v_attr[MATERIAL_FLAT_ATTRIBUTE];
@@ -192,10 +161,8 @@ void main() {
         vec3 V[3], Nc[3];
         for (uint k = 0u; k < 3u; ++k) {
             const uint ck = 3u * triangle + k, vk = indices[ck];
-            V[k] = vec3(positions[3u * vk], positions[3u * vk + 1u], positions[3u * vk + 2u]);
-            Nc[k] = (mesh_flags & 1u) != 0u
-                ? vec3(corner_normals[3u * ck], corner_normals[3u * ck + 1u], corner_normals[3u * ck + 2u])
-                : vec3(0.0);
+            V[k] = mesh_position(vk);
+            Nc[k] = (mesh_flags & 1u) != 0u ? mesh_corner_normal(ck) : vec3(0.0);
         }
         v_term_a = vec3(dot(V[1] - V[0], Nc[0]), dot(V[2] - V[0], Nc[0]), dot(V[0] - V[1], Nc[1]));
         v_term_b = vec3(dot(V[2] - V[1], Nc[1]), dot(V[0] - V[2], Nc[2]), dot(V[1] - V[2], Nc[2]));

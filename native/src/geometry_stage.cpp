@@ -58,6 +58,10 @@ std::size_t GeometryStage::distinct_graph_programs() const {
 }
 
 void GeometryStage::draw_material(const FrameScene& scene, std::uint32_t id, GLuint program) const {
+    draw_material_slots(scene, *materials_, id, program);
+}
+
+void draw_material_slots(const FrameScene& scene, const MaterialModule& materials, std::uint32_t id, GLuint program) {
     const std::uint32_t graph = std::uint32_t(scene.scene_material(id).graph);
     bool bound = false;
     for (const FrameScene::Culled& c : scene.visible()) {
@@ -66,7 +70,7 @@ void GeometryStage::draw_material(const FrameScene& scene, std::uint32_t id, GLu
             if (scene.slot_material(*c.draw, s) != id || mesh.slot_ranges[s].second == 0) continue;
             if (!bound) glUseProgram(program);
             bound = true;
-            materials_->bind_for_draw(graph, mesh);
+            materials.bind_for_draw(graph, mesh);
             scene.bind_attributes(mesh);
             scene.draw_range(c, mesh.slot_ranges[s].first, mesh.slot_ranges[s].second);
         }

@@ -27,6 +27,11 @@ namespace deferred {
 class AovModule;
 class MaterialModule;
 
+// Draws the slot ranges of the last cull's instances that use node material
+// `id`, with `program` and the graph's per-draw state (images, the mesh's
+// attribute slots): GeometryStage's programs and the visibility buffer's.
+void draw_material_slots(const FrameScene& scene, const MaterialModule& materials, std::uint32_t id, GLuint program);
+
 class GeometryStage {
 public:
     // The G-buffer program (SCENE_ALPHA when a constant material is partly

@@ -1,5 +1,6 @@
 #include "visibility_module.h"
 
+#include "geometry_stage.h"
 #include "material_module.h"
 #include "scene_store.h"
 
@@ -158,21 +159,8 @@ void VisibilityBuffer::draw(const FrameScene& scene, const MaterialModule& mater
     // Node materials that drive alpha: each with its own program (the graph
     // evaluated for its alpha test), as GeometryStage::draw_material.
     if (!graph_rasters_.empty()) materials.bind_constants();
-    for (auto& [material, program] : graph_rasters_) {
-        if (skipped(material)) continue;
-        bool bound = false;
-        for (const FrameScene::Culled& c : scene.visible()) {
-            const GpuMesh& mesh = scene.mesh(*c.draw);
-            for (std::size_t s = 0; s < mesh.slot_ranges.size(); ++s) {
-                if (scene.slot_material(*c.draw, s) != material || mesh.slot_ranges[s].second == 0) continue;
-                if (!bound) glUseProgram(program);
-                bound = true;
-                materials.bind_for_draw(graph_of_[material], mesh);
-                scene.bind_attributes(mesh);
-                scene.draw_range(c, mesh.slot_ranges[s].first, mesh.slot_ranges[s].second);
-            }
-        }
-    }
+    for (auto& [material, program] : graph_rasters_)
+        if (!skipped(material)) draw_material_slots(scene, materials, material, program);
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
 
     // Classify: the tiles listed by the keys they see.

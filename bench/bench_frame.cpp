@@ -135,15 +135,17 @@ int main(int argc, char** argv) {
             // the GPU waiting for the CPU to issue it) beside the process's CPU time.
             std::printf("\nthe median frames above by stage (ms; GPU timestamps) and the process's CPU time\n\n");
             std::printf("| frame | wall | CPU (all threads) | before the first sample | shadows | geometry | culling | "
-                        "lighting | passes | forward | readback | total | shadow layers | instances drawn (camera, "
+                        "lighting | passes | forward | readback | total | shadow layers (Mtexels, M fragments) | instances drawn (camera, "
                         "shadows) |\n");
             std::printf("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|\n");
             for (const Split& x : medians)
-                std::printf("| %s | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %zu | "
+                std::printf("| %s | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f | %zu (%.1f, %.1f) | "
                             "%llu, %llu |\n",
                             x.label, x.wall, x.cpu, x.t.upload_ms, x.t.shadow_ms, x.t.geometry_ms, x.t.culling_ms,
                             x.t.lighting_ms, x.t.passes_ms, x.t.forward_ms, x.t.readback_ms, x.t.total_ms,
-                            x.t.shadow_layers_rendered, static_cast<unsigned long long>(x.t.camera_instances_drawn),
+                            x.t.shadow_layers_rendered, 1e-6 * double(x.t.shadow_texels_rendered),
+                            1e-6 * double(x.t.shadow_fragments),
+                            static_cast<unsigned long long>(x.t.camera_instances_drawn),
                             static_cast<unsigned long long>(x.t.shadow_instances_drawn));
             std::printf("\neach case's first render (its programs compiled or loaded from the disk cache)\n\n");
             std::printf("| frame | wall | CPU (all threads) | programs compiled | compile ms | programs loaded | load ms |\n");

@@ -19,6 +19,11 @@ layout(std430, binding = SSBO_INSTANCE_REMAP) readonly buffer Remap { uint insta
 #ifdef SHADOW_PASS
 /* Shadow maps (shadow_frag.glsl): camera-relative world -> the face's clip space. */
 layout(location = 2) uniform mat4 shadow_view_projection;
+/* Casters are kept where dot(xyz, x) + w >= 0 for each plane: the region
+ * where the light shines (ShadowModule's lit_region: in front of an area
+ * light, inside a spot's cone); (0, 0, 0, 1) keeps everything. Unset
+ * uniforms are 0, which keeps everything too. */
+layout(location = LOC_SHADOW_CLIP) uniform vec4 shadow_clip[SHADOW_CLIP_PLANES];
 #endif
 #ifdef MOTION_PASS
 /* The Vector pass (motion_module.h): each instance's previous and next model
@@ -113,6 +118,10 @@ void main() {
 #endif
 #ifdef SHADOW_PASS
     gl_Position = shadow_view_projection * world;
+    gl_ClipDistance[0] = dot(shadow_clip[0].xyz, world.xyz) + shadow_clip[0].w;
+    gl_ClipDistance[1] = dot(shadow_clip[1].xyz, world.xyz) + shadow_clip[1].w;
+    gl_ClipDistance[2] = dot(shadow_clip[2].xyz, world.xyz) + shadow_clip[2].w;
+    gl_ClipDistance[3] = dot(shadow_clip[3].xyz, world.xyz) + shadow_clip[3].w;
 #elif defined(EMISSION_BAKE)
     {
         const int tile = bake_tile_offset + int(triangle - bake_first_triangle);

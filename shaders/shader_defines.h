@@ -155,6 +155,12 @@
 #define LOC_VIS_KEY 40
 #define LOC_VIS_KEY_COUNT 41
 
+/* Shadow maps: the half-spaces a cube face's casters are clipped to
+ * (geometry_vert.glsl SHADOW_PASS, gl_ClipDistance; ShadowModule's lit
+ * region), SHADOW_CLIP_PLANES vec4s from LOC_SHADOW_CLIP on. */
+#define SHADOW_CLIP_PLANES 4
+#define LOC_SHADOW_CLIP 42
+
 /* Pass ids (deferred::Pass; static_assert'ed in native/src/passes.cpp) */
 #define PASS_COMBINED 0
 #define PASS_DEPTH 1

@@ -184,7 +184,10 @@ def main(argv=None):
         wall = time.perf_counter() - t0
         timings = dict(renderer.last_timings)
         runs.append({"wall_ms": wall * 1e3, **{k: timings.get(k) for k in STAGES},
-                     "visibility_buffer": bool(timings.get("visibility_buffer"))})
+                     "visibility_buffer": bool(timings.get("visibility_buffer")),
+                     "shadow_layers": timings.get("shadow_layers_rendered"),
+                     "shadow_texels": timings.get("shadow_texels_rendered"),
+                     "shadow_fragments": timings.get("shadow_fragments")})
     warnings = list(renderer.last_warnings)
 
     result = {"capture": os.path.abspath(args.capture), "gl_renderer": info.get("renderer"),
@@ -207,6 +210,10 @@ def main(argv=None):
         for k, r in enumerate(runs):
             cells = [f"{r[s]:.1f}" if isinstance(r[s], (int, float)) else "-" for s in STAGES]
             print(f"| {k + 1} | {r['wall_ms']:.1f} | " + " | ".join(cells) + " |")
+        if runs and runs[-1].get("shadow_layers"):
+            print(f"shadow maps: {runs[-1]['shadow_layers']} layers drawn, "
+                  f"{runs[-1]['shadow_texels'] / 1e6:.1f} Mtexels inside their scissors, "
+                  f"{(runs[-1]['shadow_fragments'] or 0) / 1e6:.1f} M fragments shaded (last run)")
         for w in warnings:
             print(f"warning: {w}")
     if args.out:

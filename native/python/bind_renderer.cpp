@@ -193,6 +193,9 @@ void declare_renderer(py::module_& m) {
             d["ray_scene_bytes"] = self.last.ray_scene_bytes;
             d["ray_triangles"] = self.last.ray_triangles;
             d["shadow_map_bytes"] = self.last.shadow_map_bytes;
+            d["shadow_layers_rendered"] = self.last.shadow_layers_rendered;
+            d["shadow_texels_rendered"] = self.last.shadow_texels_rendered;
+            d["shadow_fragments"] = self.last.shadow_fragments;
             d["shadow_resolutions"] = self.last.shadow_resolutions;
             d["passes_ms"] = self.last.passes_ms;
             d["readback_ms"] = self.last.readback_ms;

@@ -3,6 +3,8 @@
 #include "aov_module.h"
 #include "material_module.h"
 
+#include "../../shaders/shader_defines.h"
+
 #include <algorithm>
 
 namespace deferred {
@@ -218,12 +220,14 @@ std::uint64_t GeometryStage::draw_casters(FrameScene& scene, const FrameScene::T
     }
     // The map's uniforms (shadow_frag.glsl's 2, 3, 4) onto the caster
     // programs' (2, 20, 21: material_module.h).
-    float view_projection[16], origin[4], axis[4] = {0, 0, 0, 0};
+    float view_projection[16], origin[4], axis[4] = {0, 0, 0, 0}, clip[4 * SHADOW_CLIP_PLANES];
     glGetUniformfv(GLuint(caster), 2, view_projection);
     glGetUniformfv(GLuint(caster), 3, origin);
     glGetUniformfv(GLuint(caster), 4, axis);
+    for (int i = 0; i < SHADOW_CLIP_PLANES; ++i) glGetUniformfv(GLuint(caster), LOC_SHADOW_CLIP + i, clip + 4 * i);
     materials_->bind_constants();
     for (auto& [id, p] : own) {
+        glProgramUniform4fv(p, LOC_SHADOW_CLIP, SHADOW_CLIP_PLANES, clip);
         glProgramUniformMatrix4fv(p, 2, 1, GL_FALSE, view_projection);
         glProgramUniform4fv(p, 20, 1, origin);
         glProgramUniform3fv(p, 21, 1, axis);

@@ -1087,6 +1087,8 @@ FrameResult Renderer::Impl::finish(Frame& f) {
     t.shadowed_lights = shadows.count();
     t.shadow_resolutions = shadows.resolutions();
     t.shadow_layers_rendered = shadows.layers_rendered();
+    t.shadow_texels_rendered = shadows.texels_rendered();
+    t.shadow_fragments = shadows.collect_fragments();  // after the frame's last wait: no stall
     t.shadow_instances_drawn = f.shadow_instances_drawn;
     t.camera_instances_drawn = f.camera_instances_drawn;
     t.shadow_lights_dropped = shadows.dropped();

@@ -120,6 +120,13 @@ public:
     // world's map left out).
     std::vector<int> resolutions() const;
     std::size_t layers_rendered() const { return layers_rendered_; }  // since fit()
+    // Texels inside the scissor of each layer drawn since fit(): the fill a
+    // light's lit region leaves (a spot's cone, an area light's front).
+    std::uint64_t texels_rendered() const { return texels_rendered_; }
+    // Fragments the maps' draws shaded since fit() (the fill itself:
+    // GL_FRAGMENT_SHADER_INVOCATIONS over each sample's draws, read once the
+    // frame is done; 0 where the driver has no pipeline statistics).
+    std::uint64_t collect_fragments();
 
 private:
     struct Entry {
@@ -141,6 +148,8 @@ private:
         double radius[SHADOW_CASCADE_COUNT];
     };
     Cascades cascades() const;
+    void begin_fragment_count();
+    void end_fragment_count();
     float quality_ = 1.0f;
     bool rays_ = false;
     int world_index_ = -1;
@@ -148,6 +157,10 @@ private:
     glm::dvec3 receivers_center_{0.0};  // bounding sphere of the visible receivers
     double receivers_radius_ = 0.0;
     std::size_t layers_rendered_ = 0;
+    std::uint64_t texels_rendered_ = 0;
+    bool count_fragments_ = false;
+    std::vector<GLuint> fragment_queries_, free_queries_;  // this frame's, and ended ones to reuse
+    bool lit_region_enabled_ = true;
     std::size_t dropped_ = 0;
     CameraMatrices camera_{};
     double split_near_ = 0.0, split_far_ = 0.0;  // the cascades' depth range (fit)

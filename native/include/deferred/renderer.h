@@ -210,6 +210,11 @@ struct FrameTimings {
     std::size_t shadowed_lights = 0;     // lights with shadow maps this frame
     std::vector<int> shadow_resolutions;  // texels per side of each shadowed light's maps
     std::size_t shadow_layers_rendered = 0;  // cube faces + cascades drawn over all samples
+    // Texels of those layers inside their scissor (faces a spot or an area
+    // light does not shine through, and their parts, are left out).
+    std::uint64_t shadow_texels_rendered = 0;
+    // Fragments those draws shaded (the fill; 0 without pipeline statistics).
+    std::uint64_t shadow_fragments = 0;
     std::uint64_t shadow_instances_drawn = 0;  // instances drawn into them (after culling per map)
     std::uint64_t camera_instances_drawn = 0;  // instances in the view frustum, over all samples
     std::size_t shadow_lights_dropped = 0;  // would cast shadows, over the layer/memory limits

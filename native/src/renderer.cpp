@@ -403,6 +403,7 @@ FrameResult Renderer::Impl::render(const Camera& camera, const RenderSettings& s
 // frame's G-buffer clear obeys.
 void Renderer::Impl::abandon_frame() {
     end_frame();
+    shadows.abandon_frame();
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
     glDisable(GL_SCISSOR_TEST);
     glDisable(GL_BLEND);

@@ -127,6 +127,10 @@ public:
     // GL_FRAGMENT_SHADER_INVOCATIONS over each sample's draws, read once the
     // frame is done; 0 where the driver has no pipeline statistics).
     std::uint64_t collect_fragments();
+    // After a frame that threw inside render_sample: the fragment query
+    // ended and forgotten, the clip distances off (the next frame's
+    // programs do not write them).
+    void abandon_frame();
 
 private:
     struct Entry {
@@ -159,6 +163,7 @@ private:
     std::size_t layers_rendered_ = 0;
     std::uint64_t texels_rendered_ = 0;
     bool count_fragments_ = false;
+    bool query_active_ = false;
     std::vector<GLuint> fragment_queries_, free_queries_;  // this frame's, and ended ones to reuse
     bool lit_region_enabled_ = true;
     std::size_t dropped_ = 0;

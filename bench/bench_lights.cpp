@@ -6,6 +6,7 @@
 // and the one sample's error against every light's (its noise, which the
 // film's samples average out; the mean stays every light's).
 // Usage: deferred_bench_lights [width height] [brute_max_lights] [csv_path]
+// (DEFERRED_BENCH_MAX_LIGHTS=N: only the rows up to N lights)
 // Prints a markdown table; rows with more lights than brute_max skip brute
 // force (llvmpipe would take minutes per frame).
 #include "builtin_scenes.h"
@@ -69,7 +70,11 @@ int main(int argc, char** argv) {
         cam.lens = 30.0f;
         cam.clip_end = 200.0f;
         double one_light_ms = 0;
+        // DEFERRED_BENCH_MAX_LIGHTS: stop after the rows up to that many lights.
+        const char* max_env = std::getenv("DEFERRED_BENCH_MAX_LIGHTS");
+        const int max_lights = max_env ? std::atoi(max_env) : 1 << 30;
         for (int n : {1, 16, 128, 1000, 10000, 65536}) {
+            if (n > max_lights) break;
             r.clear_scene();
             build(r, n);
             RenderSettings s;

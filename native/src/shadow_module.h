@@ -21,6 +21,11 @@
 // r x r corner of its layers (GpuShadow params.w = r / array size).
 // Lights without size (point/spot radius 0, sun angle 0) cast the same
 // shadow every sample: their maps are rendered once per frame.
+// Spots and area lights draw their cubes only where they shine (lit_region
+// in shadow_module.cpp): faces no lit direction passes through are only
+// cleared, the others are scissored to the lit directions, and casters are
+// clipped to the lit region (a spot's cone widened by its radius, the half
+// space in front of an area light).
 //
 // The world (offer_world(n)): per sample n orthographic RG32F maps (layers
 // of one array) along n directions of the world over the visible receivers' bounding sphere,

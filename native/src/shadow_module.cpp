@@ -150,10 +150,17 @@ struct LitRegion {
     std::vector<glm::dvec3> cones;
 };
 
-LitRegion lit_region(const gpu::GpuLight& l, const glm::dvec3& p, double pad, double far) {
+// No bound: every plane keeps everything (points, mesh lights, cascades).
+LitRegion everywhere() {
     LitRegion r;
     r.clip.fill(glm::dvec4(0.0, 0.0, 0.0, 1.0));
+    return r;
+}
+
+LitRegion lit_region(const gpu::GpuLight& l, const glm::dvec3& p, double pad, double far) {
+    LitRegion r = everywhere();
     const int type = int(l.position_type.w);
+    if (type != LIGHT_AREA && type != LIGHT_SPOT) return r;
     const glm::dvec3 centre = v3(l.position_type), axis = glm::normalize(v3(l.direction));
     // Float precision of camera-relative positions (~1e-7 of the coordinates).
     const double eps = 1e-5 * (glm::length(centre) + 1.0);
@@ -537,7 +544,7 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
     }
 
     std::vector<gpu::GpuShadow> shadows(entries_.size());
-    const LitRegion everywhere = lit_region(gpu::GpuLight{}, glm::dvec3(0.0), 0.0, 0.0);  // no planes
+    const LitRegion unbounded = everywhere();
     // A layer: cleared over the light's corner (`whole`), drawn inside
     // `scissor` (nothing where it is empty). Texels outside the scissor read
     // as unoccluded, not as an earlier sample's map: a receiver the light
@@ -580,9 +587,7 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
         ++layers_rendered_;
     };
 
-    if (!rays_) {
-        glEnable(GL_SCISSOR_TEST);
-    }
+    if (!rays_) glEnable(GL_SCISSOR_TEST);
     const Cascades cs = cascades();
     std::vector<glm::dvec3> world_axes(std::size_t(world_count_), glm::dvec3(0.0));
     std::vector<glm::dmat4> world_matrices(std::size_t(world_count_), glm::dmat4(0.0));
@@ -632,7 +637,7 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
                 g.cascade[k] = to_gpu_mat(m);
                 if (draw)
                     draw_layer(e.first_layer + k, m, glm::dvec3(0.0), SHADOW_CASCADES, axis,
-                               ortho_casters(axis, cs.center[k], cs.radius[k], true), whole, whole, everywhere);
+                               ortho_casters(axis, cs.center[k], cs.radius[k], true), whole, whole, unbounded);
             }
             g.point = {float(axis.x), float(axis.y), float(axis.z), float(e.first_layer)};
             g.params = {float(SHADOW_CASCADES), float(e.resolution), 0.0f, uv_scale};
@@ -662,7 +667,7 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
             // (at a face's centre) of margin, out to the farthest receiver.
             const double pad = 4.0 * SHADOW_CUBE_OVERLAP / e.resolution;
             const double far = std::min(glm::length(p - receivers_center_) + receivers_radius_, reach);
-            const LitRegion region = lit_region_enabled_ ? lit_region(l, p, pad, far) : everywhere;
+            const LitRegion region = lit_region_enabled_ ? lit_region(l, p, pad, far) : unbounded;
             for (int face = 0; face < 6 && draw; ++face) {
                 glm::dvec3 F, R, U;
                 face_basis(face, F, R, U);

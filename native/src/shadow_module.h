@@ -129,8 +129,9 @@ public:
     // light's lit region leaves (a spot's cone, an area light's front).
     std::uint64_t texels_rendered() const { return texels_rendered_; }
     // Fragments the maps' draws shaded since fit() (the fill itself:
-    // GL_FRAGMENT_SHADER_INVOCATIONS over each sample's draws, read once the
-    // frame is done; 0 where the driver has no pipeline statistics).
+    // GL_FRAGMENT_SHADER_INVOCATIONS around each layer's draws, not its
+    // clears; read once the frame is done, and reset; 0 where the driver has
+    // no pipeline statistics).
     std::uint64_t collect_fragments();
     // After a frame that threw inside render_sample: the fragment query
     // ended and forgotten, the clip distances off (the next frame's

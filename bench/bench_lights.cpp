@@ -2,11 +2,12 @@
 // and with brute force (every light at every pixel), same build, same scene:
 // a floor with boxes and N small random point lights (energy 0.05..0.55 W,
 // radius <= 2 cm, seed 99), one sample, Combined only. Also culled with
-// stochastic light selection (RenderSettings::light_samples = 16): its time,
+// stochastic light selection (RenderSettings::light_samples = M, 16): its time,
 // and the one sample's error against every light's (its noise, which the
 // film's samples average out; the mean stays every light's).
 // Usage: deferred_bench_lights [width height] [brute_max_lights] [csv_path]
-// (DEFERRED_BENCH_MAX_LIGHTS=N: only the rows up to N lights)
+// (DEFERRED_BENCH_MAX_LIGHTS=N: only the rows up to N lights;
+// DEFERRED_BENCH_LIGHT_SAMPLES=M: a budget other than 16)
 // Prints a markdown table; rows with more lights than brute_max skip brute
 // force (llvmpipe would take minutes per frame).
 #include "builtin_scenes.h"
@@ -57,12 +58,16 @@ int main(int argc, char** argv) {
     const char* csv_path = argc > 4 ? argv[4] : nullptr;
     FILE* csv = csv_path ? std::fopen(csv_path, "w") : nullptr;
     if (csv) std::fprintf(csv, "lights,culled_ms,culling_ms,shading_ms,tile_light_pairs,brute_ms\n");
+    // DEFERRED_BENCH_LIGHT_SAMPLES: the selection's budget M (16).
+    const char* samples_env = std::getenv("DEFERRED_BENCH_LIGHT_SAMPLES");
+    const int light_samples = samples_env ? std::atoi(samples_env) : 16;
     try {
         Renderer r;
-        std::printf("GL: %s | %s\n%dx%d, 1 sample, light threshold 1e-3 (ms, one frame after a warm-up)\n\n",
-                    r.gl_info().renderer.c_str(), r.gl_info().version.c_str(), width, height);
+        std::printf("GL: %s | %s\n%dx%d, 1 sample, light threshold 1e-3, M = %d light samples (ms, one frame after a "
+                    "warm-up)\n\n",
+                    r.gl_info().renderer.c_str(), r.gl_info().version.c_str(), width, height, light_samples);
         std::printf("| lights | culled total | culling | shading | tile-light pairs | brute force | brute/culled | "
-                    "16 light samples: total | shading | per-pixel rms | mean ratio |\n");
+                    "M light samples: total | shading | per-pixel rms | mean ratio |\n");
         std::printf("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n");
         Camera cam;
         const double eye[3] = {0, -22, 12}, target[3] = {0, 0, 0};
@@ -83,8 +88,8 @@ int main(int argc, char** argv) {
             r.render(cam, s);  // warm-up: compile, allocate
             const FrameResult culled_frame = r.render(cam, s);
             const FrameTimings culled = culled_frame.timings;
-            // Stochastic selection of 16 lights per pixel (where more reach it).
-            s.light_samples = 16;
+            // Stochastic selection of M lights per pixel (where more reach it).
+            s.light_samples = light_samples;
             r.render(cam, s);
             const FrameResult sampled = r.render(cam, s);
             s.light_samples = 0;

@@ -33,9 +33,13 @@
 #include "shadow_lib.glsl"
 #endif
 
-/* The pixel being shaded: the lighting pass's invocation, or the forward
- * pass's fragment (gl_GlobalInvocationID exists in compute shaders only). */
-#ifdef FORWARD_PASS
+/* The pixel being shaded: the lighting pass's (its main sets it: later
+ * batches run over a list of pixels, not the image's grid), the forward
+ * pass's fragment, or another compute pass's invocation. */
+#if defined(LIGHTING_PASS)
+uvec2 lighting_pixel;
+uvec2 shading_pixel() { return lighting_pixel; }
+#elif defined(FORWARD_PASS)
 uvec2 shading_pixel() { return uvec2(gl_FragCoord.xy); }
 #else
 uvec2 shading_pixel() { return gl_GlobalInvocationID.xy; }

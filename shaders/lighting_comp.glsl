@@ -6,6 +6,7 @@
  * for the DiffDir/GlossDir passes. Variants: HAS_<TYPE>_LIGHTS for the
  * light types present, GBUF_PARAMS1, OUT_LIGHT_SPLIT; FORWARD_LAYER when
  * Blend-mode surfaces were drawn in front this sample (forward_module.h). */
+#define LIGHTING_PASS
 #include "lighting_lib.glsl"
 
 layout(local_size_x = LIGHTING_GROUP_SIZE, local_size_y = LIGHTING_GROUP_SIZE) in;
@@ -17,6 +18,19 @@ layout(local_size_x = LIGHTING_GROUP_SIZE, local_size_y = LIGHTING_GROUP_SIZE) i
  * in total (LP_MAX_TGSI_LOOP_ITERATIONS), which would drop lights. Emission,
  * world light and background belong to the batch starting at 0. */
 layout(location = 0) uniform uvec2 light_batch;
+
+/* The batches after the first run only over the pixels that need them:
+ * the first appends each pixel whose light sequence goes on past it (not a
+ * background or holdout pixel, nor one whose tile list fits the batch) to
+ * this list, with the group count of an indirect dispatch
+ * (x, 1, 1; w the pixels), and later batches run one invocation per entry.
+ * A dispatch over the whole image per batch cost llvmpipe ~25 ms at
+ * 480x270 however early each invocation returned (20 of them for 10 000
+ * lights). */
+layout(std430, binding = SSBO_LIGHTING_LATER) buffer LaterPixels {
+    uvec4 later_dispatch;
+    uint later_pixels[];
+};
 
 #ifdef LIGHT_SAMPLING
 /* Stochastic light selection (RenderSettings::light_samples, the define's
@@ -176,8 +190,16 @@ vec4 behind_forward_layer(ivec2 pixel, vec4 value, bool first_batch) {
 }
 
 void main() {
+    const bool first_batch = light_batch.x == 0u;
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
+    if (!first_batch) {
+        const uint entry = gl_WorkGroupID.x * uint(LIGHTING_GROUP_SIZE * LIGHTING_GROUP_SIZE) + gl_LocalInvocationIndex;
+        if (entry >= later_dispatch.w) return;
+        const uint entry_pixel = later_pixels[entry];
+        pixel = ivec2(entry_pixel & 0xffffu, entry_pixel >> 16u);
+    }
     if (any(greaterThanEqual(pixel, ivec2(frame.viewport.xy)))) return;
+    lighting_pixel = uvec2(pixel);
 #ifdef LIGHT_GROUPS
     for (int g = 0; g < LIGHT_GROUPS; ++g) group_sums[g] = vec3(0.0);
 #endif
@@ -185,7 +207,6 @@ void main() {
     /* Each sample adds its share (1/samples) to the accumulations. */
     float share = 1.0 / float(max(frame.counts.w, 1u));
     float depth = texelFetch(gbuf_depth, pixel, 0).r;
-    const bool first_batch = light_batch.x == 0u;
     if (depth <= 0.0) {
         if (!first_batch) return;
         /* Background: the world along this sample's ray through the pixel
@@ -215,6 +236,28 @@ void main() {
         return;
     }
 
+    /* The tile's list when this sample's point lies inside the depth range
+     * and occupied bins the list was culled for, every light otherwise (a
+     * jittered sample can see a sliver no pixel centre saw). */
+    uint first = 0u, count = frame.counts.x;
+    bool from_list = false;
+#ifdef LIGHT_CULLING
+    GpuTile tile = tiles[(uint(pixel.y) / uint(TILE_SIZE)) * frame.tiles.x + uint(pixel.x) / uint(TILE_SIZE)];
+    float d = frame_view_depth_from_buffer(pixel, depth);
+    if (tile.list.w != 0u && d >= tile.depth.x && d <= tile.depth.y &&
+        ((tile.list.z >> depth_bin(d, tile.depth.x, tile.depth.y)) & 1u) != 0u) {
+        first = tile.list.x;
+        count = tile.list.y;
+        from_list = true;
+    }
+#endif
+    if (first_batch && count > light_batch.y) {
+        const uint entry = atomicAdd(later_dispatch.w, 1u);
+        later_pixels[entry] = uint(pixel.x) | (uint(pixel.y) << 16u);
+        if (entry % uint(LIGHTING_GROUP_SIZE * LIGHTING_GROUP_SIZE) == 0u) atomicAdd(later_dispatch.x, 1u);
+    }
+    if (!first_batch && light_batch.x >= min(count, light_batch.y)) return;
+
     vec4 params1 = vec4(0.0);
 #ifdef GBUF_PARAMS1
     params1 = texelFetch(gbuf_params1, pixel, 0);
@@ -240,21 +283,6 @@ void main() {
 #ifdef OUT_AO
     if (first_batch) imageStore(ao_image, pixel, imageLoad(ao_image, pixel) + vec4(vec3(ao), 0.0) * share);
 #endif
-    /* The tile's list when this sample's point lies inside the depth range
-     * and occupied bins the list was culled for, every light otherwise (a
-     * jittered sample can see a sliver no pixel centre saw). */
-    uint first = 0u, count = frame.counts.x;
-    bool from_list = false;
-#ifdef LIGHT_CULLING
-    GpuTile tile = tiles[(uint(pixel.y) / uint(TILE_SIZE)) * frame.tiles.x + uint(pixel.x) / uint(TILE_SIZE)];
-    float d = frame_view_depth_from_buffer(pixel, depth);
-    if (tile.list.w != 0u && d >= tile.depth.x && d <= tile.depth.y &&
-        ((tile.list.z >> depth_bin(d, tile.depth.x, tile.depth.y)) & 1u) != 0u) {
-        first = tile.list.x;
-        count = tile.list.y;
-        from_list = true;
-    }
-#endif
     float lum_shadowed = 0.0, lum_unshadowed = 0.0;
 #ifdef SHADOW_CATCHER
     const bool catcher = emission.a > 1.5;
@@ -263,7 +291,6 @@ void main() {
 #endif
     const vec3 luminance = vec3(0.2126729, 0.7151522, 0.0721750);
     const uint end = min(count, light_batch.y);
-    if (!first_batch && light_batch.x >= end) return;
     uint iterations = end > light_batch.x ? end - light_batch.x : 0u;
 #ifdef LIGHT_SAMPLING
     uint chosen[LIGHT_SLOTS];

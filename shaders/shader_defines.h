@@ -37,6 +37,7 @@
 #define SSBO_RECEIVERS 27         /* shadow map sizing: sample 0's depth range and grid (receivers_comp.glsl) */
 #define SSBO_VIS_KEYS 28          /* visibility buffer: per slot key, its indirect dispatch, count, offset, cursor */
 #define SSBO_VIS_TILES 29         /* ... the screen tiles where each key appears, grouped by key (visibility_classify_comp.glsl) */
+#define SSBO_LIGHTING_LATER 30    /* lighting: the pixels whose light sequence goes on past the first batch, and their indirect dispatch */
 
 /* Textures sampled by compute passes (G-buffer inputs) */
 #define TEX_DEPTH 0

@@ -61,7 +61,7 @@ void LightingStage::prepare(ShaderLibrary& shaders, const ShaderVariant& base, c
 
 void LightingStage::run(const LightModule& lights, const LightCulling* culling, const FilmModule& film,
                         GLuint instance_groups, std::uint32_t world_group, int width, int height,
-                        const std::function<void()>& between_batches) const {
+                        const std::function<void()>& between_batches) {
     glUseProgram(program_);
     use_ray_traversal(program_, GL_COMPUTE_SHADER);
     if (culling) culling->bind();
@@ -73,12 +73,29 @@ void LightingStage::run(const LightModule& lights, const LightCulling* culling, 
     }
     const GLuint groups_x = GLuint((width + LIGHTING_GROUP_SIZE - 1) / LIGHTING_GROUP_SIZE);
     const GLuint groups_y = GLuint((height + LIGHTING_GROUP_SIZE - 1) / LIGHTING_GROUP_SIZE);
-    for (std::uint32_t begin = 0; begin == 0 || begin < lights.count(); begin += batch_) {
-        if (begin > 0) between_batches();
+    const bool later_batches = lights.count() > batch_;
+    if (later_batches) {
+        const std::size_t pixels = std::size_t(width) * std::size_t(height);
+        if (!later_ || later_pixels_ < pixels) {
+            later_ = make_storage_buffer(nullptr, 16 + pixels * 4, "lighting: later batches' pixels");
+            later_pixels_ = pixels;
+        }
+        const std::uint32_t header[4] = {0u, 1u, 1u, 0u};  // groups x, y, z; pixels
+        glNamedBufferSubData(later_.get(), 0, sizeof(header), header);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_LIGHTING_LATER, later_.get());
+    }
+    glUniform2ui(0, 0, batch_);
+    glDispatchCompute(groups_x, groups_y, 1);
+    glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
+    if (!later_batches) return;
+    glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, later_.get());
+    for (std::uint32_t begin = batch_; begin < lights.count(); begin += batch_) {
+        between_batches();
         glUniform2ui(0, begin, begin + batch_);
-        glDispatchCompute(groups_x, groups_y, 1);
+        glDispatchComputeIndirect(0);
         glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
     }
+    glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, 0);
 }
 
 }  // namespace deferred

@@ -7,6 +7,7 @@
 // world's occlusion, stochastic light selection, a forward layer.
 #pragma once
 
+#include "gl_util.h"
 #include "shader_library.h"
 
 #include <cstdint>
@@ -61,8 +62,10 @@ public:
     // `instance_groups`: each instance's light group (0: no light groups),
     // `world_group` the world's; `between_batches` runs before each batch
     // after the first (a cancel).
+    // Batches after the first run over the pixels the first one listed
+    // (an indirect dispatch), not the whole image.
     void run(const LightModule& lights, const LightCulling* culling, const FilmModule& film, GLuint instance_groups,
-             std::uint32_t world_group, int width, int height, const std::function<void()>& between_batches) const;
+             std::uint32_t world_group, int width, int height, const std::function<void()>& between_batches);
     bool light_sampling() const { return light_sampling_; }
 
 private:
@@ -73,6 +76,8 @@ private:
     GLuint program_ = 0;
     std::uint32_t batch_ = kLightBatch;
     bool light_sampling_ = false;
+    Buffer later_;  // SSBO_LIGHTING_LATER: dispatch header and pixels
+    std::size_t later_pixels_ = 0;
 };
 
 }  // namespace deferred

@@ -6,8 +6,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
+#include <vector>
 
 using namespace deferred;
 using deferred::testing::overview_camera;
@@ -176,4 +178,55 @@ TEST(LightCulling, SixtyFiveThousandLights) {
     std::printf("65536 lights: max |culled - brute| %.2e, beyond bound %.2e, %llu pairs, %.0f ms culled vs %.0f ms brute\n",
                 c.max_diff, c.max_excess, (unsigned long long)c.pairs, c.culled_ms, c.brute_ms);
     EXPECT_LE(c.max_excess, 0.0);
+}
+
+TEST(LightCulling, LaterBatchesReachEveryPixelThatNeedsThem) {
+    // 1100 lights light in three batches (kLightBatch = 512); the batches
+    // after the first run only over the pixels the first listed (an
+    // indirect dispatch). Lights add linearly (no shadows, no selection), so
+    // the image must equal the sum of three renders of 512, 512 and 76 of
+    // the lights, each one batch. Culled with every light reaching every
+    // tile, and brute force; the world behind the floor is background,
+    // which no later batch visits.
+    const auto lights = random_point_lights(1100, 5, 1.0f);
+    const int width = 48, height = 32;
+    for (bool culled : {true, false}) {
+        RenderSettings s;
+        s.width = width;
+        s.height = height;
+        s.light_threshold = 1e-7f;
+        s.light_culling = culled;
+        Renderer r;
+        build_geometry(r);
+        for (const Light& l : lights) r.add_light(l);
+        const FrameResult whole = r.render(overview_camera(), s);
+        std::vector<double> sum(std::size_t(width) * height * 4, 0.0);
+        for (std::size_t begin = 0; begin < lights.size(); begin += 512) {
+            Renderer part;
+            build_geometry(part);
+            for (std::size_t i = begin; i < std::min(lights.size(), begin + 512); ++i) part.add_light(lights[i]);
+            const FrameResult f = part.render(overview_camera(), s);
+            const std::vector<float>& px = f.find(Pass::Combined)->pixels;
+            for (std::size_t i = 0; i < px.size(); ++i) sum[i] += px[i];
+        }
+        const std::vector<float>& a = whole.find(Pass::Combined)->pixels;
+        double worst = 0;
+        int lit = 0, background = 0;
+        for (std::size_t i = 0; i < a.size(); i += 4) {
+            if (sum[i + 3] > 0.5 && sum[i] + sum[i + 1] + sum[i + 2] > 0.0) ++lit;
+            if (a[i] + a[i + 1] + a[i + 2] == 0.0f) ++background;
+            for (int k = 0; k < 3; ++k)
+                worst = std::max(worst, std::abs(a[i + k] - sum[i + k]) / std::max(std::abs(sum[i + k]), 1e-3));
+        }
+        std::printf("%s: %d lit pixels, %d black, worst relative difference to the parts' sum %.2e, %llu tile-light "
+                    "pairs\n",
+                    culled ? "culled" : "brute force", lit, background, worst,
+                    (unsigned long long)whole.timings.tile_light_pairs);
+        EXPECT_GT(lit, width * height / 4);
+        EXPECT_GT(background, 0);
+        if (culled) {
+            EXPECT_GE(whole.timings.tile_light_pairs, 1100u);  // lists longer than a batch
+        }
+        EXPECT_LT(worst, 1e-4);
+    }
 }

@@ -7,6 +7,7 @@ prints where the time went.
     build/tools/deferred_render_replay scene.npz [--size WxH] [--samples N]
         [--passes A,B] [--repeat K] [--json] [--out OUT.exr] [--device N]
         [--light-samples N] [--shadow-rays | --shadow-maps]
+        [--filter-splat on|off] [--visibility-buffer on|off] [--count-fragments]
 
 Each repeat renders the captured frame again on the same renderer (the first
 one compiles or loads the programs; later ones are warm). Printed per
@@ -134,6 +135,9 @@ def main(argv=None):
     ap.add_argument("--visibility-buffer", choices=["on", "off"],
                     help="the G-buffer from the visibility buffer, in compute (native "
                          "RenderSettings.visibility_buffer), or the raster path, instead of the captured setting")
+    ap.add_argument("--count-fragments", action="store_true",
+                    help="count the fragments the shadow maps' draws shade (a pipeline-statistics query around "
+                         "each map layer: native RenderSettings.count_shadow_fragments; it may cost a GPU time)")
     args = ap.parse_args(argv)
 
     data, calls, meta = load_capture(args.capture)
@@ -173,6 +177,8 @@ def main(argv=None):
         kwargs["filter_splat"] = args.filter_splat == "on"
     if args.visibility_buffer:
         kwargs["visibility_buffer"] = args.visibility_buffer == "on"
+    if args.count_fragments:
+        kwargs["count_shadow_fragments"] = True
     kwargs["preview_interval_ms"] = -1
 
     info = dict(renderer.gl_info)
@@ -211,9 +217,10 @@ def main(argv=None):
             cells = [f"{r[s]:.1f}" if isinstance(r[s], (int, float)) else "-" for s in STAGES]
             print(f"| {k + 1} | {r['wall_ms']:.1f} | " + " | ".join(cells) + " |")
         if runs and runs[-1].get("shadow_layers"):
+            fragments = (f"{(runs[-1]['shadow_fragments'] or 0) / 1e6:.1f} M fragments shaded"
+                         if args.count_fragments else "fragments not counted (--count-fragments)")
             print(f"shadow maps: {runs[-1]['shadow_layers']} layers drawn, "
-                  f"{runs[-1]['shadow_texels'] / 1e6:.1f} Mtexels inside their scissors, "
-                  f"{(runs[-1]['shadow_fragments'] or 0) / 1e6:.1f} M fragments shaded (last run)")
+                  f"{runs[-1]['shadow_texels'] / 1e6:.1f} Mtexels inside their scissors, {fragments} (last run)")
         for w in warnings:
             print(f"warning: {w}")
     if args.out:

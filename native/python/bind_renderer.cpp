@@ -505,8 +505,9 @@ void declare_renderer(py::module_& m) {
                 const std::vector<std::string>& cryptomatte, int cryptomatte_levels,
                 const std::vector<std::pair<std::string, std::string>>& aovs, int light_groups,
                 int preview_interval_ms, const std::string& preview_pass, bool motion_blur, bool filter_splat,
-                bool visibility_buffer) {
+                bool visibility_buffer, bool count_shadow_fragments) {
                  RenderSettings s;
+                 s.count_shadow_fragments = count_shadow_fragments;
                  s.filter_splat = filter_splat;
                  s.visibility_buffer = visibility_buffer;
                  s.motion_blur = motion_blur;
@@ -614,7 +615,8 @@ void declare_renderer(py::module_& m) {
              py::arg("cryptomatte") = std::vector<std::string>{}, py::arg("cryptomatte_levels") = 6,
              py::arg("aovs") = std::vector<std::pair<std::string, std::string>>{}, py::arg("light_groups") = 0,
              py::arg("preview_interval_ms") = -1, py::arg("preview_pass") = "Combined",
-             py::arg("motion_blur") = false, py::arg("filter_splat") = true, py::arg("visibility_buffer") = false)
+             py::arg("motion_blur") = false, py::arg("filter_splat") = true, py::arg("visibility_buffer") = false,
+             py::arg("count_shadow_fragments") = false)
         .def("preview",
              [](const PyRenderer& self, std::uint64_t since) -> py::object {
                  if (!self.renderer) throw Error("the renderer was closed");

@@ -569,7 +569,7 @@ void Renderer::Impl::sync_ray_scene(Frame& f) {
         f.result.timings.ray_build_ms = ray_timer.lap_ms();
     }
     shadows.begin_frame(f.cam, settings.shadow_resolution, settings.shadow_quality, memory_budget_bytes() / 4,
-                        f.shadow_rays);
+                        f.shadow_rays, settings.count_shadow_fragments);
 }
 
 // The world (its node tree baked into an environment map), emissive meshes

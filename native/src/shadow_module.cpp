@@ -245,7 +245,7 @@ std::array<int, 4> face_image_bounds(const glm::dvec3& F, const glm::dvec3& R, c
 }  // namespace
 
 void ShadowModule::begin_frame(const CameraMatrices& camera, int max_resolution, float quality,
-                              std::size_t memory_budget, bool rays) {
+                              std::size_t memory_budget, bool rays, bool count_fragments) {
     camera_ = camera;
     rays_ = rays;
     split_near_ = camera.clip_start;
@@ -257,7 +257,8 @@ void ShadowModule::begin_frame(const CameraMatrices& camera, int max_resolution,
     // reference for what lit_region leaves out).
     const char* lit = std::getenv("DEFERRED_SHADOW_LIT_REGION");
     lit_region_enabled_ = !(lit && std::string(lit) == "off");
-    count_fragments_ = epoxy_gl_version() >= 46 || epoxy_has_gl_extension("GL_ARB_pipeline_statistics_query");
+    count_fragments_ = count_fragments &&
+                       (epoxy_gl_version() >= 46 || epoxy_has_gl_extension("GL_ARB_pipeline_statistics_query"));
     entries_.clear();
     layers_ = 0;
     world_index_ = -1;

@@ -59,8 +59,10 @@ public:
     // every offered light is kept (no layers, no budget), and the module only
     // packs each sample's light points and world directions (GpuShadow),
     // allocating and drawing no map.
+    // `count_fragments`: a fragment query around each layer's draws
+    // (collect_fragments), where the driver has pipeline statistics.
     void begin_frame(const CameraMatrices& camera, int max_resolution, float quality, std::size_t memory_budget,
-                     bool rays = false);
+                     bool rays = false, bool count_fragments = false);
     bool rays() const { return rays_; }
     // Offers a light; returns false if it cannot shadow anything visible.
     bool offer(std::size_t light_index, const Light& light, const gpu::GpuLight& packed);

@@ -91,6 +91,12 @@ struct RenderSettings {
     // alpha are still tested in the raster, by their own programs). The
     // image is the raster path's up to rounding.
     bool visibility_buffer = false;
+    // Benchmarks: count the fragments the shadow maps' draws shade
+    // (FrameTimings::shadow_fragments) with a pipeline-statistics query
+    // around each map layer's draws. Off for renders: a driver may wait for
+    // its pipeline to drain at each end of such a query, tens of times a
+    // sample.
+    bool count_shadow_fragments = false;
     // Light culling (tiled, 2.5D depth masks). Blender's lights reach to
     // infinity; a light is cut off where even a white Lambertian surface
     // facing it would reflect less than `light_threshold` (scene-linear
@@ -213,7 +219,8 @@ struct FrameTimings {
     // Texels of those layers inside their scissor (faces a spot or an area
     // light does not shine through, and their parts, are left out).
     std::uint64_t shadow_texels_rendered = 0;
-    // Fragments those draws shaded (the fill; 0 without pipeline statistics).
+    // Fragments those draws shaded (the fill; RenderSettings::
+    // count_shadow_fragments only, and 0 without pipeline statistics).
     std::uint64_t shadow_fragments = 0;
     std::uint64_t shadow_instances_drawn = 0;  // instances drawn into them (after culling per map)
     std::uint64_t camera_instances_drawn = 0;  // instances in the view frustum, over all samples

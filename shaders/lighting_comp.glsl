@@ -19,16 +19,23 @@ layout(local_size_x = LIGHTING_GROUP_SIZE, local_size_y = LIGHTING_GROUP_SIZE) i
  * world light and background belong to the batch starting at 0. */
 layout(location = 0) uniform uvec2 light_batch;
 
-/* The batches after the first run only over the pixels that need them:
- * the first appends each pixel whose light sequence goes on past it (not a
- * background or holdout pixel, nor one whose tile list fits the batch) to
- * this list, with the group count of an indirect dispatch
- * (x, 1, 1; w the pixels), and later batches run one invocation per entry.
- * A dispatch over the whole image per batch cost llvmpipe ~25 ms at
- * 480x270 however early each invocation returned (20 of them for 10 000
- * lights). */
+/* The batches after the first run only over the pixels that need them
+ * (later_from_list): the first appends each pixel whose light sequence
+ * goes on past it (not a background or holdout pixel, nor one whose tile
+ * list fits the batch) to this list, with an indirect dispatch's group
+ * counts (xyz; w the pixels; later_totals.x the pixels listed over the
+ * frame's samples, FrameTimings::lighting_later_pixels): entry k is invocation k % 64 of group k / 64,
+ * laid out LATER_GROUPS_PER_ROW groups a row (a dimension holds at least
+ * 65535 groups), and later batches run one invocation per entry. A
+ * dispatch over the whole image per batch cost llvmpipe ~25 ms at 480x270
+ * however early each invocation returned (20 of them for 10 000 lights).
+ * Without the list (an image whose list would not fit one storage block)
+ * every batch covers the image. */
+#define LATER_GROUPS_PER_ROW 1024u
+layout(location = 2) uniform bool later_from_list;
 layout(std430, binding = SSBO_LIGHTING_LATER) buffer LaterPixels {
     uvec4 later_dispatch;
+    uvec4 later_totals;
     uint later_pixels[];
 };
 
@@ -192,8 +199,9 @@ vec4 behind_forward_layer(ivec2 pixel, vec4 value, bool first_batch) {
 void main() {
     const bool first_batch = light_batch.x == 0u;
     ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
-    if (!first_batch) {
-        const uint entry = gl_WorkGroupID.x * uint(LIGHTING_GROUP_SIZE * LIGHTING_GROUP_SIZE) + gl_LocalInvocationIndex;
+    if (!first_batch && later_from_list) {
+        const uint group = gl_WorkGroupID.y * LATER_GROUPS_PER_ROW + gl_WorkGroupID.x;
+        const uint entry = group * uint(LIGHTING_GROUP_SIZE * LIGHTING_GROUP_SIZE) + gl_LocalInvocationIndex;
         if (entry >= later_dispatch.w) return;
         const uint entry_pixel = later_pixels[entry];
         pixel = ivec2(entry_pixel & 0xffffu, entry_pixel >> 16u);
@@ -251,10 +259,15 @@ void main() {
         from_list = true;
     }
 #endif
-    if (first_batch && count > light_batch.y) {
+    if (first_batch && later_from_list && count > light_batch.y) {
         const uint entry = atomicAdd(later_dispatch.w, 1u);
         later_pixels[entry] = uint(pixel.x) | (uint(pixel.y) << 16u);
-        if (entry % uint(LIGHTING_GROUP_SIZE * LIGHTING_GROUP_SIZE) == 0u) atomicAdd(later_dispatch.x, 1u);
+        atomicAdd(later_totals.x, 1u);
+        const uint group = entry / uint(LIGHTING_GROUP_SIZE * LIGHTING_GROUP_SIZE);
+        if (entry % uint(LIGHTING_GROUP_SIZE * LIGHTING_GROUP_SIZE) == 0u) {
+            atomicMax(later_dispatch.x, min(group + 1u, LATER_GROUPS_PER_ROW));
+            atomicMax(later_dispatch.y, group / LATER_GROUPS_PER_ROW + 1u);
+        }
     }
     if (!first_batch && light_batch.x >= min(count, light_batch.y)) return;
 

@@ -136,8 +136,9 @@ def main(argv=None):
                     help="the G-buffer from the visibility buffer, in compute (native "
                          "RenderSettings.visibility_buffer), or the raster path, instead of the captured setting")
     ap.add_argument("--count-fragments", action="store_true",
-                    help="count the fragments the shadow maps' draws shade (a pipeline-statistics query around "
-                         "each map layer: native RenderSettings.count_shadow_fragments; it may cost a GPU time)")
+                    help="count the fragments the shadow maps' draws shade in every repeat (a pipeline-statistics "
+                         "query around each map layer: native RenderSettings.count_shadow_fragments; it may cost a "
+                         "GPU time)")
     args = ap.parse_args(argv)
 
     data, calls, meta = load_capture(args.capture)
@@ -200,6 +201,7 @@ def main(argv=None):
               "gl_version": info.get("version"), "size": [width, height], "samples": kwargs.get("samples"),
               "light_samples": kwargs.get("light_samples", 0), "shadow_rays": kwargs.get("shadow_rays", False),
               "filter_splat": kwargs.get("filter_splat", True),
+              "fragments_counted": bool(args.count_fragments),
               "visibility_buffer": bool(runs and runs[-1].get("visibility_buffer")),
               "passes": sorted(images), "context_ms": t_context * 1e3, "scene_ms": t_scene * 1e3,
               "runs": runs, "warnings": warnings, "captured": meta}

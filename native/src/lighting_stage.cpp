@@ -73,12 +73,20 @@ void LightingStage::run(const LightModule& lights, const LightCulling* culling, 
     }
     const GLuint groups_x = GLuint((width + LIGHTING_GROUP_SIZE - 1) / LIGHTING_GROUP_SIZE);
     const GLuint groups_y = GLuint((height + LIGHTING_GROUP_SIZE - 1) / LIGHTING_GROUP_SIZE);
+    // Later batches over the pixels the first one lists (lighting_comp.glsl),
+    // where the list fits one storage block; over the image otherwise.
     const bool later_batches = lights.count() > batch_;
-    if (later_batches) {
-        const std::size_t pixels = std::size_t(width) * std::size_t(height);
+    const std::size_t pixels = std::size_t(width) * std::size_t(height);
+    GLint64 max_block = 0;
+    if (later_batches) glGetInteger64v(GL_MAX_SHADER_STORAGE_BLOCK_SIZE, &max_block);
+    const bool from_list = later_batches && kLaterHeader + 4 * std::uint64_t(pixels) <= std::uint64_t(max_block);
+    glUniform1i(2, from_list ? 1 : 0);
+    if (from_list) {
         if (!later_ || later_pixels_ < pixels) {
-            later_ = make_storage_buffer(nullptr, 16 + pixels * 4, "lighting: later batches' pixels");
+            later_ = make_storage_buffer(nullptr, kLaterHeader + pixels * 4, "lighting: later batches' pixels");
             later_pixels_ = pixels;
+            const std::uint32_t totals[4] = {0u, 0u, 0u, 0u};  // pixels listed over the samples
+            glNamedBufferSubData(later_.get(), 16, sizeof(totals), totals);
         }
         const std::uint32_t header[4] = {0u, 1u, 1u, 0u};  // groups x, y, z; pixels
         glNamedBufferSubData(later_.get(), 0, sizeof(header), header);
@@ -86,16 +94,30 @@ void LightingStage::run(const LightModule& lights, const LightCulling* culling, 
     }
     glUniform2ui(0, 0, batch_);
     glDispatchCompute(groups_x, groups_y, 1);
-    glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
-    if (!later_batches) return;
-    glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, later_.get());
+    if (!later_batches) {
+        glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+        return;
+    }
+    // The list's header is read as dispatch arguments and cleared by the
+    // next sample's glNamedBufferSubData: both wait for these writes.
+    glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT |
+                    GL_BUFFER_UPDATE_BARRIER_BIT);
+    if (from_list) glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, later_.get());
     for (std::uint32_t begin = batch_; begin < lights.count(); begin += batch_) {
         between_batches();
         glUniform2ui(0, begin, begin + batch_);
-        glDispatchComputeIndirect(0);
+        if (from_list) glDispatchComputeIndirect(0);
+        else glDispatchCompute(groups_x, groups_y, 1);
         glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
     }
-    glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, 0);
+    if (from_list) glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, 0);
+}
+
+std::uint64_t LightingStage::later_pixels() const {
+    if (!later_) return 0;
+    std::uint32_t totals[4] = {0u, 0u, 0u, 0u};
+    glGetNamedBufferSubData(later_.get(), 16, sizeof(totals), totals);
+    return totals[0];
 }
 
 }  // namespace deferred

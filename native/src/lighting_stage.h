@@ -63,10 +63,14 @@ public:
     // `world_group` the world's; `between_batches` runs before each batch
     // after the first (a cancel).
     // Batches after the first run over the pixels the first one listed
-    // (an indirect dispatch), not the whole image.
+    // (an indirect dispatch), not the whole image, where the list fits a
+    // storage block.
     void run(const LightModule& lights, const LightCulling* culling, const FilmModule& film, GLuint instance_groups,
              std::uint32_t world_group, int width, int height, const std::function<void()>& between_batches);
     bool light_sampling() const { return light_sampling_; }
+    // Pixels the batches after the first ran over, summed over this
+    // frame's samples (reads the GPU's count: after the frame).
+    std::uint64_t later_pixels() const;
 
 private:
     // The program's variant; `light_sampling`: whether stochastic light
@@ -76,7 +80,8 @@ private:
     GLuint program_ = 0;
     std::uint32_t batch_ = kLightBatch;
     bool light_sampling_ = false;
-    Buffer later_;  // SSBO_LIGHTING_LATER: dispatch header and pixels
+    static constexpr std::size_t kLaterHeader = 32;  // dispatch arguments, count; totals
+    Buffer later_;  // SSBO_LIGHTING_LATER: header and pixels
     std::size_t later_pixels_ = 0;
 };
 

@@ -1090,6 +1090,7 @@ FrameResult Renderer::Impl::finish(Frame& f) {
     t.shadow_layers_rendered = shadows.layers_rendered();
     t.shadow_texels_rendered = shadows.texels_rendered();
     t.shadow_fragments = shadows.collect_fragments();  // after the frame's last wait: no stall
+    t.lighting_later_pixels = f.lighting.later_pixels();  // likewise
     t.shadow_instances_drawn = f.shadow_instances_drawn;
     t.camera_instances_drawn = f.camera_instances_drawn;
     t.shadow_lights_dropped = shadows.dropped();

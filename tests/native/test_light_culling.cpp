@@ -180,53 +180,131 @@ TEST(LightCulling, SixtyFiveThousandLights) {
     EXPECT_LE(c.max_excess, 0.0);
 }
 
+// Lights add linearly (no selection; salts per shadowed light, not per
+// light index): the image of `lights` rendered at once equals the sum of
+// renders of its consecutive parts of `part` lights each. Returns the
+// worst relative difference; `whole` gets the full render's timings.
+double parts_difference(const std::vector<Light>& lights, std::size_t part, const RenderSettings& s,
+                        FrameTimings& whole_timings, int& geometry_pixels) {
+    Renderer r;
+    build_geometry(r);
+    for (const Light& l : lights) r.add_light(l);
+    const FrameResult whole = r.render(overview_camera(), s);
+    whole_timings = whole.timings;
+    std::vector<double> sum(std::size_t(s.width) * s.height * 4, 0.0);
+    for (std::size_t begin = 0; begin < lights.size(); begin += part) {
+        Renderer p;
+        build_geometry(p);
+        for (std::size_t i = begin; i < std::min(lights.size(), begin + part); ++i) p.add_light(lights[i]);
+        const FrameResult f = p.render(overview_camera(), s);
+        const std::vector<float>& px = f.find(Pass::Combined)->pixels;
+        for (std::size_t i = 0; i < px.size(); ++i) sum[i] += px[i];
+    }
+    const std::vector<float>& a = whole.find(Pass::Combined)->pixels;
+    const PassImage& depth = *whole.find(Pass::Depth);
+    double worst = 0;
+    geometry_pixels = 0;
+    for (std::size_t i = 0; i < a.size(); i += 4) {
+        if (depth.pixels[(i / 4) * std::size_t(depth.channels)] < 1e9f) ++geometry_pixels;
+        for (int k = 0; k < 3; ++k)
+            worst = std::max(worst, std::abs(a[i + k] - sum[i + k]) / std::max(std::abs(sum[i + k]), 1e-3));
+    }
+    return worst;
+}
+
 TEST(LightCulling, LaterBatchesReachEveryPixelThatNeedsThem) {
-    // 1100 lights light in three batches (kLightBatch = 512); the batches
-    // after the first run only over the pixels the first listed (an
-    // indirect dispatch). Lights add linearly (no shadows, no selection), so
-    // the image must equal the sum of three renders of 512, 512 and 76 of
-    // the lights, each one batch. Culled with every light reaching every
-    // tile, and brute force; the world behind the floor is background,
-    // which no later batch visits.
-    const auto lights = random_point_lights(1100, 5, 1.0f);
-    const int width = 48, height = 32;
+    // The lighting shades 512 lights a dispatch (8 with shadow rays); the
+    // dispatches after the first run only over the pixels the first listed
+    // (an indirect dispatch). 1100 lights make three batches: the image
+    // must equal the sum of renders of 512, 512 and 76 of them, one batch
+    // each, over two samples (the list is rebuilt each sample).
+    std::vector<Light> lights = random_point_lights(500, 5, 1.0f);
+    {
+        // 600 more lights crowded over one corner of the floor: only the
+        // tiles there hold more than a batch.
+        std::vector<Light> crowd = random_point_lights(600, 6, 1.0f);
+        for (Light& l : crowd) {
+            l.matrix[12] = -12.0 + 0.1 * l.matrix[12];
+            l.matrix[13] = -6.0 + 0.1 * l.matrix[13];
+        }
+        lights.insert(lights.end(), crowd.begin(), crowd.end());
+    }
+    RenderSettings s;
+    s.width = 64;
+    s.height = 48;
+    s.samples = 2;
+    s.passes = {Pass::Combined, Pass::Depth};
     for (bool culled : {true, false}) {
-        RenderSettings s;
-        s.width = width;
-        s.height = height;
-        s.light_threshold = 1e-7f;
         s.light_culling = culled;
-        Renderer r;
-        build_geometry(r);
-        for (const Light& l : lights) r.add_light(l);
-        const FrameResult whole = r.render(overview_camera(), s);
-        std::vector<double> sum(std::size_t(width) * height * 4, 0.0);
-        for (std::size_t begin = 0; begin < lights.size(); begin += 512) {
-            Renderer part;
-            build_geometry(part);
-            for (std::size_t i = begin; i < std::min(lights.size(), begin + 512); ++i) part.add_light(lights[i]);
-            const FrameResult f = part.render(overview_camera(), s);
-            const std::vector<float>& px = f.find(Pass::Combined)->pixels;
-            for (std::size_t i = 0; i < px.size(); ++i) sum[i] += px[i];
-        }
-        const std::vector<float>& a = whole.find(Pass::Combined)->pixels;
-        double worst = 0;
-        int lit = 0, background = 0;
-        for (std::size_t i = 0; i < a.size(); i += 4) {
-            if (sum[i + 3] > 0.5 && sum[i] + sum[i + 1] + sum[i + 2] > 0.0) ++lit;
-            if (a[i] + a[i + 1] + a[i + 2] == 0.0f) ++background;
-            for (int k = 0; k < 3; ++k)
-                worst = std::max(worst, std::abs(a[i + k] - sum[i + k]) / std::max(std::abs(sum[i + k]), 1e-3));
-        }
-        std::printf("%s: %d lit pixels, %d black, worst relative difference to the parts' sum %.2e, %llu tile-light "
-                    "pairs\n",
-                    culled ? "culled" : "brute force", lit, background, worst,
-                    (unsigned long long)whole.timings.tile_light_pairs);
-        EXPECT_GT(lit, width * height / 4);
-        EXPECT_GT(background, 0);
+        FrameTimings t;
+        int geometry = 0;
+        const double worst = parts_difference(lights, 512, s, t, geometry);
+        std::printf("%s: %d of %d pixels see a surface, %llu pixel-samples in the later batches, worst relative "
+                    "difference to the parts' sum %.2e\n",
+                    culled ? "culled" : "brute force", geometry, s.width * s.height,
+                    (unsigned long long)t.lighting_later_pixels, worst);
+        EXPECT_GT(geometry, s.width * s.height / 2);
+        EXPECT_LT(geometry, s.width * s.height);  // some background, never listed
         if (culled) {
-            EXPECT_GE(whole.timings.tile_light_pairs, 1100u);  // lists longer than a batch
+            // Some pixels' lists go past a batch, most do not.
+            EXPECT_GT(t.lighting_later_pixels, 0u);
+            EXPECT_LT(t.lighting_later_pixels, std::uint64_t(geometry) * s.samples * 8 / 10);
+        } else {
+            // Every pixel that sees a surface, each sample (a silhouette
+            // pixel's samples may see it or not).
+            EXPECT_GE(t.lighting_later_pixels, std::uint64_t(geometry) * s.samples * 95 / 100);
+            EXPECT_LE(t.lighting_later_pixels, std::uint64_t(s.width) * s.height * s.samples);
         }
         EXPECT_LT(worst, 1e-4);
     }
+    {
+        // More than 1024 groups of 64 listed pixels: the indirect dispatch's
+        // second row of groups (lighting_comp.glsl LATER_GROUPS_PER_ROW).
+        RenderSettings big;
+        big.width = 384;
+        big.height = 256;
+        big.passes = {Pass::Combined, Pass::Depth};
+        big.light_culling = false;
+        FrameTimings t;
+        int geometry = 0;
+        const double worst = parts_difference(random_point_lights(513, 9, 1.0f), 512, big, t, geometry);
+        std::printf("384x256, 513 lights: %llu pixels in the later batch (%llu groups), worst relative difference "
+                    "%.2e\n",
+                    (unsigned long long)t.lighting_later_pixels, (unsigned long long)(t.lighting_later_pixels + 63) / 64,
+                    worst);
+        EXPECT_GT(t.lighting_later_pixels, 1024u * 64u);
+        EXPECT_LT(worst, 1e-4);
+    }
+
+    // With shadow rays (8 lights a dispatch), sized lights draw their
+    // points per pixel: four shadowed lights after eight faint unshadowed
+    // ones (the second batch) must light as the four alone do (the first),
+    // so a later batch's invocation knows its pixel.
+    std::vector<Light> rays = random_point_lights(12, 8, 1.0f);
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+        rays[i].cast_shadow = i >= 8;
+        rays[i].radius = i >= 8 ? 0.5f : 0.0f;
+        if (i < 8) rays[i].energy = 1e-9f;
+    }
+    std::vector<Light> four(rays.begin() + 8, rays.end());
+    RenderSettings r = s;
+    r.shadow_rays = true;
+    r.light_culling = false;
+    Renderer a, b;
+    build_geometry(a);
+    build_geometry(b);
+    for (const Light& l : rays) a.add_light(l);
+    for (const Light& l : four) b.add_light(l);
+    const FrameResult with = a.render(overview_camera(), r);
+    const FrameResult alone = b.render(overview_camera(), r);
+    const std::vector<float>& x = with.find(Pass::Combined)->pixels;
+    const std::vector<float>& y = alone.find(Pass::Combined)->pixels;
+    double worst = 0;
+    for (std::size_t i = 0; i < x.size(); ++i)
+        if (i % 4 != 3) worst = std::max(worst, double(std::abs(x[i] - y[i])) / std::max(double(std::abs(y[i])), 1e-3));
+    std::printf("shadow rays: %llu pixel-samples in the later batches, worst relative difference %.2e\n",
+                (unsigned long long)with.timings.lighting_later_pixels, worst);
+    EXPECT_TRUE(with.timings.shadow_rays);
+    EXPECT_GT(with.timings.lighting_later_pixels, 0u);
+    EXPECT_LT(worst, 1e-3);
 }

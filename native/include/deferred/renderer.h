@@ -212,6 +212,10 @@ struct FrameTimings {
     double forward_ms = 0;  // the forward pass (Blend-mode materials), all samples
     double total_ms = 0;
     std::uint64_t tile_light_pairs = 0;  // entries in the culled per-tile light lists
+    // Pixels the lighting's batches after the first ran over (their light
+    // lists go past one batch: 512 lights, 8 with shadow rays), summed over
+    // the samples; 0 where one batch holds every light.
+    std::uint64_t lighting_later_pixels = 0;
     std::size_t shadow_map_bytes = 0;    // shadow map array + its depth buffer
     std::size_t shadowed_lights = 0;     // lights with shadow maps this frame
     std::vector<int> shadow_resolutions;  // texels per side of each shadowed light's maps

@@ -7,7 +7,8 @@ samples, render after render of an unchanged scene. Prints a table.
 "Beyond the samples" = wall time of bpy.ops.render.render() minus the engine's
 per-sample stages (geometry, shadows, culling, lighting, forward, passes):
 Blender's own render setup, the depsgraph export, the upload, the readback
-and the hand-over to the RenderResult. The first render starts the renderer
+and the hand-over to the RenderResult. The three largest stages (shadow
+maps, G-buffer, lighting) are printed apart. The first render starts the renderer
 (GL context, programs from the disk cache); the later ones reuse it.
 """
 
@@ -34,16 +35,18 @@ def main():
     scene.render.use_persistent_data = True
     from deferred_render.engine import final
     print(f"{bpy.data.filepath}: {args.size}, {args.samples} samples, Persistent Data on")
-    print("| render | wall s | samples' stages s | beyond the samples s | upload ms | readback ms | programs loaded |")
-    print("| ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
+    print("| render | wall s | samples' stages s | beyond the samples s | shadows s | geometry s | lighting s | "
+          "upload ms | readback ms | programs loaded |")
+    print("| ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
     for i in range(args.renders):
         t0 = time.perf_counter()
         bpy.ops.render.render()
         wall = time.perf_counter() - t0
         t = dict(final.last_timings)
         loop = sum(t.get(k, 0.0) for k in STAGES) / 1e3
-        print(f"| {i + 1} | {wall:.3f} | {loop:.3f} | {wall - loop:.3f} | {t.get('upload_ms', 0):.0f} | "
-              f"{t.get('readback_ms', 0):.0f} | {t.get('programs_loaded', 0)} |")
+        print(f"| {i + 1} | {wall:.3f} | {loop:.3f} | {wall - loop:.3f} | {t.get('shadow_ms', 0) / 1e3:.3f} | "
+              f"{t.get('geometry_ms', 0) / 1e3:.3f} | {t.get('lighting_ms', 0) / 1e3:.3f} | "
+              f"{t.get('upload_ms', 0):.0f} | {t.get('readback_ms', 0):.0f} | {t.get('programs_loaded', 0)} |")
 
 
 main()

@@ -53,23 +53,33 @@ layout(binding = OUT_UV, rg32f) writeonly uniform image2D img_uv;
 layout(binding = OUT_GEOMETRY, rgba32ui) writeonly uniform uimage2D img_geometry;
 #endif
 
+/* The pixel's ray met on the triangle's plane, in double precision: in
+ * float the weights lose bits to cancellation, since the ray's origin and
+ * the corner are as far apart as the camera is from the surface while the
+ * weights resolve offsets within the triangle (about 1e-6 of the view's
+ * extent: the node probes' Degrees case, whose input is x57 its UV, erred
+ * 1.2e-4 in float where the raster erred 3e-5). The corners stay the float
+ * positions the vertex stage computes, so both paths meet the same
+ * triangle. On NVIDIA's data-centre GPUs doubles run at half the float
+ * rate; the resolve does three of these per pixel. */
+
 /* Camera-relative world point of window position `frag` (pixels) at depth d. */
-vec3 window_point(vec2 frag, float d) {
-    vec4 view = frame.inv_projection * vec4(frag * frame.viewport.zw * 2.0 - 1.0, d, 1.0);
-    return (frame.inv_view * vec4(view.xyz / view.w, 1.0)).xyz;
+dvec3 window_point(dvec2 frag, double d) {
+    const dvec4 view = dmat4(frame.inv_projection) * dvec4(frag / dvec2(frame.viewport.xy) * 2.0 - 1.0, d, 1.0);
+    return (dmat4(frame.inv_view) * dvec4(view.xyz / view.w, 1.0)).xyz;
 }
 
 /* Weights of corners 1 and 2 where the ray through window position `frag`
  * meets the plane of (p0, p1, p2) (Moeller-Trumbore, unclamped). */
-vec2 plane_weights(vec2 frag, vec3 p0, vec3 e1, vec3 e2) {
-    const vec3 o = window_point(frag, 1.0);            /* the near plane (reversed Z) */
-    const vec3 d = window_point(frag, 0.5) - o;        /* further along the same ray */
-    const vec3 pvec = cross(d, e2);
-    const float det = dot(e1, pvec);
-    if (abs(det) < 1e-30 || isnan(det)) return vec2(1.0 / 3.0);  /* edge-on: the centroid */
-    const vec3 tvec = o - p0;
-    const vec3 qvec = cross(tvec, e1);
-    return vec2(dot(tvec, pvec), dot(d, qvec)) / det;
+dvec2 plane_weights(dvec2 frag, dvec3 p0, dvec3 e1, dvec3 e2) {
+    const dvec3 o = window_point(frag, 1.0);            /* the near plane (reversed Z) */
+    const dvec3 d = window_point(frag, 0.5) - o;        /* further along the same ray */
+    const dvec3 pvec = cross(d, e2);
+    const double det = dot(e1, pvec);
+    if (abs(det) < 1e-300 || isnan(det)) return dvec2(1.0 / 3.0);  /* edge-on: the centroid */
+    const dvec3 tvec = o - p0;
+    const dvec3 qvec = cross(tvec, e1);
+    return dvec2(dot(tvec, pvec), dot(d, qvec)) / det;
 }
 
 void main() {
@@ -103,10 +113,12 @@ void main() {
     }
     const vec2 frag = vec2(pixel) + 0.5;
     g_frag_coord = vec4(frag, 0.0, 1.0);
-    const vec3 e1 = world[1] - world[0], e2 = world[2] - world[0];
-    const vec2 w12 = plane_weights(frag, world[0], e1, e2);
-    const vec2 w12_dx = plane_weights(frag + vec2(1.0, 0.0), world[0], e1, e2) - w12;
-    const vec2 w12_dy = plane_weights(frag + vec2(0.0, 1.0), world[0], e1, e2) - w12;
+    g_triangle_normal = cross(world[1] - world[0], world[2] - world[0]);
+    const dvec3 p0 = dvec3(world[0]), e1 = dvec3(world[1]) - p0, e2 = dvec3(world[2]) - p0;
+    const dvec2 w12_d = plane_weights(dvec2(frag), p0, e1, e2);
+    const vec2 w12 = vec2(w12_d);
+    const vec2 w12_dx = vec2(plane_weights(dvec2(frag) + dvec2(1.0, 0.0), p0, e1, e2) - w12_d);
+    const vec2 w12_dy = vec2(plane_weights(dvec2(frag) + dvec2(0.0, 1.0), p0, e1, e2) - w12_d);
     const vec3 b = vec3(1.0 - w12.x - w12.y, w12);
     const vec3 db_dx = vec3(-w12_dx.x - w12_dx.y, w12_dx), db_dy = vec3(-w12_dy.x - w12_dy.y, w12_dy);
 

@@ -184,10 +184,13 @@ vec3 g_dposition_dx, g_dposition_dy;  /* camera-relative world */
 vec3 g_dobject_dx, g_dobject_dy;      /* object-space position */
 vec2 g_duv_dx, g_duv_dy;
 vec4 g_dattr_dx[8], g_dattr_dy[8];
+vec3 g_triangle_normal;               /* cross of the triangle's world edges */
 vec3 ddx_position() { return g_dposition_dx; }
 vec3 ddy_position() { return g_dposition_dy; }
-/* The true normal's direction (either side): the plane the two differentials span. */
-vec3 screen_plane_normal() { return cross(g_dposition_dx, g_dposition_dy); }
+/* The true normal's direction (either side): the triangle's own plane, the
+ * one the two differentials span, without their rounding (a flat plane's
+ * normal exactly as the raster's derivatives give it). */
+vec3 screen_plane_normal() { return g_triangle_normal; }
 #else
 vec3 ddx_position() { return dFdxFine(v_position); }
 vec3 ddy_position() { return dFdyFine(v_position); }

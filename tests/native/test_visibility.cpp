@@ -19,24 +19,81 @@ using namespace deferred::testing;
 
 namespace {
 
-// Largest absolute difference between the two renders' passes, per pass.
+// The rasteriser's interpolation is the visibility buffer's only up to where
+// it puts the vertices: GL snaps window positions to its subpixel grid (GL
+// 4.5 section 14.5, GL_SUBPIXEL_BITS, 8 on llvmpipe and NVIDIA), each
+// corner by up to 1/512 pixel per axis. An attribute interpolated over the
+// snapped corners moves by at most its screen gradient times that shift
+// (the weights' change is -sum_j b_j grad(b) . e_j), so a pixel's Normal or
+// UV may differ by its change to a neighbour over 128 (two grid steps: the
+// largest neighbour difference of a linear attribute is at least
+// |gradient| / sqrt 2, and the shift at most sqrt 2 / 512). llvmpipe
+// interpolates from the unsnapped positions (every pass within 7.4e-5);
+// an H200 differed by 2.3e-3 in Normal and 4.2e-4 in UV on the showcase at
+// 96x64, where its 24x12 sphere's triangles are two or three pixels wide.
+constexpr double kSnapSlopeFactor = 2.0 / 256.0;
+
+bool interpolated(Pass p) { return p == Pass::Normal || p == Pass::UV; }
+// Passes shaded from that normal: a sharp highlight narrower than a pixel
+// moves by more than the image's neighbour differences tell, so these must
+// agree at all but 1 % of their pixels to the same allowance, and on
+// average to the bound.
+bool shaded(Pass p) {
+    return p == Pass::Combined || p == Pass::DiffDir || p == Pass::GlossDir || p == Pass::Shadow || p == Pass::AO ||
+           p == Pass::ShadowCatcher;
+}
+
+// Per pass: the largest difference between the two renders beyond what the
+// rasteriser's snapping allows (above), relative to the pass's range
+// (Depth, Position are metres). The other passes (Depth, Position, the
+// indices, the colour passes: what surface a pixel sees, not where on it)
+// must agree to the bound at every pixel.
 void expect_same_passes(const FrameResult& raster, const FrameResult& vis, double bound, const std::string& what) {
     ASSERT_EQ(raster.passes.size(), vis.passes.size());
     for (const PassImage& a : raster.passes) {
         const PassImage* b = vis.find(a.pass);
         ASSERT_NE(b, nullptr);
         ASSERT_EQ(a.pixels.size(), b->pixels.size());
-        double worst = 0, scale = 1;
+        double scale = 1;
         for (float v : a.pixels)
             if (std::isfinite(v) && std::abs(v) < 1e9f) scale = std::max(scale, double(std::abs(v)));
+        const bool snapped = interpolated(a.pass) || shaded(a.pass);
+        const std::size_t ch = std::size_t(a.channels), w = std::size_t(a.width), h = std::size_t(a.height);
+        double worst = 0, worst_excess = 0, sum = 0;
+        std::size_t beyond = 0, counted = 0, worst_at = 0;
         for (std::size_t i = 0; i < a.pixels.size(); ++i) {
             ASSERT_TRUE(std::isfinite(b->pixels[i]) || !std::isfinite(a.pixels[i])) << what;
             if (std::abs(a.pixels[i]) >= 1e9f) continue;  // the background's depth
-            worst = std::max(worst, std::abs(double(a.pixels[i]) - double(b->pixels[i])));
+            const double d = std::abs(double(a.pixels[i]) - double(b->pixels[i]));
+            double slope = 0;  // the raster pixel's largest difference to a neighbour
+            if (snapped) {
+                const std::size_t px = i / ch, x = px % w, y = px / w;
+                for (const auto& [dx, dy] : {std::pair{-1, 0}, {1, 0}, {0, -1}, {0, 1}}) {
+                    const long nx = long(x) + dx, ny = long(y) + dy;
+                    if (nx < 0 || ny < 0 || nx >= long(w) || ny >= long(h)) continue;
+                    const float n = a.pixels[(std::size_t(ny) * w + std::size_t(nx)) * ch + i % ch];
+                    if (std::abs(n) < 1e9f) slope = std::max(slope, std::abs(double(n) - double(a.pixels[i])));
+                }
+            }
+            const double excess = d - slope * kSnapSlopeFactor;
+            if (excess > bound * scale) ++beyond;
+            if (excess > worst_excess) worst_excess = excess, worst_at = i;
+            worst = std::max(worst, d);
+            sum += d;
+            ++counted;
         }
-        std::printf("%s: %s differs by %.3g (of %.3g)\n", what.c_str(), pass_info(a.pass).name, worst, scale);
-        // Relative to the pass's range (Depth, Position are metres).
-        EXPECT_LE(worst, bound * scale) << what << ": " << pass_info(a.pass).name << " differs by " << worst;
+        const double mean = counted ? sum / double(counted) : 0.0;
+        const std::size_t px = worst_at / ch;
+        std::printf("%s: %s differs by %.3g (of %.3g), mean %.3g; beyond the snapping allowance %.3g at %zu of %zu "
+                    "values (worst at pixel %zu, %zu)\n",
+                    what.c_str(), pass_info(a.pass).name, worst, scale, mean, worst_excess, beyond, counted, px % w,
+                    px / w);
+        if (shaded(a.pass)) {
+            EXPECT_LE(double(beyond), 0.01 * double(counted)) << what << ": " << pass_info(a.pass).name;
+            EXPECT_LE(mean, bound * scale) << what << ": " << pass_info(a.pass).name << " differs on average";
+        } else {
+            EXPECT_LE(worst_excess, bound * scale) << what << ": " << pass_info(a.pass).name << " differs by " << worst;
+        }
     }
 }
 
@@ -177,4 +234,57 @@ TEST(VisibilityBuffer, PartlyTransparentMaterialsCoverTheSamePixels) {
     s.film_transparent = true;
     const Camera cam = top_down_ortho(5.0, 3.0f);
     expect_same_passes(render(r, cam, s, false), render(r, cam, s, true), 1e-4, "partly transparent");
+}
+
+TEST(VisibilityBuffer, TheResolveMeetsThePixelsRayAsExactlyAsDoublesAllow) {
+    // A plane seen obliquely (perspective: the weights are not affine in
+    // the window) whose corners, and the camera's position, are exact in
+    // float, so the only error left is the resolve's own: its UV against the
+    // UV where each pixel centre's ray (1 sample: unjittered) meets the
+    // plane, computed here in double. llvmpipe: the resolve in double errs
+    // 1.1e-7, in float 5.3e-7 (the ray's origin and the corner are ~9 m
+    // apart while the weights resolve millimetres), the rasteriser 2.7e-7.
+    Renderer r;
+    Material m;
+    m.base_color = {0.5f, 0.5f, 0.5f};
+    const float half = 2.0f;
+    add_plane(r, m, half, 4);
+    set_world_color(r, 0.1f, 0.1f, 0.1f);
+    Camera cam;
+    const double eye[3] = {0.25, -4.5, 6.5}, target[3] = {0.125, 0.25, 0.0};
+    cam.matrix = tools::look_at(eye, target);
+    RenderSettings s;
+    s.width = 160;
+    s.height = 120;
+    s.samples = 1;
+    s.passes = PassSet{Pass::Combined, Pass::UV};
+    const FrameResult vis = render(r, cam, s, true), raster = render(r, cam, s, false);
+    // The pixel centre's ray (the camera looks down its -Z; sensor fit Auto,
+    // so the width spans the sensor's 36 mm at the 50 mm lens).
+    const double tan_x = 0.5 * double(cam.sensor_width) / double(cam.lens);
+    const double tan_y = tan_x * double(s.height) / double(s.width);
+    const Mat4d& M = cam.matrix;
+    double worst_vis = 0, worst_raster = 0;
+    int counted = 0;
+    for (int y = 0; y < s.height; ++y)
+        for (int x = 0; x < s.width; ++x) {
+            const double lx = (2.0 * (x + 0.5) / s.width - 1.0) * tan_x, ly = (2.0 * (y + 0.5) / s.height - 1.0) * tan_y;
+            const glm::dvec3 dir(M[0] * lx + M[4] * ly - M[8], M[1] * lx + M[5] * ly - M[9], M[2] * lx + M[6] * ly - M[10]);
+            const glm::dvec3 origin(M[12], M[13], M[14]);
+            const double t = -origin.z / dir.z;
+            const glm::dvec3 hit = origin + t * dir;
+            // Pixels a whole pixel inside the plane's edges.
+            if (!(t > 0) || std::abs(hit.x) > half - 0.1 || std::abs(hit.y) > half - 0.1) continue;
+            const glm::dvec2 uv(0.5 + hit.x / (2.0 * half), 0.5 + hit.y / (2.0 * half));
+            const glm::dvec3 got = pixel3(*vis.find(Pass::UV), x, y), raster_uv = pixel3(*raster.find(Pass::UV), x, y);
+            ASSERT_EQ(got.z, 1.0) << "pixel " << x << ", " << y << " should see the plane";
+            worst_vis = std::max({worst_vis, std::abs(got.x - uv.x), std::abs(got.y - uv.y)});
+            worst_raster = std::max({worst_raster, std::abs(raster_uv.x - uv.x), std::abs(raster_uv.y - uv.y)});
+            ++counted;
+        }
+    std::printf("%d pixels: UV against the ray's exact hit: visibility buffer %.3g, raster %.3g\n", counted, worst_vis,
+                worst_raster);
+    EXPECT_GT(counted, 5000);
+    // UV is stored as float (half an ulp at 1: 6e-8); the weights as float.
+    EXPECT_LT(worst_vis, 3e-7);
 }

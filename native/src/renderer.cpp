@@ -236,6 +236,8 @@ struct Renderer::Impl {
         bool catchers = false;     // some visible shadow catcher
         bool splat = false;        // filter splatting (film_module.h)
         std::string splat_dropped; // why it is off where it was asked for (a warning)
+        bool visibility = false;   // the visibility buffer's targets fit the budget
+        std::string visibility_dropped;  // why not, where it was asked for (a warning)
     };
     FramePlan plan_frame(const RenderSettings& settings) const;
 
@@ -454,7 +456,6 @@ Renderer::Impl::FramePlan Renderer::Impl::plan_frame(const RenderSettings& setti
     for (Pass p : wanted.list()) per_pixel += (p == Pass::Combined ? 0 : 16) + 4 * std::size_t(pass_info(p).channels);
     if (features.instance_ids) per_pixel += 16;  // the ids target grows to RGBA32UI
     per_pixel += 16 * std::size_t(settings.light_groups) + (settings.light_groups > 0 ? 16 : 0);
-    if (settings.visibility_buffer) per_pixel += VisibilityBuffer::kBytesPerPixel;
     if (plan.catchers) per_pixel += 32;
     const std::size_t frame_bytes = pixels * per_pixel + 2 * CryptomatteModule::bytes(settings) +
                                     AovModule::bytes(settings) +
@@ -465,6 +466,7 @@ Renderer::Impl::FramePlan Renderer::Impl::plan_frame(const RenderSettings& setti
     // catchers' sums, the light groups, FilmModule::splatted's passes).
     // Where only they would go over the budget, the frame renders without
     // them, warned.
+    std::size_t splat_bytes = 0;
     if (settings.samples > 1 && settings.filter_splat && PixelFilter::splat_margin(settings.filter_width) > 0) {
         std::size_t scratch = 16 + (plan.light_split ? 32 : 0) + (plan.shadow_pass ? 16 : 0) +
                               (plan.catchers ? 32 : 0) + 16 * std::size_t(settings.light_groups);
@@ -476,6 +478,21 @@ Renderer::Impl::FramePlan Renderer::Impl::plan_frame(const RenderSettings& setti
                                  std::to_string((pixels * scratch) >> 20) + " MiB) would take the frame over the " +
                                  std::to_string(memory_budget_bytes() >> 20) +
                                  " MiB budget (DEFERRED_MEMORY_BUDGET_MB); each pixel keeps its own samples";
+        else
+            splat_bytes = pixels * scratch;
+    }
+    // The visibility buffer last: it changes no pixel (the raster path
+    // writes the same G-buffer), so where its targets would take the frame
+    // over the budget the raster path draws it, where the splat's scratch
+    // changes the image.
+    if (settings.visibility_buffer) {
+        const std::size_t vis_bytes = pixels * VisibilityBuffer::kBytesPerPixel;
+        plan.visibility = frame_bytes + splat_bytes + vis_bytes <= memory_budget_bytes();
+        if (!plan.visibility)
+            plan.visibility_dropped = "its targets (" + std::to_string(vis_bytes >> 20) +
+                                      " MiB) would take the frame over the " +
+                                      std::to_string(memory_budget_bytes() >> 20) +
+                                      " MiB budget (DEFERRED_MEMORY_BUDGET_MB)";
     }
     return plan;
 }
@@ -743,6 +760,8 @@ void Renderer::Impl::prepare_programs(Frame& f) {
     // not compiled: their resolves (below) replace them.
     std::string visibility_why_not;
     if (settings.visibility_buffer) visibility_why_not = VisibilityBuffer::unsupported(settings.width, settings.height);
+    if (visibility_why_not.empty() && settings.visibility_buffer && !f.plan.visibility)
+        visibility_why_not = f.plan.visibility_dropped;
     const bool want_visibility = settings.visibility_buffer && visibility_why_not.empty();
     f.geometry.prepare(*shaders, materials, f.scene, base, f.scene_alpha, result.warnings, !want_visibility);
     result.timings.material_programs = f.geometry.distinct_graph_programs();

@@ -616,7 +616,7 @@ void declare_renderer(py::module_& m) {
              py::arg("cryptomatte") = std::vector<std::string>{}, py::arg("cryptomatte_levels") = 6,
              py::arg("aovs") = std::vector<std::pair<std::string, std::string>>{}, py::arg("light_groups") = 0,
              py::arg("preview_interval_ms") = -1, py::arg("preview_pass") = "Combined",
-             py::arg("motion_blur") = false, py::arg("filter_splat") = true, py::arg("visibility_buffer") = false,
+             py::arg("motion_blur") = false, py::arg("filter_splat") = true, py::arg("visibility_buffer") = true,
              py::arg("count_shadow_fragments") = false)
         .def("preview",
              [](const PyRenderer& self, std::uint64_t since) -> py::object {

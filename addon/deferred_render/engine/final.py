@@ -80,9 +80,9 @@ def _filter_splat(scene):
 
 def _visibility_buffer(scene):
     """Whether the G-buffer comes from the visibility buffer (native
-    RenderSettings.visibility_buffer; off unless the setting turns it on)."""
+    RenderSettings.visibility_buffer; on unless the setting turns it off)."""
     settings = getattr(scene, "deferred_render", None)
-    return bool(getattr(settings, "visibility_buffer", False)) if settings is not None else False
+    return bool(getattr(settings, "visibility_buffer", True)) if settings is not None else True
 
 
 def _light_settings(scene):

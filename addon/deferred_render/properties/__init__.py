@@ -58,7 +58,7 @@ class DeferredRenderSettings(bpy.types.PropertyGroup):
             "and the G-buffer written by compute shaders, which data-centre GPUs run far faster "
             "than fragment shading. The same image"
         ),
-        default=False,
+        default=True,
     )
     light_culling: BoolProperty(
         name="Light Culling",

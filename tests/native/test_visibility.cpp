@@ -24,14 +24,16 @@ namespace {
 // 4.5 section 14.5, GL_SUBPIXEL_BITS, 8 on llvmpipe and NVIDIA), each
 // corner by up to 1/512 pixel per axis. An attribute interpolated over the
 // snapped corners moves by at most its screen gradient times that shift
-// (the weights' change is -sum_j b_j grad(b) . e_j), so a pixel's Normal or
-// UV may differ by its change to a neighbour over 128 (two grid steps: the
-// largest neighbour difference of a linear attribute is at least
-// |gradient| / sqrt 2, and the shift at most sqrt 2 / 512). llvmpipe
-// interpolates from the unsnapped positions (every pass within 7.4e-5);
+// (the weights' change is -sum_j b_j grad(b) . e_j): for a linear attribute,
+// at most 0.7 of its largest difference to a neighbour over 256. A pixel's
+// Normal or UV may differ by that difference over 64 (a 1/64-pixel shift):
 // an H200 differed by 2.3e-3 in Normal and 4.2e-4 in UV on the showcase at
-// 96x64, where its 24x12 sphere's triangles are two or three pixels wide.
-constexpr double kSnapSlopeFactor = 2.0 / 256.0;
+// 96x64, where its 24x12 sphere's triangles are two or three pixels wide,
+// at most 2.02/256 of the neighbour difference (by the silhouette, where
+// the normal is far from linear). llvmpipe interpolates from the unsnapped
+// positions: every pass within 7.4e-5 without the allowance. A resolve off
+// by 0.05 pixel exceeds it everywhere (Normal 0.12; measured by hand).
+constexpr double kSnapSlopeFactor = 4.0 / 256.0;
 
 bool interpolated(Pass p) { return p == Pass::Normal || p == Pass::UV; }
 // Passes shaded from that normal: a sharp highlight narrower than a pixel

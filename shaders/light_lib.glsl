@@ -343,8 +343,20 @@ vec3 sun_sample_direction(GpuLight light) {
     return L;
 }
 
-LightContribution shade_light_unshadowed(GpuLight light, SurfaceParams s, PrincipledWeights w, vec3 P, vec3 N,
-                                         vec3 V) {
+/* Light kinds, the groups of types that share code: LIGHT_POINT (point and
+ * spot lights), LIGHT_SUN, LIGHT_AREA, LIGHT_MESH; LIGHT_ANY_KIND reads the
+ * type from the light. A caller that passes a literal kind gets only that
+ * kind's code once the compiler has inlined and folded the tests: llvmpipe
+ * runs both sides of every branch (masked SIMD lanes, no jump over a side
+ * no lane takes), so a loop body holding every type's code costs all of
+ * them per light; the lighting pass loops over each kind apart
+ * (lighting_comp.glsl). */
+#define LIGHT_ANY_KIND (-1)
+int light_kind(int type) { return type <= LIGHT_SPOT ? LIGHT_POINT : type; }
+bool is_kind(int kind, int type, int want) { return kind == LIGHT_ANY_KIND ? light_kind(type) == want : kind == want; }
+
+LightContribution shade_light_unshadowed(int kind, GpuLight light, SurfaceParams s, PrincipledWeights w, vec3 P,
+                                         vec3 N, vec3 V) {
     LightContribution r;
     r.diffuse = vec3(0.0);
     r.glossy = vec3(0.0);
@@ -352,7 +364,7 @@ LightContribution shade_light_unshadowed(GpuLight light, SurfaceParams s, Princi
     const vec3 S = light.strength.rgb;
 
 #if defined(HAS_POINT_LIGHTS) || defined(HAS_SPOT_LIGHTS)
-    if (type == LIGHT_POINT || type == LIGHT_SPOT) {
+    if (is_kind(kind, type, LIGHT_POINT)) {
         vec3 to_light = light.position_type.xyz - P;
         float d2 = dot(to_light, to_light);
         if (d2 <= 1e-20) return r;
@@ -376,7 +388,7 @@ LightContribution shade_light_unshadowed(GpuLight light, SurfaceParams s, Princi
     }
 #endif
 #ifdef HAS_SUN_LIGHTS
-    if (type == LIGHT_SUN) {
+    if (is_kind(kind, type, LIGHT_SUN)) {
         /* One point of the sun's disk per sample (angular radius in
          * strength.w), uniform over the tangent disk as Cycles'
          * distant_light_sample; sample 0 looks at the centre. */
@@ -424,7 +436,7 @@ LightContribution shade_light_unshadowed(GpuLight light, SurfaceParams s, Princi
     }
 #endif
 #ifdef HAS_AREA_LIGHTS
-    if (type == LIGHT_AREA) {
+    if (is_kind(kind, type, LIGHT_AREA)) {
         vec3 c = light.position_type.xyz - P;
         /* One-sided: only points in front of the emitting (-Z) face. */
         if (dot(-c, light.direction.xyz) <= 0.0) return r;
@@ -934,16 +946,18 @@ bool sized_light_shadowed(GpuLight light, uint salt, SurfaceParams s, Principled
  * rays on a sized light). */
 LightContribution last_unshadowed;
 
-LightContribution shade_light(GpuLight light, SurfaceParams s, PrincipledWeights w, vec3 P, vec3 N, vec3 V,
-                              out float visible) {
+/* A light of kind `kind` (a literal: only its code; LIGHT_ANY_KIND: the
+ * light's own). */
+LightContribution shade_light_kind(int kind, GpuLight light, SurfaceParams s, PrincipledWeights w, vec3 P, vec3 N,
+                                   vec3 V, out float visible) {
 #ifdef HAS_MESH_LIGHTS
-    if (int(light.position_type.w) == LIGHT_MESH) {
+    if (is_kind(kind, int(light.position_type.w), LIGHT_MESH)) {
         LightContribution r = mesh_light_unoccluded(light, s, w, P, N, V);
         visible = 1.0;
 #if defined(HAS_SHADOWS) && !defined(SHADOW_RAYS)
         int shadow = int(light.params.w);
         if (shadow >= 0) {
-            float blocked = 1.0 - shadow_visibility(shadow, P, s);
+            float blocked = 1.0 - shadow_visibility_kind(kind, shadow, P, s);
             if (blocked > 0.0) {
                 LightContribution c = mesh_light_point(s, w, P, N, V, light.axis_x.xyz, light.axis_y.xyz,
                                                        light.strength.rgb, light.axis_x.w, light.axis_y.w);
@@ -956,7 +970,7 @@ LightContribution shade_light(GpuLight light, SurfaceParams s, PrincipledWeights
         return r;
     }
 #endif
-    LightContribution r = shade_light_unshadowed(light, s, w, P, N, V);
+    LightContribution r = shade_light_unshadowed(kind, light, s, w, P, N, V);
     last_unshadowed = r;
     visible = 1.0;
 #ifdef HAS_SHADOWS
@@ -967,8 +981,14 @@ LightContribution shade_light(GpuLight light, SurfaceParams s, PrincipledWeights
             visible = light_ray_visibility(light, P, s);
     }
 #else
-    if (shadow >= 0 && (r.diffuse != vec3(0.0) || r.glossy != vec3(0.0))) visible = shadow_visibility(shadow, P, s);
+    if (shadow >= 0 && (r.diffuse != vec3(0.0) || r.glossy != vec3(0.0)))
+        visible = shadow_visibility_kind(kind, shadow, P, s);
 #endif
 #endif
     return r;
+}
+
+LightContribution shade_light(GpuLight light, SurfaceParams s, PrincipledWeights w, vec3 P, vec3 N, vec3 V,
+                              out float visible) {
+    return shade_light_kind(LIGHT_ANY_KIND, light, s, w, P, N, V, visible);
 }

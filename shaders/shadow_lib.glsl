@@ -205,9 +205,12 @@ float world_visibility(GpuShadow sh, vec3 P, SurfaceParams s, float side) {
 #endif
 
 /* 1 where this sample's light point sees P (surface s), 0 in shadow. */
-float shadow_visibility(int index, vec3 P, SurfaceParams s) {
+/* `kind` the light's (light_lib.glsl's light kinds; negative: read from the
+ * map): a sun's maps are cascades, every other light's a cube, so a literal
+ * kind leaves the other lookup out of the caller's code. */
+float shadow_visibility_kind(int kind, int index, vec3 P, SurfaceParams s) {
     GpuShadow sh = shadows[index];
-    if (int(sh.params.x) == SHADOW_CASCADES) {
+    if (kind < 0 ? int(sh.params.x) == SHADOW_CASCADES : kind == LIGHT_SUN) {
         float d = frame_view_depth(P);
         int c = d <= sh.cascade_split.x ? 0 : d <= sh.cascade_split.y ? 1 : d <= sh.cascade_split.z ? 2 : 3;
         return ortho_visibility(sh, sh.cascade[c], c, P, s);
@@ -263,4 +266,6 @@ float shadow_visibility(int index, vec3 P, SurfaceParams s) {
     stored = texture(shadow_maps, vec3(shadow_map_uv(sh, uv), sh.point.w + float(face))).r;
     return (length(vb) - slope * texel <= stored || stored < sh.cascade_split.z) ? 1.0 : 0.0;
 }
+
+float shadow_visibility(int index, vec3 P, SurfaceParams s) { return shadow_visibility_kind(-1, index, P, s); }
 #endif /* SHADOW_RAYS */

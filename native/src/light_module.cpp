@@ -72,7 +72,17 @@ void LightModule::sync(const std::vector<Light>& lights, const glm::dvec3& camer
     packed.reserve(lights.size());
     groups_.clear();
     for (auto& t : has_type_) t = false;
-    for (const Light& l : lights) {
+    // Packed in order of type (point, spot, sun, area; then the mesh
+    // lights), each type in the scene's order: the lighting pass shades
+    // each type in a loop of its own whose body holds only that type's code
+    // (lighting_comp.glsl), over a sequence in this order.
+    std::vector<const Light*> by_type;
+    by_type.reserve(lights.size());
+    for (const Light& l : lights) by_type.push_back(&l);
+    std::stable_sort(by_type.begin(), by_type.end(),
+                     [](const Light* a, const Light* b) { return int(a->type) < int(b->type); });
+    for (const Light* lp : by_type) {
+        const Light& l = *lp;
         // Lights that cannot contribute are dropped here, not in the shader.
         if (l.energy == 0.0f || (l.color[0] == 0 && l.color[1] == 0 && l.color[2] == 0)) continue;
         if (l.type == LightType::Area && (l.size <= 0 || (l.shape == AreaShape::Rectangle && l.size_y <= 0) ||

@@ -349,8 +349,8 @@ vec3 sun_sample_direction(GpuLight light) {
  * kind's code once the compiler has inlined and folded the tests: llvmpipe
  * runs both sides of every branch (masked SIMD lanes, no jump over a side
  * no lane takes), so a loop body holding every type's code costs all of
- * them per light; the lighting pass loops over each kind apart
- * (lighting_comp.glsl). */
+ * them per light; there the lighting pass loops over each kind apart
+ * (lighting_comp.glsl LIGHT_KIND_LOOPS). */
 #define LIGHT_ANY_KIND (-1)
 int light_kind(int type) { return type <= LIGHT_SPOT ? LIGHT_POINT : type; }
 bool is_kind(int kind, int type, int want) { return kind == LIGHT_ANY_KIND ? light_kind(type) == want : kind == want; }

@@ -385,13 +385,15 @@ void main() {
 #define SEQUENCE_LIGHT(j) light_entry(light_batch.x + (j), from_list, first)
 #define SEQUENCE_WEIGHT(j) 1.0
 #endif
-    /* One loop per light kind, its body holding only that kind's code
+    /* LIGHT_KIND_LOOPS (LightingStage::Config::kind_loops, llvmpipe): one
+     * loop per light kind, its body holding only that kind's code
      * (shade_light_kind with a literal kind), over the sequence LightModule
      * packs in kind order; a kind's loop ends at the first entry of another
      * kind. On llvmpipe a loop body costs all the code it holds, whatever
      * branch a light takes (light_lib.glsl, is_kind): one loop over every
      * kind's code cost the showcase's seven lights 765 ms at 320x180 and 4
-     * samples, of which 620 ms remained with every light returning at once. */
+     * samples, of which 620 ms remained with every light returning at once.
+     * A GPU skips the branches its lanes do not take: one loop. */
 #define SHADE_KIND(KIND) \
     for (; j < iterations; ++j) { \
         const uint i = SEQUENCE_LIGHT(j); \
@@ -399,6 +401,7 @@ void main() {
         add_light(KIND, i, SEQUENCE_WEIGHT(j), s, w, P, N, V, total, lum_shadowed, lum_unshadowed, catcher_unshadowed); \
     }
     uint j = 0u;
+#ifdef LIGHT_KIND_LOOPS
 #if defined(HAS_POINT_LIGHTS) || defined(HAS_SPOT_LIGHTS)
     SHADE_KIND(LIGHT_POINT)
 #endif
@@ -411,9 +414,11 @@ void main() {
 #ifdef HAS_MESH_LIGHTS
     SHADE_KIND(LIGHT_MESH)
 #endif
-#ifdef LIGHT_CULLING
-    /* A tile's list comes in the culling's atomic order, kinds mixed: the
-     * entries the loops above left, with every kind's code. */
+#endif
+#if !defined(LIGHT_KIND_LOOPS) || defined(LIGHT_CULLING)
+    /* Every light with every kind's code; after the kind loops, the entries
+     * they left in a tile's list, which comes in the culling's atomic order,
+     * kinds mixed. */
     for (; j < iterations; ++j)
         add_light(LIGHT_ANY_KIND, SEQUENCE_LIGHT(j), SEQUENCE_WEIGHT(j), s, w, P, N, V, total, lum_shadowed,
                   lum_unshadowed, catcher_unshadowed);

@@ -73,9 +73,10 @@ void LightModule::sync(const std::vector<Light>& lights, const glm::dvec3& camer
     groups_.clear();
     for (auto& t : has_type_) t = false;
     // Packed in order of type (point, spot, sun, area; then the mesh
-    // lights), each type in the scene's order: the lighting pass shades
-    // each type in a loop of its own whose body holds only that type's code
-    // (lighting_comp.glsl), over a sequence in this order.
+    // lights), each type in the scene's order: on llvmpipe the lighting
+    // pass shades each kind in a loop of its own whose body holds only that
+    // kind's code (lighting_comp.glsl LIGHT_KIND_LOOPS), over a sequence in
+    // this order.
     std::vector<const Light*> by_type;
     by_type.reserve(lights.size());
     for (const Light& l : lights) by_type.push_back(&l);

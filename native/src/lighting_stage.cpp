@@ -19,6 +19,7 @@ ShaderVariant LightingStage::variant(const ShaderVariant& base, const LightModul
     lights.add_defines(v);
     if (config.light_split) v.defines.push_back("OUT_LIGHT_SPLIT");
     if (config.culled) v.defines.push_back("LIGHT_CULLING");
+    if (config.kind_loops) v.defines.push_back("LIGHT_KIND_LOOPS");
     // Selection only where some pixel can have more lights than the budget,
     // within one lighting dispatch (512 lights, 8 with shadow rays): a budget
     // of a dispatch's size or more never selects.

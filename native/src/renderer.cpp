@@ -741,6 +741,12 @@ void Renderer::Impl::prepare_programs(Frame& f) {
     LightingStage::Config lighting;
     lighting.light_split = f.plan.light_split;
     lighting.culled = f.culled;
+    // Mesa's CPU rasterisers run both sides of every branch (masked SIMD).
+    lighting.kind_loops = info.renderer.find("llvmpipe") != std::string::npos ||
+                          info.renderer.find("softpipe") != std::string::npos;
+    // DEFERRED_LIGHT_KIND_LOOPS=on|off overrides (the tests hold the two
+    // forms equal on one driver).
+    if (const char* env = std::getenv("DEFERRED_LIGHT_KIND_LOOPS")) lighting.kind_loops = std::string(env) == "on";
     lighting.light_samples = settings.light_samples;
     lighting.shadow_maps = !shadows.empty();
     lighting.shadow_rays = f.shadow_rays;

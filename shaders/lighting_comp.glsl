@@ -414,11 +414,9 @@ void main() {
 #ifdef HAS_MESH_LIGHTS
     SHADE_KIND(LIGHT_MESH)
 #endif
-#endif
-#if !defined(LIGHT_KIND_LOOPS) || defined(LIGHT_CULLING)
-    /* Every light with every kind's code; after the kind loops, the entries
-     * they left in a tile's list, which comes in the culling's atomic order,
-     * kinds mixed. */
+#else
+    /* Every light with every kind's code (GPUs, and culled frames, whose
+     * tile lists come in the culling's atomic order, kinds mixed). */
     for (; j < iterations; ++j)
         add_light(LIGHT_ANY_KIND, SEQUENCE_LIGHT(j), SEQUENCE_WEIGHT(j), s, w, P, N, V, total, lum_shadowed,
                   lum_unshadowed, catcher_unshadowed);

@@ -744,9 +744,9 @@ void Renderer::Impl::prepare_programs(Frame& f) {
     // Mesa's CPU rasterisers run both sides of every branch (masked SIMD).
     // DEFERRED_LIGHT_KIND_LOOPS=on|off overrides (the tests hold the two
     // forms equal on one driver). Not for culled frames: a tile's list
-    // mixes kinds, so the kind loops need the loop over every kind after
-    // them, which doubled the program's compile on llvmpipe (759 against
-    // 334 ms, many_lights) for a tenth of its lighting time.
+    // mixes kinds, so the kind loops would need the loop over every kind
+    // after them, which doubled the program's compile on llvmpipe (759
+    // against 334 ms, many_lights) for a tenth of its lighting time.
     lighting.kind_loops = info.renderer.find("llvmpipe") != std::string::npos ||
                           info.renderer.find("softpipe") != std::string::npos;
     if (const char* env = std::getenv("DEFERRED_LIGHT_KIND_LOOPS")) lighting.kind_loops = std::string(env) == "on";

@@ -91,7 +91,36 @@ flat out uint v_triangle;  /* the triangle of the mesh (transparency_random) */
 flat out uint v_slot_key;
 #endif
 
+#ifdef SHADOW_PASS
+/* A caster's vertex in the map being drawn, and its distances to the lit
+ * region's planes. */
+void shadow_map_position(vec4 world) {
+    gl_Position = shadow_view_projection * world;
+    gl_ClipDistance[0] = dot(shadow_clip[0].xyz, world.xyz) + shadow_clip[0].w;
+    gl_ClipDistance[1] = dot(shadow_clip[1].xyz, world.xyz) + shadow_clip[1].w;
+    gl_ClipDistance[2] = dot(shadow_clip[2].xyz, world.xyz) + shadow_clip[2].w;
+    gl_ClipDistance[3] = dot(shadow_clip[3].xyz, world.xyz) + shadow_clip[3].w;
+}
+#endif
+
 void main() {
+#ifdef INDEXED_DRAW
+    /* Drawn by vertex (glDrawElementsInstanced over the index buffer,
+     * draw_style.h): gl_VertexID is the vertex itself, which a vertex cache
+     * shades once for the triangles sharing it. Only the position: a
+     * position-only caster program (shadow_frag.glsl without SCENE_ALPHA)
+     * reads nothing else. */
+#ifndef SHADOW_PASS
+#error "INDEXED_DRAW draws shadow casters only"
+#endif
+    {
+        const uint instance = instance_remap[instance_offset + uint(gl_InstanceID)];
+        const vec4 world = instances[instance].model * vec4(mesh_position_at_shutter(uint(gl_VertexID), mesh_flags), 1.0);
+        v_position = world.xyz;
+        shadow_map_position(world);
+        return;
+    }
+#endif
     const uint corner = uint(gl_VertexID);
     const uint triangle = corner / 3u;
     const uint instance = instance_remap[instance_offset + uint(gl_InstanceID)];
@@ -117,11 +146,7 @@ void main() {
     }
 #endif
 #ifdef SHADOW_PASS
-    gl_Position = shadow_view_projection * world;
-    gl_ClipDistance[0] = dot(shadow_clip[0].xyz, world.xyz) + shadow_clip[0].w;
-    gl_ClipDistance[1] = dot(shadow_clip[1].xyz, world.xyz) + shadow_clip[1].w;
-    gl_ClipDistance[2] = dot(shadow_clip[2].xyz, world.xyz) + shadow_clip[2].w;
-    gl_ClipDistance[3] = dot(shadow_clip[3].xyz, world.xyz) + shadow_clip[3].w;
+    shadow_map_position(world);
 #elif defined(EMISSION_BAKE)
     {
         const int tile = bake_tile_offset + int(triangle - bake_first_triangle);

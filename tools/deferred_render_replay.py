@@ -194,7 +194,9 @@ def main(argv=None):
                      "visibility_buffer": bool(timings.get("visibility_buffer")),
                      "shadow_layers": timings.get("shadow_layers_rendered"),
                      "shadow_texels": timings.get("shadow_texels_rendered"),
-                     "shadow_fragments": timings.get("shadow_fragments")})
+                     "shadow_fragments": timings.get("shadow_fragments"),
+                     "shadow_instances": timings.get("shadow_instances_drawn"),
+                     "shadow_instances_one_sided": timings.get("shadow_instances_one_sided")})
     warnings = list(renderer.last_warnings)
 
     result = {"capture": os.path.abspath(args.capture), "gl_renderer": info.get("renderer"),
@@ -222,7 +224,9 @@ def main(argv=None):
             fragments = (f"{(runs[-1]['shadow_fragments'] or 0) / 1e6:.1f} M fragments shaded"
                          if args.count_fragments else "fragments not counted (--count-fragments)")
             print(f"shadow maps: {runs[-1]['shadow_layers']} layers drawn, "
-                  f"{runs[-1]['shadow_texels'] / 1e6:.1f} Mtexels inside their scissors, {fragments} (last run)")
+                  f"{runs[-1]['shadow_texels'] / 1e6:.1f} Mtexels inside their scissors, {fragments}, "
+                  f"{runs[-1]['shadow_instances']} instances drawn, {runs[-1]['shadow_instances_one_sided']} of them "
+                  f"without back faces (last run)")
         for w in warnings:
             print(f"warning: {w}")
     if args.out:

@@ -196,6 +196,8 @@ void declare_renderer(py::module_& m) {
             d["shadow_layers_rendered"] = self.last.shadow_layers_rendered;
             d["shadow_texels_rendered"] = self.last.shadow_texels_rendered;
             d["shadow_fragments"] = self.last.shadow_fragments;
+            d["shadow_instances_drawn"] = self.last.shadow_instances_drawn;
+            d["shadow_instances_one_sided"] = self.last.shadow_instances_one_sided;
             d["lighting_later_pixels"] = self.last.lighting_later_pixels;
             d["shadow_resolutions"] = self.last.shadow_resolutions;
             d["passes_ms"] = self.last.passes_ms;

@@ -133,6 +133,7 @@ void FrameScene::build(const SceneStore& scene, const MaterialModule& materials,
 
 void FrameScene::release() {
     scene_ = nullptr;
+    one_sided_ = 0;
     instances_.clear();
     bounds_.clear();
     slots_.clear();
@@ -237,15 +238,39 @@ void FrameScene::bind_attributes(const GpuMesh& mesh) const {
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_ATTRIBUTES, mesh.attributes ? mesh.attributes.get() : dummy_ssbo_);
 }
 
-std::uint64_t FrameScene::cull(const Test& keep, bool casters_only) {
+std::uint64_t FrameScene::cull(const Test& keep, bool casters_only, const FaceCulling* faces) {
     remap_.clear();
     visible_.clear();
+    facing_ccw_ = faces ? faces->facing_ccw : true;
     for (const Draw& d : draws_) {
-        if ((casters_only && !d.cast_shadow) || scene_->meshes()[d.mesh].triangle_count == 0) continue;
+        const GpuMesh& mesh = scene_->meshes()[d.mesh];
+        if ((casters_only && !d.cast_shadow) || mesh.triangle_count == 0) continue;
+        if (!faces || mesh.closed == 0) {
+            const std::uint32_t first = std::uint32_t(remap_.size());
+            for (std::uint32_t i = d.first; i < d.first + d.count; ++i)
+                if (keep(bounds_[i].center, bounds_[i].radius)) remap_.push_back(i);
+            if (remap_.size() > first) visible_.push_back({&d, first, std::uint32_t(remap_.size()) - first, 0});
+            continue;
+        }
+        // Grouped by the side that faces the viewer: the mesh's own
+        // orientation, flipped by a mirroring instance (ids.w bit 0).
         const std::uint32_t first = std::uint32_t(remap_.size());
-        for (std::uint32_t i = d.first; i < d.first + d.count; ++i)
-            if (keep(bounds_[i].center, bounds_[i].radius)) remap_.push_back(i);
-        if (remap_.size() > first) visible_.push_back({&d, first, std::uint32_t(remap_.size()) - first});
+        facing_groups_[0].clear();
+        facing_groups_[1].clear();
+        for (std::uint32_t i = d.first; i < d.first + d.count; ++i) {
+            if (!keep(bounds_[i].center, bounds_[i].radius)) continue;
+            if (!faces->applies(bounds_[i].center, bounds_[i].radius)) facing_groups_[1].push_back(i);
+            else if ((mesh.closed > 0) != ((instances_[i].ids.w & 1u) != 0u)) remap_.push_back(i);
+            else facing_groups_[0].push_back(i);
+        }
+        std::uint32_t at = first;
+        const int facing[3] = {1, -1, 0};
+        for (int g = 0; g < 3; ++g) {
+            if (g > 0) remap_.insert(remap_.end(), facing_groups_[g - 1].begin(), facing_groups_[g - 1].end());
+            const std::uint32_t end = std::uint32_t(remap_.size());
+            if (end > at) visible_.push_back({&d, at, end - at, facing[g]});
+            at = end;
+        }
     }
     if (visible_.empty()) return 0;
     if (remap_.size() > remap_capacity_) {
@@ -258,18 +283,35 @@ std::uint64_t FrameScene::cull(const Test& keep, bool casters_only) {
     return remap_.size();
 }
 
-void FrameScene::draw_range(const Culled& c, std::uint32_t first, std::uint32_t count) const {
+void FrameScene::draw_range(const Culled& c, std::uint32_t first, std::uint32_t count, const DrawStyle& style) const {
     if (count == 0) return;
     const GpuMesh& m = mesh(*c.draw);
     bind_mesh(m);
     glUniform1ui(0, c.first);
     glUniform1ui(1, m.flags);
-    glDrawArraysInstanced(GL_TRIANGLES, GLint(first * 3), GLsizei(count * 3), GLsizei(c.count));
+    const bool cull = style.cull_faces && c.facing != 0;
+    if (cull) {
+        one_sided_ += c.count;
+        glEnable(GL_CULL_FACE);
+        glCullFace(GL_BACK);
+        glFrontFace((c.facing > 0) == facing_ccw_ ? GL_CCW : GL_CW);
+    }
+    if (style.by_vertex) {
+        // Triangle t's corners are elements 3t..3t+2 of the index buffer.
+        glVertexArrayElementBuffer(empty_vao_, m.indices.get());
+        glDrawElementsInstanced(GL_TRIANGLES, GLsizei(count * 3), GL_UNSIGNED_INT,
+                                reinterpret_cast<const void*>(std::uintptr_t(first) * 3u * sizeof(std::uint32_t)),
+                                GLsizei(c.count));
+    } else {
+        glDrawArraysInstanced(GL_TRIANGLES, GLint(first * 3), GLsizei(count * 3), GLsizei(c.count));
+    }
+    if (cull) glDisable(GL_CULL_FACE);
 }
 
-std::uint64_t FrameScene::draw_culled(const Test& keep, bool casters_only) {
-    const std::uint64_t n = cull(keep, casters_only);
-    for (const Culled& c : visible_) draw_range(c, 0, mesh(*c.draw).triangle_count);
+std::uint64_t FrameScene::draw_culled(const Test& keep, bool casters_only, const DrawStyle& style,
+                                      const FaceCulling* faces) {
+    const std::uint64_t n = cull(keep, casters_only, faces);
+    for (const Culled& c : visible_) draw_range(c, 0, mesh(*c.draw).triangle_count, style);
     return n;
 }
 

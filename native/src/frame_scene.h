@@ -13,6 +13,7 @@
 #pragma once
 
 #include "camera.h"
+#include "draw_style.h"
 #include "gl_util.h"
 #include "ray_scene.h"
 #include "scene_store.h"
@@ -64,10 +65,14 @@ public:
         std::uint32_t slot_offset, slot_count;
     };
     // The instances of one batch that passed the last cull, at [first,
-    // first + count) of the remap buffer.
+    // first + count) of the remap buffer. `facing`, where the cull was given
+    // a FaceCulling: +1 the triangles whose own winding faces the viewer
+    // are its front faces, -1 the others (a mirrored instance, a mesh
+    // facing in), 0 both sides are drawn (open mesh, viewer too near).
     struct Culled {
         const Draw* draw;
         std::uint32_t first, count;
+        int facing = 0;
     };
     using Test = std::function<bool(const glm::dvec3&, double)>;
 
@@ -111,16 +116,22 @@ public:
 
     // Keeps the instances whose bounding sphere passes `keep` (casters_only:
     // without the cast_shadow-off ones), fills the remap buffer and binds
-    // the tables; returns how many were kept.
-    std::uint64_t cull(const Test& keep, bool casters_only);
+    // the tables; returns how many were kept. `faces`: the projection the
+    // draws will use, for which each batch's kept instances are grouped by
+    // the side of their triangles that faces it (draw_style.h).
+    std::uint64_t cull(const Test& keep, bool casters_only, const FaceCulling* faces = nullptr);
     const std::vector<Culled>& visible() const { return visible_; }
     // The instance index of the j-th kept instance of the last cull.
     std::uint32_t kept(std::uint32_t j) const { return remap_[j]; }
     // Triangles [first, first + count) of the kept instances of one batch,
-    // with the bound program.
-    void draw_range(const Culled& c, std::uint32_t first, std::uint32_t count) const;
+    // with the bound program, drawn as `style` says.
+    void draw_range(const Culled& c, std::uint32_t first, std::uint32_t count, const DrawStyle& style = {}) const;
     // cull(), then every kept instance whole.
-    std::uint64_t draw_culled(const Test& keep, bool casters_only);
+    std::uint64_t draw_culled(const Test& keep, bool casters_only, const DrawStyle& style = {},
+                              const FaceCulling* faces = nullptr);
+    // Instances draw_range() has drawn without their back faces since the
+    // last build() (the count of each such draw's kept instances).
+    std::uint64_t one_sided_instances() const { return one_sided_; }
     // The material drawing slot s of a batch.
     std::uint32_t slot_material(const Draw& d, std::size_t s) const;
     // Entries in the slot table (every batch's slots, one after the other).
@@ -158,6 +169,9 @@ private:
     Buffer remap_buffer_;
     std::size_t remap_capacity_ = 0;
     std::vector<Culled> visible_;
+    std::vector<std::uint32_t> facing_groups_[2];  // cull()'s scratch: a batch's kept instances facing -1, 0
+    bool facing_ccw_ = true;                       // the last cull's FaceCulling::facing_ccw
+    mutable std::uint64_t one_sided_ = 0;
 };
 
 }  // namespace deferred

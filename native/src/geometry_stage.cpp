@@ -206,17 +206,24 @@ void GeometryStage::prepare_casters(ShaderLibrary& shaders, MaterialModule& mate
     }
 }
 
-std::uint64_t GeometryStage::draw_casters(FrameScene& scene, const FrameScene::Test& casts, bool world_map) const {
-    if (!alpha_graphs_) return scene.draw_culled(casts, true);
+std::uint64_t GeometryStage::draw_casters(FrameScene& scene, const FrameScene::Test& casts, bool world_map,
+                                          const DrawStyle& style, const FaceCulling* faces) const {
+    if (!alpha_graphs_) return scene.draw_culled(casts, true, style, faces);
     GLint caster = 0;
     glGetIntegerv(GL_CURRENT_PROGRAM, &caster);
     const std::map<std::uint32_t, GLuint>& own = world_map ? world_casters_ : light_casters_;
-    const std::uint64_t n = scene.cull(casts, true);
+    // A closed mesh with a cut-out slot shows its inside through the cut:
+    // its back faces stay where any of its slots has a caster program.
+    const std::uint64_t n = scene.cull(casts, true, faces);
     for (const FrameScene::Culled& c : scene.visible()) {
         const GpuMesh& mesh = scene.mesh(*c.draw);
+        bool cut = false;
+        for (std::size_t s = 0; s < mesh.slot_ranges.size(); ++s) cut = cut || own.count(scene.slot_material(*c.draw, s));
+        DrawStyle slot_style = style;
+        slot_style.cull_faces = style.cull_faces && !cut;
         for (std::size_t s = 0; s < mesh.slot_ranges.size(); ++s)
             if (!own.count(scene.slot_material(*c.draw, s)))
-                scene.draw_range(c, mesh.slot_ranges[s].first, mesh.slot_ranges[s].second);
+                scene.draw_range(c, mesh.slot_ranges[s].first, mesh.slot_ranges[s].second, slot_style);
     }
     // The map's uniforms (shadow_frag.glsl's 2, 3, 4) onto the caster
     // programs' (2, 20, 21: material_module.h).

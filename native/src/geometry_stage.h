@@ -80,9 +80,11 @@ public:
     void prepare_casters(ShaderLibrary& shaders, MaterialModule& materials, const FrameScene& scene, bool world_map,
                          std::vector<std::string>& warnings);
     // The shadow casters that pass `casts`, with the bound program (the
-    // shadow module's) or their own; `world_map`: the bound program draws a
-    // world occlusion map. Returns how many instances were kept.
-    std::uint64_t draw_casters(FrameScene& scene, const FrameScene::Test& casts, bool world_map) const;
+    // shadow module's, drawn as `style` says) or their own (by corner, both
+    // sides); `world_map`: the bound program draws a world occlusion map.
+    // Returns how many instances were kept.
+    std::uint64_t draw_casters(FrameScene& scene, const FrameScene::Test& casts, bool world_map,
+                               const DrawStyle& style = {}, const FaceCulling* faces = nullptr) const;
 
     bool is_forward(std::uint32_t id) const { return id < forward_.size() && forward_[id]; }
     // Per material id: drawn by the forward pass (left out of the G-buffer).

@@ -1001,8 +1001,8 @@ void Renderer::Impl::render_sample(Frame& f, int sample) {
                                            float(std::fmod(0.5 + sample * 0.5698402909980532, 1.0))};
         shadows.render_sample(
             *shaders, {u[2], u[3]}, grid, world_dirs,
-            [&](const ShadowModule::CasterTest& casts, bool world_map) {
-                f.shadow_instances_drawn += f.geometry.draw_casters(f.scene, casts, world_map);
+            [&](const ShadowModule::CasterTest& casts, bool world_map, const DrawStyle& style, const FaceCulling* faces) {
+                f.shadow_instances_drawn += f.geometry.draw_casters(f.scene, casts, world_map, style, faces);
             },
             f.caster_defines, f.geometry.stochastic_alpha() || f.casters_move);
         gpu_timer.lap(f.shadow_ms);
@@ -1121,6 +1121,7 @@ FrameResult Renderer::Impl::finish(Frame& f) {
     t.shadow_fragments = shadows.collect_fragments();  // after the frame's last wait: no stall
     t.lighting_later_pixels = f.lighting.later_pixels();  // likewise
     t.shadow_instances_drawn = f.shadow_instances_drawn;
+    t.shadow_instances_one_sided = f.scene.one_sided_instances();
     t.camera_instances_drawn = f.camera_instances_drawn;
     t.shadow_lights_dropped = shadows.dropped();
     t.tile_light_pairs = f.culled ? culling.last_index_count() : 0;

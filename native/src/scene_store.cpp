@@ -1,5 +1,7 @@
 #include "scene_store.h"
 
+#include "mesh_topology.h"
+
 #include <deferred/renderer.h>
 
 #include <algorithm>
@@ -250,6 +252,8 @@ std::uint32_t SceneStore::add_mesh(const MeshData& m, const std::string& key) {
         }
         g.bound_radius = std::sqrt(r2);
     }
+    // A deforming mesh's winding is known at rest only.
+    if (!m.motion_positions) g.closed = closed_orientation(m.positions, m.vertex_count, m.indices, m.triangle_count);
     // Triangles sorted by material slot (stable), so each slot is one draw
     // range: node materials bind a program per slot. Per-triangle and
     // per-corner arrays are permuted together; unsorted input is copied.

@@ -43,6 +43,9 @@ struct GpuMesh {
     // out of shadow maps.
     double bound_center[3] = {0.0, 0.0, 0.0};
     double bound_radius = 0.0;
+    // closed_orientation() of its triangles (mesh_topology.h): +1/-1 closed
+    // and facing out/in, whose back faces a draw may leave out; 0 both sides.
+    int closed = 0;
     // Its ray hierarchy (ray_scene.h), built on first use by shadow rays.
     mutable std::shared_ptr<const MeshBvh> bvh;
 };

@@ -40,6 +40,8 @@ void face_basis(int face, glm::dvec3& F, glm::dvec3& R, glm::dvec3& U) {
 
 // Camera-relative world -> clip for a (slightly wider than) 90 degree face from `origin`, reversed
 // Z with an infinite far plane (depth = near / distance along F).
+constexpr double kCubeNear = 1e-3;
+
 glm::dmat4 cube_face_matrix(int face, const glm::dvec3& origin) {
     glm::dvec3 F, R, U;
     face_basis(face, F, R, U);
@@ -50,11 +52,10 @@ glm::dmat4 cube_face_matrix(int face, const glm::dvec3& origin) {
         view[c][2] = -F[c];
     }
     view[3] = glm::dvec4(-glm::dot(R, origin), -glm::dot(U, origin), glm::dot(F, origin), 1.0);
-    constexpr double near = 1e-3;
     glm::dmat4 proj(0.0);
     proj[0][0] = 1.0 / SHADOW_CUBE_OVERLAP;
     proj[1][1] = 1.0 / SHADOW_CUBE_OVERLAP;
-    proj[3][2] = near;
+    proj[3][2] = kCubeNear;
     proj[2][3] = -1.0;
     return proj * view;
 }
@@ -68,17 +69,23 @@ glm::dvec2 concentric_disk(double u1, double u2) {
     return {r * std::cos(t), r * std::sin(t)};
 }
 
+// Where ortho_map's near plane lies along `axis`: casters up to max(far,
+// 1 km) before the sphere.
+double ortho_near(const glm::dvec3& axis, const glm::dvec3& center, double radius, double far) {
+    return glm::dot(center, axis) - radius - std::max(far, 1000.0);
+}
+
 // Camera-relative world -> clip of an orthographic map along `axis` (the
 // direction light travels) over the sphere (center, radius): x, y over the
 // sphere, depth 1 nearest the light, with casters up to max(far, 1 km)
 // beyond the sphere towards the light. `shift`: the texel grid moved by that
 // fraction of a texel (of a map `resolution` texels wide) in x and y.
+
 glm::dmat4 ortho_map(const glm::dvec3& axis, const glm::dvec3& center, double radius, double far,
                      const glm::dvec2& shift = glm::dvec2(0.0), int resolution = 1) {
     const glm::dvec3 R = glm::normalize(glm::cross(axis, std::abs(axis.z) < 0.999 ? glm::dvec3(0, 0, 1) : glm::dvec3(1, 0, 0)));
     const glm::dvec3 U = glm::cross(R, axis);
-    const double zc = glm::dot(center, axis);
-    const double zmin = zc - radius - std::max(far, 1000.0), zmax = zc + radius;
+    const double zmin = ortho_near(axis, center, radius, far), zmax = glm::dot(center, axis) + radius;
     glm::dmat4 m(0.0);  // rows: R/r, U/r, depth (1 nearest the light), w
     for (int c = 0; c < 3; ++c) {
         m[c][0] = R[c] / radius;
@@ -257,6 +264,13 @@ void ShadowModule::begin_frame(const CameraMatrices& camera, int max_resolution,
     // reference for what lit_region leaves out).
     const char* lit = std::getenv("DEFERRED_SHADOW_LIT_REGION");
     lit_region_enabled_ = !(lit && std::string(lit) == "off");
+    // DEFERRED_SHADOW_BY_VERTEX=off draws the casters by corner, and
+    // DEFERRED_SHADOW_FACE_CULLING=off both sides of every triangle
+    // (draw_style.h; the tests' references for the same maps).
+    const char* by_vertex = std::getenv("DEFERRED_SHADOW_BY_VERTEX");
+    by_vertex_enabled_ = !(by_vertex && std::string(by_vertex) == "off");
+    const char* culling = std::getenv("DEFERRED_SHADOW_FACE_CULLING");
+    face_culling_enabled_ = !(culling && std::string(culling) == "off");
     count_fragments_ = count_fragments &&
                        (epoxy_gl_version() >= 46 || epoxy_has_gl_extension("GL_ARB_pipeline_statistics_query"));
     entries_.clear();
@@ -534,6 +548,14 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
     ShaderVariant variant;
     variant.defines = caster_defines;
     variant.defines.push_back("SHADOW_PASS");
+    // Opaque casters are drawn by vertex and, where closed, front faces only
+    // (draw_style.h); partly transparent ones (SCENE_ALPHA: each triangle
+    // kept by chance, seen through) need every corner's triangle and both sides.
+    const bool alpha = std::find(caster_defines.begin(), caster_defines.end(), "SCENE_ALPHA") != caster_defines.end();
+    DrawStyle style;
+    style.by_vertex = by_vertex_enabled_ && !alpha;
+    style.cull_faces = face_culling_enabled_ && !alpha;
+    if (style.by_vertex) variant.defines.push_back("INDEXED_DRAW");
     if (!rays_) {
         const GLuint program = shaders.graphics_program("geometry_vert.glsl", "shadow_frag.glsl", variant);
         glUseProgram(program);
@@ -554,7 +576,7 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
     // light is about 0 (an area light's plane) or a spot's cone ends.
     auto draw_layer = [&](int layer, const glm::dmat4& view_projection, const glm::dvec3& origin, int kind,
                           const glm::dvec3& axis, const CasterTest& casts, const std::array<int, 4>& whole,
-                          const std::array<int, 4>& scissor, const LitRegion& region) {
+                          const std::array<int, 4>& scissor, const LitRegion& region, const FaceCulling& faces) {
         if (rays_) return;
         glNamedFramebufferTextureLayer(fbo_.get(), GL_COLOR_ATTACHMENT0, maps_.get(), 0, layer);
         const GLenum draw = GL_COLOR_ATTACHMENT0;
@@ -583,7 +605,7 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
         glUniform4f(3, float(origin.x), float(origin.y), float(origin.z), float(kind));
         glUniform3f(4, float(axis.x), float(axis.y), float(axis.z));
         begin_fragment_count();
-        draw_casters(casts, false);
+        draw_casters(casts, false, style, style.cull_faces ? &faces : nullptr);
         end_fragment_count();
         ++layers_rendered_;
     };
@@ -636,9 +658,15 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
                                         shift, e.resolution)
                             : ortho_map(axis, cs.center[k], cs.radius[k], camera_.clip_end);
                 g.cascade[k] = to_gpu_mat(m);
+                FaceCulling faces;
+                faces.perspective = false;
+                faces.axis = axis;
+                faces.near = ortho_near(axis, cs.center[k], shifted ? padded(cs.radius[k], e.resolution) : cs.radius[k],
+                                        camera_.clip_end);
+                faces.facing_ccw = facing_is_ccw(m, cs.center[k], -axis);
                 if (draw)
                     draw_layer(e.first_layer + k, m, glm::dvec3(0.0), SHADOW_CASCADES, axis,
-                               ortho_casters(axis, cs.center[k], cs.radius[k], true), whole, whole, unbounded);
+                               ortho_casters(axis, cs.center[k], cs.radius[k], true), whole, whole, unbounded, faces);
             }
             g.point = {float(axis.x), float(axis.y), float(axis.z), float(e.first_layer)};
             g.params = {float(SHADOW_CASCADES), float(e.resolution), 0.0f, uv_scale};
@@ -675,8 +703,14 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
                 const glm::dvec3 pf = p + R * disk.x + U * disk.y;
                 // Faces no lit direction passes through are only cleared.
                 const std::array<int, 4> scissor = face_image_bounds(F, R, U, region.cones, pad, e.resolution);
-                draw_layer(e.first_layer + face, cube_face_matrix(face, pf), pf, SHADOW_CUBE, glm::dvec3(0.0),
-                           face_casters(face, pf, reach), whole, scissor, region);
+                const glm::dmat4 m = cube_face_matrix(face, pf);
+                // Nothing within the near plane's corners (< 2 near) of pf is clipped.
+                FaceCulling faces;
+                faces.origin = pf;
+                faces.near = 2.0 * kCubeNear;
+                faces.facing_ccw = facing_is_ccw(m, pf + F, -F);
+                draw_layer(e.first_layer + face, m, pf, SHADOW_CUBE, glm::dvec3(0.0), face_casters(face, pf, reach),
+                           whole, scissor, region, faces);
             }
             g.point = {float(p.x), float(p.y), float(p.z), float(e.first_layer)};
             g.params = {float(SHADOW_CUBE), float(e.resolution), float(2.0 * SHADOW_CUBE_OVERLAP / e.resolution),
@@ -718,8 +752,9 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
             glUniformMatrix4fv(2, 1, GL_FALSE, &m.cols[0].x);
             glUniform4f(3, 0.0f, 0.0f, 0.0f, float(SHADOW_CASCADES));
             glUniform3f(4, float(axis.x), float(axis.y), float(axis.z));
+            // Both sides: the map keeps the farthest surface too.
             begin_fragment_count();
-            draw_casters(ortho_casters(axis, receivers_center_, receivers_radius_, false), true);
+            draw_casters(ortho_casters(axis, receivers_center_, receivers_radius_, false), true, style, nullptr);
             end_fragment_count();
             ++layers_rendered_;
             texels_rendered_ += std::uint64_t(world_allocated_) * std::uint64_t(world_allocated_);

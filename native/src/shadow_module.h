@@ -36,6 +36,7 @@
 #pragma once
 
 #include "camera.h"
+#include "draw_style.h"
 #include "gl_util.h"
 #include "shader_library.h"
 
@@ -100,8 +101,11 @@ public:
     using CasterTest = std::function<bool(const glm::dvec3&, double)>;
     // Draws the scene's shadow casters that pass the test, with the
     // currently bound program (world_map: it draws a world occlusion map,
-    // else a light's map).
-    using DrawCasters = std::function<void(const CasterTest&, bool world_map)>;
+    // else a light's map), as `style` says (by vertex where the program is
+    // an INDEXED_DRAW one; closed casters' back faces left out, for the
+    // map's projection `faces`, where style.cull_faces).
+    using DrawCasters = std::function<void(const CasterTest&, bool world_map, const DrawStyle& style,
+                                           const FaceCulling* faces)>;
     // Renders every kept light's maps (and the world's) for one film sample.
     // `u`: the sample's point on the light shapes; `world_dirs`: its
     // directions of the world, one per world map (xyz unit, towards the
@@ -174,6 +178,7 @@ private:
     bool query_active_ = false;
     std::vector<GLuint> fragment_queries_, free_queries_;  // this frame's, and ended ones to reuse
     bool lit_region_enabled_ = true;
+    bool by_vertex_enabled_ = true, face_culling_enabled_ = true;
     std::size_t dropped_ = 0;
     CameraMatrices camera_{};
     double split_near_ = 0.0, split_far_ = 0.0;  // the cascades' depth range (fit)

@@ -234,6 +234,9 @@ struct FrameTimings {
     // count_shadow_fragments only, and 0 without pipeline statistics).
     std::uint64_t shadow_fragments = 0;
     std::uint64_t shadow_instances_drawn = 0;  // instances drawn into them (after culling per map)
+    // Of those, drawn without their back faces: closed meshes seen from
+    // outside (draw_style.h; DEFERRED_SHADOW_FACE_CULLING=off: none).
+    std::uint64_t shadow_instances_one_sided = 0;
     std::uint64_t camera_instances_drawn = 0;  // instances in the view frustum, over all samples
     std::size_t shadow_lights_dropped = 0;  // would cast shadows, over the layer/memory limits
     bool shadow_rays = false;              // visibility came from shadow rays (settings.shadow_rays)

@@ -1,0 +1,22 @@
+// Whether a mesh encloses volume, and on which side of its triangles: what
+// back-face culling needs to leave its image unchanged (draw_style.h).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+namespace deferred {
+
+// +1: closed and facing out: every edge is shared by exactly two triangles
+// that run along it in opposite directions (a consistently oriented
+// 2-manifold without boundary), and every connected part encloses positive
+// volume with the right-handed normals cross(p1 - p0, p2 - p0) pointing out
+// of it. Seen from any point outside such a mesh, the first surface a ray
+// meets is a triangle whose normal points back at that point.
+// -1: the same with every part facing in (a room modelled from inside).
+// 0: open, non-manifold, inconsistently wound, degenerate (an edge from a
+// vertex to itself), without volume, or with parts facing both ways.
+int closed_orientation(const float* positions, std::size_t vertex_count, const std::uint32_t* indices,
+                       std::size_t triangle_count);
+
+}  // namespace deferred

@@ -1,0 +1,209 @@
+// Shadow casters drawn by vertex (glDrawElements) and, for closed meshes
+// seen from outside, without their back faces (draw_style.h): the maps
+// hold the same nearest surfaces, so the image is the same to the bit as
+// with every corner drawn and both sides (DEFERRED_SHADOW_BY_VERTEX=off,
+// DEFERRED_SHADOW_FACE_CULLING=off). Which meshes are closed, and which
+// way they face, is mesh_topology.h's.
+#include "mesh_topology.h"
+#include "test_helpers.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <utility>
+#include <vector>
+
+using namespace deferred;
+
+namespace {
+
+// A box with its 8 corners shared by its 12 triangles, wound
+// counter-clockwise seen from outside (closed, facing out); `inward`
+// reverses every triangle (facing in). `offset` moves its vertices.
+tools::MeshArrays welded_box(float h, bool inward = false, float offset = 0.0f) {
+    tools::MeshArrays m;
+    for (int i = 0; i < 8; ++i)
+        m.positions.insert(m.positions.end(), {offset + ((i & 1) ? h : -h), offset + ((i & 2) ? h : -h),
+                                               offset + ((i & 4) ? h : -h)});
+    const std::uint32_t quads[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                                       {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+    for (const auto& q : quads) {
+        const std::uint32_t tris[2][3] = {{q[0], q[1], q[2]}, {q[0], q[2], q[3]}};
+        for (const auto& t : tris) {
+            if (inward) m.indices.insert(m.indices.end(), {t[0], t[2], t[1]});
+            else m.indices.insert(m.indices.end(), {t[0], t[1], t[2]});
+        }
+    }
+    return m;
+}
+
+int orientation(const tools::MeshArrays& m) {
+    return closed_orientation(m.positions.data(), m.positions.size() / 3, m.indices.data(), m.indices.size() / 3);
+}
+
+// Two meshes as one: b's vertices after a's.
+tools::MeshArrays joined(tools::MeshArrays a, const tools::MeshArrays& b) {
+    const std::uint32_t base = std::uint32_t(a.positions.size() / 3);
+    a.positions.insert(a.positions.end(), b.positions.begin(), b.positions.end());
+    for (std::uint32_t i : b.indices) a.indices.push_back(base + i);
+    return a;
+}
+
+Material grey() {
+    Material m;
+    m.base_color = {0.5f, 0.5f, 0.5f};
+    m.roughness = 0.4f;
+    return m;
+}
+
+Mat4d scaled(double sx, double sy, double sz, double x, double y, double z) {
+    Mat4d m = tools::translation(x, y, z);
+    m[0] = sx;
+    m[5] = sy;
+    m[10] = sz;
+    return m;
+}
+
+// An open floor; closed boxes facing out (two of them mirrored by their
+// instances), a closed box facing in, a box welded shut around a spot light
+// (its maps' origin inside: both sides), an unwelded box (open: its faces
+// do not share corners). A sun with an angle (cascades), a sphere light and
+// a tilted area light (cubes, the area light's clip plane), the spot; the
+// world's occlusion maps (both sides always).
+FrameResult casters_frame(const char* by_vertex, const char* face_culling) {
+    setenv("DEFERRED_SHADOW_BY_VERTEX", by_vertex, 1);
+    setenv("DEFERRED_SHADOW_FACE_CULLING", face_culling, 1);
+    Renderer r;
+    const std::uint32_t mat = deferred::testing::add_plane(r, grey(), 6.0f, 4);
+    const tools::MeshArrays out = welded_box(0.3f), in = welded_box(0.3f, true), open = tools::make_box(0.3f, 0.3f, 0.3f);
+    const std::uint32_t out_mesh = r.add_mesh(out.view()), in_mesh = r.add_mesh(in.view()),
+                        open_mesh = r.add_mesh(open.view());
+    // Resting on the floor; mirrored and resting; mirrored, tall, through
+    // the area light's plane.
+    const Mat4d out_at[] = {tools::translation(0.0, 0.0, 0.3), scaled(-1.0, 1.5, 1.0, 1.5, 0.5, 0.3),
+                            scaled(-0.5, 0.5, 4.0, -0.6, 0.4, 1.5)};
+    for (const Mat4d& t : out_at) r.add_instances(out_mesh, t.data(), 1, nullptr, {mat});
+    const Mat4d in_at = tools::translation(-1.5, -0.5, 0.3), open_at = tools::translation(0.5, -1.5, 0.6),
+                housing_at = tools::translation(2.0, 2.0, 1.5);
+    r.add_instances(in_mesh, in_at.data(), 1, nullptr, {mat});
+    r.add_instances(open_mesh, open_at.data(), 1, nullptr, {mat});
+    r.add_instances(out_mesh, housing_at.data(), 1, nullptr, {mat});
+
+    auto aimed = [](LightType type, double x, double y, double z, double tx, double ty, float energy) {
+        Light l;
+        l.type = type;
+        const double eye[3] = {x, y, z}, target[3] = {tx, ty, 0.0};
+        l.matrix = tools::look_at(eye, target);
+        l.energy = energy;
+        return l;
+    };
+    Light sun = aimed(LightType::Sun, 3.0, -2.0, 6.0, 0.0, 0.0, 2.0f);
+    sun.angle = float(4.0 * M_PI / 180.0);
+    r.add_light(sun);
+    Light point = aimed(LightType::Point, -1.0, 1.0, 3.0, 0.0, 0.0, 300.0f);
+    point.radius = 0.2f;
+    r.add_light(point);
+    Light area = aimed(LightType::Area, 1.2, -1.0, 2.5, -0.5, 0.3, 300.0f);
+    area.size = 0.8f;
+    r.add_light(area);
+    Light spot = aimed(LightType::Spot, 2.0, 2.0, 1.5, 0.5, 0.5, 300.0f);
+    spot.radius = 0.05f;
+    spot.spot_size = float(80.0 * M_PI / 180.0);
+    r.add_light(spot);
+    deferred::testing::set_world_color(r, 0.05f, 0.06f, 0.08f);
+
+    Camera cam;
+    const double eye[3] = {5.0, -6.0, 6.0}, target[3] = {0.0, 0.0, 0.8};
+    cam.matrix = tools::look_at(eye, target);
+    RenderSettings s;
+    s.width = 96;
+    s.height = 64;
+    s.samples = 4;
+    s.passes = {Pass::Combined, Pass::DiffDir, Pass::GlossDir, Pass::Shadow, Pass::AO};
+    FrameResult f = r.render(cam, s);
+    unsetenv("DEFERRED_SHADOW_BY_VERTEX");
+    unsetenv("DEFERRED_SHADOW_FACE_CULLING");
+    return f;
+}
+
+}  // namespace
+
+TEST(MeshTopology, ClosedMeshesAndTheSideTheyFace) {
+    EXPECT_EQ(orientation(welded_box(1.0f)), 1);
+    EXPECT_EQ(orientation(welded_box(1.0f, true)), -1);
+    // Far from the origin: each part's volume is taken at its own vertex.
+    EXPECT_EQ(orientation(welded_box(0.01f, false, 1.0e5f)), 1);
+    // Two parts facing out; one out and one in (a shell seen from both
+    // sides: its inner part would be met first from inside the cavity).
+    EXPECT_EQ(orientation(joined(welded_box(1.0f), welded_box(0.5f, false, 3.0f))), 1);
+    EXPECT_EQ(orientation(joined(welded_box(1.0f), welded_box(0.5f, true))), 0);
+    // Open: a plane, a box whose faces do not share corners, a box missing
+    // a triangle.
+    EXPECT_EQ(orientation(tools::make_plane(1.0f, 2)), 0);
+    EXPECT_EQ(orientation(tools::make_box(1.0f, 1.0f, 1.0f)), 0);
+    tools::MeshArrays holed = welded_box(1.0f);
+    holed.indices.resize(holed.indices.size() - 3);
+    EXPECT_EQ(orientation(holed), 0);
+    // Inconsistently wound: one triangle turned over.
+    tools::MeshArrays turned = welded_box(1.0f);
+    std::swap(turned.indices[1], turned.indices[2]);
+    EXPECT_EQ(orientation(turned), 0);
+    // Non-manifold: a third triangle on an edge (with its own way back).
+    tools::MeshArrays fin = welded_box(1.0f);
+    fin.positions.insert(fin.positions.end(), {0.0f, 0.0f, 3.0f});
+    fin.indices.insert(fin.indices.end(), {0, 1, 8, 1, 0, 8});
+    EXPECT_EQ(orientation(fin), 0);
+    // A quad drawn both ways: every edge twice, once each way, but no volume.
+    tools::MeshArrays sheet;
+    sheet.positions = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
+    sheet.indices = {0, 1, 2, 0, 2, 3, 0, 2, 1, 0, 3, 2};
+    EXPECT_EQ(orientation(sheet), 0);
+    // Degenerate: an edge from a vertex to itself; an index out of range.
+    tools::MeshArrays degenerate = welded_box(1.0f);
+    degenerate.indices[1] = degenerate.indices[0];
+    EXPECT_EQ(orientation(degenerate), 0);
+    tools::MeshArrays beyond = welded_box(1.0f);
+    beyond.indices[0] = 99;
+    EXPECT_EQ(orientation(beyond), 0);
+}
+
+TEST(ShadowCasters, ByVertexAndFrontFacesOnlyChangeNoPixel) {
+    struct EnvGuard {
+        ~EnvGuard() {
+            unsetenv("DEFERRED_SHADOW_BY_VERTEX");
+            unsetenv("DEFERRED_SHADOW_FACE_CULLING");
+        }
+    } guard;
+    const FrameResult reference = casters_frame("off", "off");
+    const FrameResult by_vertex = casters_frame("on", "off");
+    const FrameResult one_sided = casters_frame("on", "on");
+    EXPECT_EQ(reference.timings.shadow_instances_one_sided, 0u);
+    EXPECT_EQ(by_vertex.timings.shadow_instances_one_sided, 0u);
+    // The closed boxes facing out or in, mirrored or not, from every map but
+    // the world's and the spot's inside its housing; never the floor or the
+    // open box.
+    EXPECT_GT(one_sided.timings.shadow_instances_one_sided, 0u);
+    EXPECT_LT(one_sided.timings.shadow_instances_one_sided, one_sided.timings.shadow_instances_drawn);
+    EXPECT_EQ(one_sided.timings.shadow_instances_drawn, reference.timings.shadow_instances_drawn);
+    std::printf("%llu of %llu instances drawn into the maps without back faces\n",
+                static_cast<unsigned long long>(one_sided.timings.shadow_instances_one_sided),
+                static_cast<unsigned long long>(one_sided.timings.shadow_instances_drawn));
+    for (const FrameResult* f : {&by_vertex, &one_sided}) {
+        const char* name = f == &by_vertex ? "by vertex" : "by vertex, front faces only";
+        for (Pass pass : {Pass::Combined, Pass::DiffDir, Pass::GlossDir, Pass::Shadow, Pass::AO}) {
+            const PassImage& a = *f->find(pass);
+            const PassImage& b = *reference.find(pass);
+            ASSERT_EQ(a.pixels.size(), b.pixels.size());
+            std::size_t differ = 0;
+            double worst = 0;
+            for (std::size_t i = 0; i < a.pixels.size(); ++i) {
+                differ += a.pixels[i] != b.pixels[i];
+                worst = std::max(worst, double(std::abs(a.pixels[i] - b.pixels[i])));
+            }
+            EXPECT_EQ(differ, 0u) << name << ", pass " << int(pass) << ": largest difference " << worst;
+        }
+    }
+}

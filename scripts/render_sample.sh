@@ -6,6 +6,9 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scene=${1:-showcase}
+# Blender allocates with jemalloc, whose defaults make llvmpipe fault its
+# freed memory in again for every draw batch (native/src/cpu_rasteriser.h).
+export MALLOC_CONF=${MALLOC_CONF:-muzzy_decay_ms:-1,lg_extent_max_active_fit:20}
 bash scripts/install_deps.sh
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release
 cmake --build build -j2

@@ -134,6 +134,7 @@ EEVEE_SETTINGS = {"light_threshold": 1e-4, "use_soft_shadows": True, "use_shadow
 REF_SEEDS = (1, 2)
 CYCLES_SEED = 1000
 JOB_VERSION = 2   # bump when the reference job changes in a way the cache key must see
+JEMALLOC_CONF = "muzzy_decay_ms:-1,lg_extent_max_active_fit:20"  # native/src/cpu_rasteriser.h kJemallocConf
 
 
 def log(msg):
@@ -163,6 +164,10 @@ def blender_env():
     env["PATH"] = os.pathsep.join(p for p in env.get("PATH", "").split(os.pathsep) if "pyenv" not in p)
     env.pop("PYTHONHOME", None)
     env.pop("PYTHONPATH", None)
+    # Every engine's Blender with the jemalloc setting the README gives for
+    # CPU renders (native/src/cpu_rasteriser.h): without it llvmpipe faults
+    # its freed memory in again for every draw batch.
+    env.setdefault("MALLOC_CONF", JEMALLOC_CONF)
     return env
 
 

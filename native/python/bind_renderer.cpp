@@ -174,6 +174,7 @@ void declare_renderer(py::module_& m) {
             d["version"] = i.version;
             d["display"] = i.display;
             d["device_note"] = i.device_note;
+            d["allocator_note"] = i.allocator_note;
             return d;
         })
         .def_property_readonly("last_timings", [](PyRenderer& self) {

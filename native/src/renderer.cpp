@@ -21,6 +21,7 @@
 
 #include "aov_module.h"
 #include "camera.h"
+#include "cpu_rasteriser.h"
 #include "cryptomatte_module.h"
 #include "egl_context.h"
 #include "emitter_module.h"
@@ -197,6 +198,10 @@ struct Renderer::Impl {
         info.version = gl_string(GL_VERSION);
         info.display = context->display_description();
         info.device_note = context->device_note();
+        if (is_cpu_rasteriser(info.renderer)) {
+            keep_freed_memory_at_heap_tops();
+            info.allocator_note = jemalloc_note();
+        }
         if (epoxy_gl_version() < 45)
             throw Error("OpenGL 4.5 core is required, the context gives " + info.version);
         glGetIntegerv(GL_MAX_TEXTURE_SIZE, &max_texture_size);
@@ -747,8 +752,7 @@ void Renderer::Impl::prepare_programs(Frame& f) {
     // mixes kinds, so the kind loops would need the loop over every kind
     // after them, which doubled the program's compile on llvmpipe (759
     // against 334 ms, many_lights) for a tenth of its lighting time.
-    lighting.kind_loops = info.renderer.find("llvmpipe") != std::string::npos ||
-                          info.renderer.find("softpipe") != std::string::npos;
+    lighting.kind_loops = is_cpu_rasteriser(info.renderer);
     if (const char* env = std::getenv("DEFERRED_LIGHT_KIND_LOOPS")) lighting.kind_loops = std::string(env) == "on";
     if (f.culled) lighting.kind_loops = false;
     lighting.light_samples = settings.light_samples;

@@ -36,6 +36,34 @@ class ModuleTest(unittest.TestCase):
         self.assertTrue(info["version"].startswith("4."), info)
         self.assertTrue(info["renderer"])
 
+    def test_allocator_note_names_jemallocs_setting(self):
+        """On a CPU rasteriser, a process whose allocator is jemalloc with
+        its defaults (Blender links it) gets a note naming MALLOC_CONF; with
+        the setting, or with glibc's malloc (which the module tunes itself),
+        none. In subprocesses: jemalloc reads MALLOC_CONF at start-up."""
+        import os
+        import subprocess
+        import sys
+        if "llvmpipe" not in self.r.gl_info["renderer"] and "softpipe" not in self.r.gl_info["renderer"]:
+            self.skipTest("not a CPU rasteriser")
+        self.assertEqual(self.r.gl_info["allocator_note"], "")  # this process: glibc
+        jemalloc = "/lib/x86_64-linux-gnu/libjemalloc.so.2"
+        if not os.path.exists(jemalloc):
+            self.skipTest("no libjemalloc (the blender package brings it)")
+        code = "import deferred_native as dn; print(repr(dn.Renderer().gl_info['allocator_note']))"
+        conf = "muzzy_decay_ms:-1,lg_extent_max_active_fit:20"
+        for malloc_conf, expect_note in ((None, True), ("dirty_decay_ms:5000", True), (conf, False)):
+            env = dict(os.environ, LD_PRELOAD=jemalloc)
+            env.pop("MALLOC_CONF", None)
+            if malloc_conf:
+                env["MALLOC_CONF"] = malloc_conf
+            out = subprocess.run([sys.executable, "-c", code], env=env, stdout=subprocess.PIPE, text=True,
+                                 timeout=120, check=True).stdout.strip()
+            if expect_note:
+                self.assertIn(f"MALLOC_CONF={conf}", out, malloc_conf)
+            else:
+                self.assertEqual(out, "''", malloc_conf)
+
     def test_render_returns_float32_passes(self):
         p, i, n = plane()
         mesh = self.r.add_mesh(p, i, corner_normals=n)

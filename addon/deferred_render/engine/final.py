@@ -253,6 +253,8 @@ class FinalRender:
             print(f"{LOG_PREFIX}: rendering on {self.gl_name} ({last_device['display']})", flush=True)
             if last_device["note"]:
                 print(f"{LOG_PREFIX}: device note: {last_device['note']}", flush=True)
+            if info.get("allocator_note"):
+                print(f"{LOG_PREFIX}: note: {info['allocator_note']}", flush=True)
 
     def _render_cancellable(self, renderer, mod, camera, frame, kwargs):
         """The native render on a worker thread (it releases the GIL and

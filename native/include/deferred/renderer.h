@@ -47,6 +47,7 @@ struct GLInfo {
     std::string vendor, renderer, version;
     std::string display;      // which step of the cascade gave the display, and which GPU
     std::string device_note;  // a fallback taken choosing the device (CUDA_VISIBLE_DEVICES), or ""
+    std::string allocator_note;  // a setting of the process's allocator that slows the CPU rasteriser, or ""
 };
 
 // What a Cryptomatte layer names: the object (its name), the material

@@ -107,17 +107,23 @@ void main() {
 #ifdef INDEXED_DRAW
     /* Drawn by vertex (glDrawElementsInstanced over the index buffer,
      * draw_style.h): gl_VertexID is the vertex itself, which a vertex cache
-     * shades once for the triangles sharing it. Only the position: a
-     * position-only caster program (shadow_frag.glsl without SCENE_ALPHA)
-     * reads nothing else. */
-#ifndef SHADOW_PASS
-#error "INDEXED_DRAW draws shadow casters only"
+     * shades once for the triangles sharing it. Only the position (and the
+     * instance): an opaque caster (shadow_frag.glsl without SCENE_ALPHA)
+     * reads nothing else, the visibility buffer's one raster program
+     * (visibility_frag.glsl) takes the rest from gl_PrimitiveID. */
+#if !defined(SHADOW_PASS) && !defined(VISIBILITY_PASS)
+#error "INDEXED_DRAW draws shadow casters and the visibility buffer only"
 #endif
     {
         const uint instance = instance_remap[instance_offset + uint(gl_InstanceID)];
         const vec4 world = instances[instance].model * vec4(mesh_position_at_shutter(uint(gl_VertexID), mesh_flags), 1.0);
         v_position = world.xyz;
+#ifdef SHADOW_PASS
         shadow_map_position(world);
+#else
+        gl_Position = frame.projection * (frame.view * world);
+        v_instance = instance;
+#endif
         return;
     }
 #endif

@@ -161,6 +161,10 @@
  * region), SHADOW_CLIP_PLANES vec4s from LOC_SHADOW_CLIP on. */
 #define SHADOW_CLIP_PLANES 4
 #define LOC_SHADOW_CLIP 42
+/* The visibility buffer drawn by vertex (visibility_frag.glsl
+ * INDEXED_DRAW): the drawn range's first triangle, to which gl_PrimitiveID
+ * counts (after LOC_SHADOW_CLIP's SHADOW_CLIP_PLANES locations). */
+#define LOC_FIRST_TRIANGLE 46
 
 /* Pass ids (deferred::Pass; static_assert'ed in native/src/passes.cpp) */
 #define PASS_COMBINED 0

@@ -199,6 +199,7 @@ void declare_renderer(py::module_& m) {
             d["shadow_fragments"] = self.last.shadow_fragments;
             d["shadow_instances_drawn"] = self.last.shadow_instances_drawn;
             d["shadow_instances_one_sided"] = self.last.shadow_instances_one_sided;
+            d["camera_instances_drawn"] = self.last.camera_instances_drawn;
             d["lighting_later_pixels"] = self.last.lighting_later_pixels;
             d["shadow_resolutions"] = self.last.shadow_resolutions;
             d["passes_ms"] = self.last.passes_ms;

@@ -4,8 +4,10 @@
 // shared by several triangles is shaded once where the driver's vertex
 // cache holds it, instead of once per corner as glDrawArrays does (six
 // times per vertex in a closed triangle mesh). Only programs that need no
-// per-corner data or triangle index in their vertex stage can: the shadow
-// maps' position-only casters (geometry_vert.glsl INDEXED_DRAW).
+// per-corner data in their vertex stage can (geometry_vert.glsl
+// INDEXED_DRAW): the shadow maps' opaque casters, and the visibility
+// buffer's one raster program, whose fragments take their triangle from
+// gl_PrimitiveID (visibility_frag.glsl).
 //
 // Back faces: of a closed mesh (mesh_topology.h), seen from a point
 // outside it, the nearest surface along every ray is a triangle facing that
@@ -14,12 +16,19 @@
 // the near plane (then the inside would show through the cut). FaceCulling
 // describes the projection for that test; the rasteriser then rejects the
 // back-facing half of such a mesh's triangles before setting them up.
+// Where the rasteriser snaps a sliver by a silhouette, it may turn over and
+// be rejected with the back faces: the shadow maps of every benchmark
+// capture at 640x360 were equal to the bit, but the visibility buffer of the
+// showcase lost such slivers at 53 of its sphere's silhouette pixels, so
+// only the shadow maps leave back faces out (visibility_module.h).
 #pragma once
 
 #include <glm/glm.hpp>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <string>
 
 namespace deferred {
 
@@ -63,6 +72,21 @@ inline bool facing_is_ccw(const glm::dmat4& view_projection, const glm::dvec3& a
 struct DrawStyle {
     bool by_vertex = false;   // glDrawElements; the program must be an INDEXED_DRAW one
     bool cull_faces = false;  // leave out the back faces of the kept instances cull() found closed
+    // by_vertex: the uniform location where the program reads the drawn
+    // range's first triangle (gl_PrimitiveID counts from it); -1 none.
+    int first_triangle_location = -1;
 };
+
+// DEFERRED_DRAW_BY_VERTEX=off draws by corner, DEFERRED_FACE_CULLING=off
+// both sides of every triangle, in the shadow maps and the visibility
+// buffer alike: the tests' references for the same images.
+inline bool draw_by_vertex_enabled() {
+    const char* env = std::getenv("DEFERRED_DRAW_BY_VERTEX");
+    return !(env && std::string(env) == "off");
+}
+inline bool face_culling_enabled() {
+    const char* env = std::getenv("DEFERRED_FACE_CULLING");
+    return !(env && std::string(env) == "off");
+}
 
 }  // namespace deferred

@@ -298,6 +298,7 @@ void FrameScene::draw_range(const Culled& c, std::uint32_t first, std::uint32_t 
     }
     if (style.by_vertex) {
         // Triangle t's corners are elements 3t..3t+2 of the index buffer.
+        if (style.first_triangle_location >= 0) glUniform1ui(style.first_triangle_location, first);
         glVertexArrayElementBuffer(empty_vao_, m.indices.get());
         glDrawElementsInstanced(GL_TRIANGLES, GLsizei(count * 3), GL_UNSIGNED_INT,
                                 reinterpret_cast<const void*>(std::uintptr_t(first) * 3u * sizeof(std::uint32_t)),

@@ -130,7 +130,8 @@ public:
     std::uint64_t draw_culled(const Test& keep, bool casters_only, const DrawStyle& style = {},
                               const FaceCulling* faces = nullptr);
     // Instances draw_range() has drawn without their back faces since the
-    // last build() (the count of each such draw's kept instances).
+    // last build() (the count of each such draw's kept instances; callers
+    // take differences around their draws).
     std::uint64_t one_sided_instances() const { return one_sided_; }
     // The material drawing slot s of a batch.
     std::uint32_t slot_material(const Draw& d, std::size_t s) const;

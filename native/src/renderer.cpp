@@ -288,6 +288,7 @@ struct Renderer::Impl {
         double geometry_ms = 0, lighting_ms = 0, passes_ms = 0, culling_ms = 0, shadow_ms = 0, forward_ms = 0,
                preview_ms = 0;
         std::uint64_t shadow_instances_drawn = 0, camera_instances_drawn = 0;
+        std::uint64_t shadow_one_sided = 0;  // of those, without back faces
         std::size_t compiles_before = 0, loads_before = 0;
         double compile_ms_before = 0, load_ms_before = 0;
 
@@ -1006,7 +1007,9 @@ void Renderer::Impl::render_sample(Frame& f, int sample) {
         shadows.render_sample(
             *shaders, {u[2], u[3]}, grid, world_dirs,
             [&](const ShadowModule::CasterTest& casts, bool world_map, const DrawStyle& style, const FaceCulling* faces) {
+                const std::uint64_t one_sided = f.scene.one_sided_instances();
                 f.shadow_instances_drawn += f.geometry.draw_casters(f.scene, casts, world_map, style, faces);
+                f.shadow_one_sided += f.scene.one_sided_instances() - one_sided;
             },
             f.caster_defines, f.geometry.stochastic_alpha() || f.casters_move);
         gpu_timer.lap(f.shadow_ms);
@@ -1125,7 +1128,7 @@ FrameResult Renderer::Impl::finish(Frame& f) {
     t.shadow_fragments = shadows.collect_fragments();  // after the frame's last wait: no stall
     t.lighting_later_pixels = f.lighting.later_pixels();  // likewise
     t.shadow_instances_drawn = f.shadow_instances_drawn;
-    t.shadow_instances_one_sided = f.scene.one_sided_instances();
+    t.shadow_instances_one_sided = f.shadow_one_sided;
     t.camera_instances_drawn = f.camera_instances_drawn;
     t.shadow_lights_dropped = shadows.dropped();
     t.tile_light_pairs = f.culled ? culling.last_index_count() : 0;

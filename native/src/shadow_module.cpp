@@ -264,13 +264,8 @@ void ShadowModule::begin_frame(const CameraMatrices& camera, int max_resolution,
     // reference for what lit_region leaves out).
     const char* lit = std::getenv("DEFERRED_SHADOW_LIT_REGION");
     lit_region_enabled_ = !(lit && std::string(lit) == "off");
-    // DEFERRED_SHADOW_BY_VERTEX=off draws the casters by corner, and
-    // DEFERRED_SHADOW_FACE_CULLING=off both sides of every triangle
-    // (draw_style.h; the tests' references for the same maps).
-    const char* by_vertex = std::getenv("DEFERRED_SHADOW_BY_VERTEX");
-    by_vertex_enabled_ = !(by_vertex && std::string(by_vertex) == "off");
-    const char* culling = std::getenv("DEFERRED_SHADOW_FACE_CULLING");
-    face_culling_enabled_ = !(culling && std::string(culling) == "off");
+    by_vertex_enabled_ = draw_by_vertex_enabled();
+    face_culling_enabled_ = face_culling_enabled();
     count_fragments_ = count_fragments &&
                        (epoxy_gl_version() >= 46 || epoxy_has_gl_extension("GL_ARB_pipeline_statistics_query"));
     entries_.clear();

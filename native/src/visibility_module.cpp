@@ -34,8 +34,13 @@ void VisibilityBuffer::prepare(ShaderLibrary& shaders, MaterialModule& materials
         ShaderVariant alpha = raster;
         alpha.defines.push_back("SCENE_ALPHA");
         raster_ = shaders.graphics_program("geometry_vert.glsl", "geometry_frag.glsl", alpha);
+        one_program_style_ = DrawStyle{};
     } else {
-        raster_ = shaders.graphics_program("geometry_vert.glsl", "visibility_frag.glsl", raster);
+        ShaderVariant ids = raster;
+        one_program_style_.by_vertex = draw_by_vertex_enabled();
+        one_program_style_.first_triangle_location = LOC_FIRST_TRIANGLE;
+        if (one_program_style_.by_vertex) ids.defines.push_back("INDEXED_DRAW");
+        raster_ = shaders.graphics_program("geometry_vert.glsl", "visibility_frag.glsl", ids);
     }
     ShaderVariant v;
     v.defines = {"VIS_COUNT"};
@@ -147,13 +152,13 @@ void VisibilityBuffer::draw(const FrameScene& scene, const MaterialModule& mater
     for (const FrameScene::Culled& c : scene.visible()) {
         const GpuMesh& mesh = scene.mesh(*c.draw);
         if (!any_skipped && graph_rasters_.empty()) {
-            scene.draw_range(c, 0, mesh.triangle_count);
+            scene.draw_range(c, 0, mesh.triangle_count, one_program_style_);
             continue;
         }
         for (std::size_t s = 0; s < mesh.slot_ranges.size(); ++s) {
             const std::uint32_t id = scene.slot_material(*c.draw, s);
             if (!skipped(id) && raster_for(id) == 0)
-                scene.draw_range(c, mesh.slot_ranges[s].first, mesh.slot_ranges[s].second);
+                scene.draw_range(c, mesh.slot_ranges[s].first, mesh.slot_ranges[s].second, one_program_style_);
         }
     }
     // Node materials that drive alpha: each with its own program (the graph

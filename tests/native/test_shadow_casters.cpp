@@ -1,9 +1,9 @@
-// Shadow casters drawn by vertex (glDrawElements) and, for closed meshes
-// seen from outside, without their back faces (draw_style.h): the maps
-// hold the same nearest surfaces, so the image is the same to the bit as
-// with every corner drawn and both sides (DEFERRED_SHADOW_BY_VERTEX=off,
-// DEFERRED_SHADOW_FACE_CULLING=off). Which meshes are closed, and which
-// way they face, is mesh_topology.h's.
+// Shadow casters and the visibility buffer drawn by vertex (glDrawElements),
+// and closed casters seen from outside without their back faces
+// (draw_style.h): the maps and the visibility buffer hold the same nearest
+// surfaces, so the image is the same to the bit as with every corner drawn
+// and both sides (DEFERRED_DRAW_BY_VERTEX=off, DEFERRED_FACE_CULLING=off).
+// Which meshes are closed, and which way they face, is mesh_topology.h's.
 #include "mesh_topology.h"
 #include "test_helpers.h"
 
@@ -72,10 +72,11 @@ Mat4d scaled(double sx, double sy, double sz, double x, double y, double z) {
 // (its maps' origin inside: both sides), an unwelded box (open: its faces
 // do not share corners). A sun with an angle (cascades), a sphere light and
 // a tilted area light (cubes, the area light's clip plane), the spot; the
-// world's occlusion maps (both sides always).
+// world's occlusion maps (both sides always). Around it all, a closed room
+// facing in that casts no shadow.
 FrameResult casters_frame(const char* by_vertex, const char* face_culling) {
-    setenv("DEFERRED_SHADOW_BY_VERTEX", by_vertex, 1);
-    setenv("DEFERRED_SHADOW_FACE_CULLING", face_culling, 1);
+    setenv("DEFERRED_DRAW_BY_VERTEX", by_vertex, 1);
+    setenv("DEFERRED_FACE_CULLING", face_culling, 1);
     Renderer r;
     const std::uint32_t mat = deferred::testing::add_plane(r, grey(), 6.0f, 4);
     const tools::MeshArrays out = welded_box(0.3f), in = welded_box(0.3f, true), open = tools::make_box(0.3f, 0.3f, 0.3f);
@@ -91,6 +92,10 @@ FrameResult casters_frame(const char* by_vertex, const char* face_culling) {
     r.add_instances(in_mesh, in_at.data(), 1, nullptr, {mat});
     r.add_instances(open_mesh, open_at.data(), 1, nullptr, {mat});
     r.add_instances(out_mesh, housing_at.data(), 1, nullptr, {mat});
+    const tools::MeshArrays room = welded_box(15.0f, true);
+    const std::uint32_t room_mesh = r.add_mesh(room.view());
+    const Mat4d room_at = tools::translation(0.0, 0.0, 14.9);
+    r.add_instances(room_mesh, room_at.data(), 1, nullptr, {mat}, false);
 
     auto aimed = [](LightType type, double x, double y, double z, double tx, double ty, float energy) {
         Light l;
@@ -122,10 +127,11 @@ FrameResult casters_frame(const char* by_vertex, const char* face_culling) {
     s.width = 96;
     s.height = 64;
     s.samples = 4;
-    s.passes = {Pass::Combined, Pass::DiffDir, Pass::GlossDir, Pass::Shadow, Pass::AO};
+    s.passes = {Pass::Combined, Pass::DiffDir, Pass::GlossDir, Pass::Shadow, Pass::AO,
+                Pass::Depth,    Pass::Normal,  Pass::IndexOB,  Pass::UV};
     FrameResult f = r.render(cam, s);
-    unsetenv("DEFERRED_SHADOW_BY_VERTEX");
-    unsetenv("DEFERRED_SHADOW_FACE_CULLING");
+    unsetenv("DEFERRED_DRAW_BY_VERTEX");
+    unsetenv("DEFERRED_FACE_CULLING");
     return f;
 }
 
@@ -170,11 +176,11 @@ TEST(MeshTopology, ClosedMeshesAndTheSideTheyFace) {
     EXPECT_EQ(orientation(beyond), 0);
 }
 
-TEST(ShadowCasters, ByVertexAndFrontFacesOnlyChangeNoPixel) {
+TEST(DrawStyle, ByVertexAndFrontFacesOnlyChangeNoPixel) {
     struct EnvGuard {
         ~EnvGuard() {
-            unsetenv("DEFERRED_SHADOW_BY_VERTEX");
-            unsetenv("DEFERRED_SHADOW_FACE_CULLING");
+            unsetenv("DEFERRED_DRAW_BY_VERTEX");
+            unsetenv("DEFERRED_FACE_CULLING");
         }
     } guard;
     const FrameResult reference = casters_frame("off", "off");
@@ -182,6 +188,7 @@ TEST(ShadowCasters, ByVertexAndFrontFacesOnlyChangeNoPixel) {
     const FrameResult one_sided = casters_frame("on", "on");
     EXPECT_EQ(reference.timings.shadow_instances_one_sided, 0u);
     EXPECT_EQ(by_vertex.timings.shadow_instances_one_sided, 0u);
+    EXPECT_TRUE(by_vertex.timings.visibility_buffer);
     // The closed boxes facing out or in, mirrored or not, from every map but
     // the world's and the spot's inside its housing; never the floor or the
     // open box.
@@ -193,7 +200,8 @@ TEST(ShadowCasters, ByVertexAndFrontFacesOnlyChangeNoPixel) {
                 static_cast<unsigned long long>(one_sided.timings.shadow_instances_drawn));
     for (const FrameResult* f : {&by_vertex, &one_sided}) {
         const char* name = f == &by_vertex ? "by vertex" : "by vertex, front faces only";
-        for (Pass pass : {Pass::Combined, Pass::DiffDir, Pass::GlossDir, Pass::Shadow, Pass::AO}) {
+        for (Pass pass : {Pass::Combined, Pass::DiffDir, Pass::GlossDir, Pass::Shadow, Pass::AO, Pass::Depth,
+                          Pass::Normal, Pass::IndexOB, Pass::UV}) {
             const PassImage& a = *f->find(pass);
             const PassImage& b = *reference.find(pass);
             ASSERT_EQ(a.pixels.size(), b.pixels.size());

@@ -236,7 +236,7 @@ struct FrameTimings {
     std::uint64_t shadow_fragments = 0;
     std::uint64_t shadow_instances_drawn = 0;  // instances drawn into them (after culling per map)
     // Of those, drawn without their back faces: closed meshes seen from
-    // outside (draw_style.h; DEFERRED_SHADOW_FACE_CULLING=off: none).
+    // outside (draw_style.h; DEFERRED_FACE_CULLING=off: none).
     std::uint64_t shadow_instances_one_sided = 0;
     std::uint64_t camera_instances_drawn = 0;  // instances in the view frustum, over all samples
     std::size_t shadow_lights_dropped = 0;  // would cast shadows, over the layer/memory limits

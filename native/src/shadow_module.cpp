@@ -38,10 +38,11 @@ void face_basis(int face, glm::dvec3& F, glm::dvec3& R, glm::dvec3& U) {
     U = glm::cross(R, F);
 }
 
-// Camera-relative world -> clip for a (slightly wider than) 90 degree face from `origin`, reversed
-// Z with an infinite far plane (depth = near / distance along F).
+// The cube faces' near plane (distance along the face's axis).
 constexpr double kCubeNear = 1e-3;
 
+// Camera-relative world -> clip for a (slightly wider than) 90 degree face from `origin`, reversed
+// Z with an infinite far plane (depth = near / distance along F).
 glm::dmat4 cube_face_matrix(int face, const glm::dvec3& origin) {
     glm::dvec3 F, R, U;
     face_basis(face, F, R, U);
@@ -80,7 +81,6 @@ double ortho_near(const glm::dvec3& axis, const glm::dvec3& center, double radiu
 // sphere, depth 1 nearest the light, with casters up to max(far, 1 km)
 // beyond the sphere towards the light. `shift`: the texel grid moved by that
 // fraction of a texel (of a map `resolution` texels wide) in x and y.
-
 glm::dmat4 ortho_map(const glm::dvec3& axis, const glm::dvec3& center, double radius, double far,
                      const glm::dvec2& shift = glm::dvec2(0.0), int resolution = 1) {
     const glm::dvec3 R = glm::normalize(glm::cross(axis, std::abs(axis.z) < 0.999 ? glm::dvec3(0, 0, 1) : glm::dvec3(1, 0, 0)));

@@ -3,6 +3,7 @@
 #include <dlfcn.h>
 #include <sys/types.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <mutex>
 
@@ -23,7 +24,7 @@ void keep_freed_memory_at_heap_tops(int megabytes) {
         if (const char* env = std::getenv("DEFERRED_MALLOC_TOP_PAD_MB")) mb = std::atoi(env);
         if (mb <= 0) return;
 #if defined(__GLIBC__)
-        mallopt(M_TOP_PAD, mb << 20);
+        mallopt(M_TOP_PAD, std::min(mb, 1024) << 20);  // M_TOP_PAD is an int of bytes
 #endif
     });
 }

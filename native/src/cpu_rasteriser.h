@@ -18,7 +18,7 @@ bool is_cpu_rasteriser(const std::string& gl_renderer);
 // and their shadow maps 2.2-3.0 s; with 32 MiB kept at the top of each
 // heap, 87 000-136 000 faults, 1.6-2.3 s and 1.1-1.7 s (README, "Rendering
 // on the CPU").
-// Raises M_TOP_PAD to `megabytes` (DEFERRED_MALLOC_TOP_PAD_MB overrides;
+// Raises M_TOP_PAD to `megabytes`, at most 1024 (DEFERRED_MALLOC_TOP_PAD_MB overrides;
 // 0 leaves glibc's setting), once per process; the cost is up to that much
 // freed memory each heap keeps. No-op without glibc.
 void keep_freed_memory_at_heap_tops(int megabytes = 32);

@@ -18,9 +18,10 @@
 // back-facing half of such a mesh's triangles before setting them up.
 // Where the rasteriser snaps a sliver by a silhouette, it may turn over and
 // be rejected with the back faces: the shadow maps of every benchmark
-// capture at 640x360 were equal to the bit, but the visibility buffer of the
-// showcase lost such slivers at 53 of its sphere's silhouette pixels, so
-// only the shadow maps leave back faces out (visibility_module.h).
+// capture at 640x360 were equal to the bit, but culled in the visibility
+// buffer such slivers changed 159 of the showcase's colour values at
+// 320x180, by its spheres' silhouettes, so only the shadow maps leave back
+// faces out (visibility_module.h).
 #pragma once
 
 #include <glm/glm.hpp>

@@ -26,9 +26,9 @@ void keep_freed_memory_at_heap_tops(int megabytes = 32);
 // jemalloc, where it is the process's allocator (Blender links it), does
 // the same with its defaults, and cannot be told otherwise once running:
 // its options are read at start-up from MALLOC_CONF. In Blender 3.4 on
-// llvmpipe the instancing sample's 4-sample render took 8.8-9.7 s with the
-// defaults (1.63 M page faults over three renders) and 2.1-3.1 s with
-// kJemallocConf (0.15 M): freed pages stay mapped, marked MADV_FREE for
+// llvmpipe the instancing sample's 4-sample render took 7.5-9.6 s with the
+// defaults (1.46 M page faults over three renders) and 2.1-3.1 s with
+// kJemallocConf (0.15 M; bench/cpu/bench_malloc_conf.py): freed pages stay mapped, marked MADV_FREE for
 // the kernel to take back only under memory pressure (muzzy_decay_ms -1),
 // and a freed extent serves requests up to 2^20 times smaller than itself
 // (lg_extent_max_active_fit 20, default 6) instead of fresh pages; either

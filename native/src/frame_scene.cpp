@@ -95,6 +95,19 @@ void FrameScene::build(const SceneStore& scene, const MaterialModule& materials,
             }
             g.color = {b.colors[i * 4], b.colors[i * 4 + 1], b.colors[i * 4 + 2], b.colors[i * 4 + 3]};
             g.info = {b.randoms[i], b.terminator_offsets[i], 0.0f, 0.0f};
+            if (b.terminator_offsets[i] > 0.0f && mesh.terminator_reach > 0.0) {
+                // Frobenius norms bound a matrix's largest stretch; a moving
+                // instance's at each step of the shutter.
+                auto frobenius = [](const glm::dmat4& w) {
+                    return std::sqrt(glm::dot(glm::dvec3(w[0]), glm::dvec3(w[0])) +
+                                     glm::dot(glm::dvec3(w[1]), glm::dvec3(w[1])) +
+                                     glm::dot(glm::dvec3(w[2]), glm::dvec3(w[2])));
+                };
+                double stretch = frobenius(world);
+                if (!moving_.empty() && moving_.back().index == instances_.size())
+                    for (const glm::dmat4& w : moving_.back().steps) stretch = std::max(stretch, frobenius(w));
+                terminator_lift_ = std::max(terminator_lift_, stretch * mesh.terminator_reach);
+            }
             instances_.push_back(g);
             if (options.cryptomatte) crypto_.insert(crypto_.end(), {b.crypto[2 * i], b.crypto[2 * i + 1]});
             if (options.light_groups) groups.push_back(b.light_group);
@@ -140,6 +153,7 @@ void FrameScene::release() {
     draws_.clear();
     moving_.clear();
     deforming_ = false;
+    terminator_lift_ = 0.0;
     gpu_materials_.clear();
     crypto_.clear();
     casters_.clear();

@@ -96,6 +96,11 @@ public:
     bool any_moving() const { return !moving_.empty(); }
     // A deforming mesh under motion blur (its vertices move in the vertex stage).
     bool deforming() const { return deforming_; }
+    // The most the shadow terminator offset can move a visible point of any
+    // instance (metres; GpuMesh::terminator_reach through each instance's
+    // matrices, with a Geometry Offset on): how far a shadow lookup can land
+    // from the surface it shades.
+    double terminator_lift() const { return terminator_lift_; }
 
     // The ray scene's casters (every shadow-casting instance with its slots'
     // alphas: a constant material's mix chain averaged, as
@@ -160,6 +165,7 @@ private:
     std::vector<Draw> draws_;
     std::vector<Moving> moving_;
     bool deforming_ = false;
+    double terminator_lift_ = 0.0;
     std::vector<gpu::GpuMaterial> gpu_materials_;
     std::vector<std::uint32_t> crypto_;  // object and asset hash per instance
     std::vector<RayScene::Instance> casters_;

@@ -1090,7 +1090,12 @@ void Renderer::Impl::fit_shadow_maps(Frame& f) {
             }
         if (far > 0.0) visible_depths = {std::max(near, double(cam.clip_start)), far};
     }
-    shadows.fit(receivers, visible_depths);
+    // Where later samples' lookups land: the frame's view volume (the
+    // sample cameras' own, unless the camera moves) and the terminator's lift.
+    ShadowModule::LookupVolume lookups;
+    lookups.viewplane = {f.view.left, f.view.right, f.view.bottom, f.view.top};
+    lookups.lift = f.scene.terminator_lift();
+    shadows.fit(receivers, visible_depths, f.camera_moves ? nullptr : &lookups);
 }
 
 // After the last sample: the resolves, the stages' times, the readback.

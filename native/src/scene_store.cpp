@@ -4,6 +4,8 @@
 
 #include <deferred/renderer.h>
 
+#include <glm/glm.hpp>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -230,6 +232,41 @@ std::int64_t SceneStore::find_mesh(const std::string& key) {
     return std::int64_t(found->second);
 }
 
+namespace {
+
+// A bound on the shadow terminator offset's length over the mesh, before
+// its instance's matrix (geometry_frag.glsl terminator_offset: Cycles 3.4's
+// shadow_ray_smooth_surface_offset). With G = max |Gij| = |dot(V_j - V_i,
+// N_i)| over the triangles' corners: |D_i| <= G, so each h_i <= 2 G; with
+// |a|, |b|, |c| <= 2 G and u(1 - u), v(1 - v), uv <= 1/4 inside the
+// triangle, the parabola is at most 2.5 G, halved 1.25 G; so |h| <= 2 G.
+// The offset is h along the interpolated normal through the instance's
+// matrix, at most max |N_i| times its largest stretch (at most its
+// Frobenius norm, FrameScene::terminator_lift). 2.2 instead of 2: slack for
+// barycentrics a hair outside the triangle.
+double terminator_reach(const MeshData& m) {
+    if (!m.corner_normals) return 0.0;
+    double g = 0.0, n_max = 0.0;
+    for (std::size_t t = 0; t < m.triangle_count; ++t) {
+        glm::dvec3 v[3], n[3];
+        for (int k = 0; k < 3; ++k) {
+            const std::uint32_t i = m.indices[t * 3 + std::size_t(k)];
+            const float* p = m.positions + std::size_t(i) * 3;
+            const float* c = m.corner_normals + (t * 3 + std::size_t(k)) * 3;
+            v[k] = glm::dvec3(p[0], p[1], p[2]);
+            n[k] = glm::dvec3(c[0], c[1], c[2]);
+        }
+        for (int i = 0; i < 3; ++i) {
+            n_max = std::max(n_max, glm::length(n[i]));
+            for (int j = 0; j < 3; ++j)
+                if (i != j) g = std::max(g, std::abs(glm::dot(v[j] - v[i], n[i])));
+        }
+    }
+    return 2.2 * g * n_max;
+}
+
+}  // namespace
+
 std::uint32_t SceneStore::add_mesh(const MeshData& m, const std::string& key) {
     const std::int32_t max_mat = validate_mesh(m);
 
@@ -254,6 +291,7 @@ std::uint32_t SceneStore::add_mesh(const MeshData& m, const std::string& key) {
     }
     // A deforming mesh's winding is known at rest only.
     if (!m.motion_positions) g.closed = closed_orientation(m.positions, m.vertex_count, m.indices, m.triangle_count);
+    g.terminator_reach = terminator_reach(m);
     // Triangles sorted by material slot (stable), so each slot is one draw
     // range: node materials bind a program per slot. Per-triangle and
     // per-corner arrays are permuted together; unsorted input is copied.

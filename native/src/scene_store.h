@@ -46,6 +46,10 @@ struct GpuMesh {
     // closed_orientation() of its triangles (mesh_topology.h): +1/-1 closed
     // and facing out/in, whose back faces a draw may leave out; 0 both sides.
     int closed = 0;
+    // The most any point of it is lifted by the shadow terminator offset,
+    // over the largest column of its instance's matrix (object units;
+    // terminator_reach in scene_store.cpp). 0 without normals.
+    double terminator_reach = 0.0;
     // Its ray hierarchy (ray_scene.h), built on first use by shadow rays.
     mutable std::shared_ptr<const MeshBvh> bvh;
 };

@@ -131,6 +131,72 @@ ShadowModule::CasterTest ortho_casters(const glm::dvec3& axis, const glm::dvec3&
     };
 }
 
+// The convex hull of `p` (counter-clockwise, Andrew's monotone chain;
+// collinear points dropped).
+std::vector<glm::dvec2> convex_hull(std::vector<glm::dvec2> p) {
+    std::sort(p.begin(), p.end(), [](const glm::dvec2& a, const glm::dvec2& b) {
+        return a.x < b.x || (a.x == b.x && a.y < b.y);
+    });
+    auto turn = [](const glm::dvec2& o, const glm::dvec2& a, const glm::dvec2& b) {
+        return (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x);
+    };
+    std::vector<glm::dvec2> h(2 * p.size() + 1);
+    std::size_t k = 0;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+        while (k >= 2 && turn(h[k - 2], h[k - 1], p[i]) <= 0.0) --k;
+        h[k++] = p[i];
+    }
+    for (std::size_t i = p.size() - 1, lower = k + 1; i-- > 0;) {
+        while (k >= lower && turn(h[k - 2], h[k - 1], p[i]) <= 0.0) --k;
+        h[k++] = p[i];
+    }
+    h.resize(k > 0 ? k - 1 : 0);
+    return h;
+}
+
+// Casters of a sun's cascade whose shadow can fall on a lookup of its slice.
+// A lookup at point Q reads the texel holding Q's place across the map,
+// written by the casters covering that texel's centre before Q along the
+// axis. Every Q lies within `reach` (metres, across the axis) of the
+// slice's volume, the convex hull of `corners`, so its projection along the
+// axis is within `reach` of the hull of the corners' projections; a caster
+// (a sphere) whose projection keeps farther than that from it covers no
+// texel any lookup reads. Nor does one that starts beyond every lookup's
+// compared depth (`depth_reach` past the farthest corner): it can only be
+// the stored depth where that depth is already lit. Each test is applied
+// edge by edge, so the corners of the widened polygon are mitred: a few
+// more casters are kept, never fewer. `square`: the map's own test.
+ShadowModule::CasterTest slice_casters(const glm::dvec3& axis, const std::array<glm::dvec3, 8>& corners,
+                                       double reach, double depth_reach, ShadowModule::CasterTest square) {
+    const glm::dvec3 R = glm::normalize(glm::cross(axis, std::abs(axis.z) < 0.999 ? glm::dvec3(0, 0, 1) : glm::dvec3(1, 0, 0)));
+    const glm::dvec3 U = glm::cross(R, axis);
+    std::vector<glm::dvec2> across;
+    double far_end = -1e300;
+    for (const glm::dvec3& c : corners) {
+        across.emplace_back(glm::dot(c, R), glm::dot(c, U));
+        far_end = std::max(far_end, glm::dot(c, axis));
+    }
+    far_end += depth_reach;
+    const std::vector<glm::dvec2> hull = convex_hull(across);
+    // Each edge's outward unit normal n and offset: outside by dot(n, q) - o.
+    std::vector<glm::dvec3> edges;
+    for (std::size_t i = 0; hull.size() >= 3 && i < hull.size(); ++i) {
+        const glm::dvec2 e = hull[(i + 1) % hull.size()] - hull[i];
+        const double len = glm::length(e);
+        if (!(len > 0.0)) continue;
+        const glm::dvec2 n(e.y / len, -e.x / len);
+        edges.emplace_back(n.x, n.y, glm::dot(n, hull[i]) + reach);
+    }
+    return [=](const glm::dvec3& c, double r) {
+        if (!square(c, r)) return false;
+        if (glm::dot(c, axis) - r > far_end) return false;
+        const glm::dvec2 q(glm::dot(c, R), glm::dot(c, U));
+        for (const glm::dvec3& e : edges)
+            if (e.x * q.x + e.y * q.y - e.z > r) return false;
+        return true;
+    };
+}
+
 // Where a light with a cube map shines. An area light lights only what lies
 // in front of its plane (one-sided, light_lib.glsl); a spot only its cone
 // (Cycles 3.4's spot_attenuation is 0 at and beyond cos = cos(spot_size / 2)),
@@ -264,6 +330,10 @@ void ShadowModule::begin_frame(const CameraMatrices& camera, int max_resolution,
     // reference for what lit_region leaves out).
     const char* lit = std::getenv("DEFERRED_SHADOW_LIT_REGION");
     lit_region_enabled_ = !(lit && std::string(lit) == "off");
+    // DEFERRED_SHADOW_RECEIVER_CULLING=off: each cascade draws every caster
+    // in its square (the tests' reference for what slice_casters leaves out).
+    const char* receiver = std::getenv("DEFERRED_SHADOW_RECEIVER_CULLING");
+    receiver_culling_enabled_ = !(receiver && std::string(receiver) == "off");
     by_vertex_enabled_ = draw_by_vertex_enabled();
     face_culling_enabled_ = face_culling_enabled();
     count_fragments_ = count_fragments &&
@@ -375,6 +445,22 @@ std::vector<int> ShadowModule::allocate(std::size_t light_count) {
     return index;
 }
 
+std::array<glm::dvec3, 8> ShadowModule::slice_corners(const Cascades& cs, int k) const {
+    // A float view depth against the double splits: 1e-4 of slack each side.
+    const double near = k == 0 ? camera_.clip_start : cs.split[k] * (1.0 - 1e-4);
+    const double far = k == SHADOW_CASCADE_COUNT - 1 ? camera_.clip_end : cs.split[k + 1] * (1.0 + 1e-4);
+    const glm::dvec4& vp = lookups_.viewplane;
+    std::array<glm::dvec3, 8> corners;
+    int ci = 0;
+    for (double depth : {near, far})
+        for (double x : {vp.x, vp.y})
+            for (double y : {vp.z, vp.w}) {
+                const double s = camera_.orthographic ? 1.0 : depth;
+                corners[std::size_t(ci++)] = camera_.rotation * glm::dvec3(x * s, y * s, -depth);
+            }
+    return corners;
+}
+
 ShadowModule::Cascades ShadowModule::cascades() const {
     Cascades c{};
     // Practical split scheme (Zhang et al. 2006), lambda 0.75, over the
@@ -405,7 +491,10 @@ ShadowModule::Cascades ShadowModule::cascades() const {
     return c;
 }
 
-void ShadowModule::fit(const std::vector<Receiver>& receivers, std::pair<double, double> visible_depths) {
+void ShadowModule::fit(const std::vector<Receiver>& receivers, std::pair<double, double> visible_depths,
+                       const LookupVolume* lookups) {
+    lookups_known_ = lookups != nullptr && receiver_culling_enabled_;
+    if (lookups) lookups_ = *lookups;
     if (entries_.empty()) return;
     split_near_ = camera_.clip_start;
     split_far_ = camera_.clip_end;
@@ -659,9 +748,27 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
                 faces.near = ortho_near(axis, cs.center[k], shifted ? padded(cs.radius[k], e.resolution) : cs.radius[k],
                                         camera_.clip_end);
                 faces.facing_ccw = facing_is_ccw(m, cs.center[k], -axis);
-                if (draw)
-                    draw_layer(e.first_layer + k, m, glm::dvec3(0.0), SHADOW_CASCADES, axis,
-                               ortho_casters(axis, cs.center[k], cs.radius[k], true), whole, whole, unbounded, faces);
+                if (draw) {
+                    CasterTest casts = ortho_casters(axis, cs.center[k], cs.radius[k], true);
+                    if (lookups_known_) {
+                        // How far a lookup lands from its slice across the
+                        // axis: the terminator's lift, 1.5 texels of normal
+                        // offset (ortho_visibility's Pb) and the 0.71 to the
+                        // texel's centre, rounded up to 3 texels, and the
+                        // float error of camera-relative positions. Along
+                        // it, the plane's depth at that centre can lie 0.71
+                        // texel / SHADOW_PLANE_MIN_COS beyond the point, the
+                        // slope bias 10 texels before it.
+                        const double texel = 2.0 * (shifted ? padded(cs.radius[k], e.resolution) : cs.radius[k]) /
+                                             double(e.resolution);
+                        const double slack = 1e-5 * (glm::length(cs.center[k]) + cs.radius[k]);
+                        const double reach = lookups_.lift + 3.0 * texel + slack;
+                        const double depth_reach = lookups_.lift + (3.0 + 1.0 / SHADOW_PLANE_MIN_COS) * texel + slack;
+                        casts = slice_casters(axis, slice_corners(cs, k), reach, depth_reach, casts);
+                    }
+                    draw_layer(e.first_layer + k, m, glm::dvec3(0.0), SHADOW_CASCADES, axis, casts, whole, whole,
+                               unbounded, faces);
+                }
             }
             g.point = {float(axis.x), float(axis.y), float(axis.z), float(e.first_layer)};
             g.params = {float(SHADOW_CASCADES), float(e.resolution), 0.0f, uv_scale};

@@ -95,7 +95,22 @@ public:
     // clip end (Blender's default 100 m, an orthographic view's +-clip_end/2)
     // would put everything visible in one coarse cascade. (0, 0): the clip
     // range.
-    void fit(const std::vector<Receiver>& receivers, std::pair<double, double> visible_depths = {0.0, 0.0});
+    //
+    // `lookups`: where the visible surfaces' shadow lookups can land, when
+    // that is known (not under camera motion blur): inside the frame's view
+    // volume with its sides at `viewplane` (the camera's, widened by the
+    // pixel filter's reach: FrameScene's ViewVolume), each lookup point
+    // moved by at most `lift` metres (the shadow terminator offset,
+    // FrameScene::terminator_lift). A sun's cascade then draws only the
+    // casters whose shadow can fall on its own slice of that volume
+    // (slice_casters in shadow_module.cpp) and no texel any lookup reads
+    // changes; without it, every caster in the cascade's square.
+    struct LookupVolume {
+        glm::dvec4 viewplane{0.0};  // left, right, bottom, top (tan units, or metres for orthographic)
+        double lift = 0.0;
+    };
+    void fit(const std::vector<Receiver>& receivers, std::pair<double, double> visible_depths = {0.0, 0.0},
+             const LookupVolume* lookups = nullptr);
     // Whether an instance's bounding sphere (camera-relative centre, radius)
     // can cast into the map being drawn.
     using CasterTest = std::function<bool(const glm::dvec3&, double)>;
@@ -163,6 +178,11 @@ private:
         glm::dvec3 center[SHADOW_CASCADE_COUNT];
         double radius[SHADOW_CASCADE_COUNT];
     };
+    // The corners of the part of the lookup volume whose view depths select
+    // cascade k (shadow_lib.glsl shadow_visibility_kind: up to the first
+    // split for cascade 0, beyond the last but one for cascade 3, so those
+    // two reach the clip range's ends), camera-relative.
+    std::array<glm::dvec3, 8> slice_corners(const Cascades& cs, int k) const;
     Cascades cascades() const;
     void begin_fragment_count();
     void end_fragment_count();
@@ -178,10 +198,13 @@ private:
     bool query_active_ = false;
     std::vector<GLuint> fragment_queries_, free_queries_;  // this frame's, and ended ones to reuse
     bool lit_region_enabled_ = true;
+    bool receiver_culling_enabled_ = true;
     bool by_vertex_enabled_ = true, face_culling_enabled_ = true;
     std::size_t dropped_ = 0;
     CameraMatrices camera_{};
     double split_near_ = 0.0, split_far_ = 0.0;  // the cascades' depth range (fit)
+    bool lookups_known_ = false;                   // fit() was given a LookupVolume
+    LookupVolume lookups_{};
     int resolution_ = 1024;
     std::size_t budget_ = 0, bytes_ = 0;
     std::vector<Entry> entries_;

@@ -135,6 +135,82 @@ FrameResult casters_frame(const char* by_vertex, const char* face_culling) {
     return f;
 }
 
+// A low sun's long shadows across a field of posts, most of them outside
+// the view, and low-poly smooth spheres whose shadow terminator offset
+// (Geometry Offset 1) moves their lookups well off the surface, one of
+// them at the view's side. `ortho`: an orthographic camera, else a
+// perspective one looking along the field. The sun's cascades draw the
+// casters that can shadow a lookup of their slice
+// (DEFERRED_SHADOW_RECEIVER_CULLING, shadow_module.cpp slice_casters), or
+// every one in their square ("off").
+FrameResult slices_frame(const char* receiver_culling, bool ortho, bool balls) {
+    setenv("DEFERRED_SHADOW_RECEIVER_CULLING", receiver_culling, 1);
+    Renderer r;
+    const std::uint32_t mat = deferred::testing::add_plane(r, grey(), 40.0f, 4);
+    const tools::MeshArrays post = welded_box(0.15f), ball = tools::make_uv_sphere(0.6f, 6, 4);
+    const std::uint32_t post_mesh = r.add_mesh(post.view()), ball_mesh = r.add_mesh(ball.view());
+    std::vector<double> posts;
+    unsigned seed = 12345u;
+    auto next = [&seed]() {
+        seed = seed * 1664525u + 1013904223u;
+        return double(seed >> 8) / double(1u << 24);
+    };
+    // Gravel floating 0.1 m above the floor, so dense that some of it
+    // shadows every strip along the view's edges, and a few tall posts.
+    for (int i = 0; i < 120; ++i)
+        for (int j = 0; j < 120; ++j) {
+            const Mat4d m = scaled(0.25, 0.25, 0.25, -18.0 + 0.3 * i + 0.2 * next(), -18.0 + 0.3 * j + 0.2 * next(),
+                                   0.14);
+            posts.insert(posts.end(), m.begin(), m.end());
+        }
+    for (int i = 0; i < 6; ++i)
+        for (int j = 0; j < 6; ++j) {
+            const double height = 1.0 + 6.0 * next();
+            const Mat4d m = scaled(1.0, 1.0, height, -18.0 + 6.0 * i + next(), -18.0 + 6.0 * j + next(), 0.15 * height);
+            posts.insert(posts.end(), m.begin(), m.end());
+        }
+    r.add_instances(post_mesh, posts.data(), posts.size() / 16, nullptr, {mat});
+    const float offset = 1.0f;
+    for (const Mat4d& at : {tools::translation(3.2, -6.0, 1.2), tools::translation(-2.0, 4.0, 1.0),
+                            tools::translation(6.0, 10.0, 1.0)})
+        if (balls) r.add_instances(ball_mesh, at.data(), 1, nullptr, {mat}, true, nullptr, nullptr, nullptr, false, 0, &offset);
+    Light sun;
+    sun.type = LightType::Sun;
+    const double from[3] = {-10.0, -4.0, 7.0}, to[3] = {0.0, 0.0, 0.0};
+    sun.matrix = tools::look_at(from, to);
+    sun.energy = 3.0f;
+    sun.angle = float(2.0 * M_PI / 180.0);
+    r.add_light(sun);
+    deferred::testing::set_world_color(r, 0.02f, 0.02f, 0.03f);
+
+    Camera cam;
+    if (ortho) {
+        const double eye[3] = {4.0, -8.0, 14.0}, target[3] = {0.0, 0.0, 0.0};
+        cam.matrix = tools::look_at(eye, target);
+        cam.type = CameraType::Orthographic;
+        cam.ortho_scale = 12.0f;
+        cam.clip_start = 8.0f;
+        cam.clip_end = 30.0f;
+    } else {
+        const double eye[3] = {0.0, -14.0, 2.5}, target[3] = {0.0, 0.0, 0.5};
+        cam.matrix = tools::look_at(eye, target);
+        cam.lens = 40.0f;
+        cam.clip_end = 80.0f;
+    }
+    RenderSettings s;
+    // Coarse pixels, a wide filter and coarse maps: the strips the margins
+    // keep (the filter's reach beyond the view, texels) span metres.
+    s.width = 48;
+    s.height = 32;
+    s.filter_width = 4.0f;
+    s.shadow_resolution = 128;
+    s.samples = 8;
+    s.passes = {Pass::Combined, Pass::Shadow, Pass::Depth};
+    FrameResult f = r.render(cam, s);
+    unsetenv("DEFERRED_SHADOW_RECEIVER_CULLING");
+    return f;
+}
+
 }  // namespace
 
 TEST(MeshTopology, ClosedMeshesAndTheSideTheyFace) {
@@ -204,6 +280,39 @@ TEST(DrawStyle, ByVertexAndFrontFacesOnlyChangeNoPixel) {
                           Pass::Normal, Pass::IndexOB, Pass::UV}) {
             const PassImage& a = *f->find(pass);
             const PassImage& b = *reference.find(pass);
+            ASSERT_EQ(a.pixels.size(), b.pixels.size());
+            std::size_t differ = 0;
+            double worst = 0;
+            for (std::size_t i = 0; i < a.pixels.size(); ++i) {
+                differ += a.pixels[i] != b.pixels[i];
+                worst = std::max(worst, double(std::abs(a.pixels[i] - b.pixels[i])));
+            }
+            EXPECT_EQ(differ, 0u) << name << ", pass " << int(pass) << ": largest difference " << worst;
+        }
+    }
+}
+
+// A sun's cascade draws only the casters whose shadow can fall on a lookup
+// of its own slice of the view (shadow_module.cpp slice_casters): the maps
+// differ only in texels no lookup reads, so the image is the same to the bit.
+TEST(DrawStyle, CascadesLeaveOutOnlyCastersNoLookupSees) {
+    struct EnvGuard {
+        ~EnvGuard() { unsetenv("DEFERRED_SHADOW_RECEIVER_CULLING"); }
+    } guard;
+    for (int view = 0; view < 4; ++view) {
+        const bool ortho = view & 1, balls = view & 2;
+        const FrameResult every = slices_frame("off", ortho, balls);
+        const FrameResult culled = slices_frame("on", ortho, balls);
+        const std::string name = std::string(ortho ? "orthographic" : "perspective") + (balls ? ", spheres" : "");
+        std::printf("%s: %llu of %llu instances drawn into the cascades\n", name.c_str(),
+                    static_cast<unsigned long long>(culled.timings.shadow_instances_drawn),
+                    static_cast<unsigned long long>(every.timings.shadow_instances_drawn));
+        // Most posts lie outside the view, beside or behind it.
+        EXPECT_LT(double(culled.timings.shadow_instances_drawn), 0.95 * double(every.timings.shadow_instances_drawn))
+            << name;
+        for (Pass pass : {Pass::Combined, Pass::Shadow, Pass::Depth}) {
+            const PassImage& a = *culled.find(pass);
+            const PassImage& b = *every.find(pass);
             ASSERT_EQ(a.pixels.size(), b.pixels.size());
             std::size_t differ = 0;
             double worst = 0;

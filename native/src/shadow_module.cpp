@@ -447,8 +447,11 @@ std::vector<int> ShadowModule::allocate(std::size_t light_count) {
 
 std::array<glm::dvec3, 8> ShadowModule::slice_corners(const Cascades& cs, int k) const {
     // A float view depth against the double splits: 1e-4 of slack each side.
-    const double near = k == 0 ? camera_.clip_start : cs.split[k] * (1.0 - 1e-4);
-    const double far = k == SHADOW_CASCADE_COUNT - 1 ? camera_.clip_end : cs.split[k + 1] * (1.0 + 1e-4);
+    return lookup_corners(k == 0 ? camera_.clip_start : cs.split[k] * (1.0 - 1e-4),
+                          k == SHADOW_CASCADE_COUNT - 1 ? camera_.clip_end : cs.split[k + 1] * (1.0 + 1e-4));
+}
+
+std::array<glm::dvec3, 8> ShadowModule::lookup_corners(double near, double far) const {
     const glm::dvec4& vp = lookups_.viewplane;
     std::array<glm::dvec3, 8> corners;
     int ci = 0;
@@ -751,20 +754,16 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
                 if (draw) {
                     CasterTest casts = ortho_casters(axis, cs.center[k], cs.radius[k], true);
                     if (lookups_known_) {
-                        // How far a lookup lands from its slice across the
-                        // axis: the terminator's lift, 1.5 texels of normal
-                        // offset (ortho_visibility's Pb) and the 0.71 to the
-                        // texel's centre, rounded up to 3 texels, and the
-                        // float error of camera-relative positions. Along
-                        // it, the plane's depth at that centre can lie 0.71
-                        // texel / SHADOW_PLANE_MIN_COS beyond the point, the
-                        // slope bias 10 texels before it.
+                        // Along the axis, the plane's depth at a texel's
+                        // centre can lie 0.71 texel / SHADOW_PLANE_MIN_COS
+                        // beyond the lookup's point, the slope bias 10
+                        // texels before it.
                         const double texel = 2.0 * (shifted ? padded(cs.radius[k], e.resolution) : cs.radius[k]) /
                                              double(e.resolution);
                         const double slack = 1e-5 * (glm::length(cs.center[k]) + cs.radius[k]);
-                        const double reach = lookups_.lift + 3.0 * texel + slack;
                         const double depth_reach = lookups_.lift + (3.0 + 1.0 / SHADOW_PLANE_MIN_COS) * texel + slack;
-                        casts = slice_casters(axis, slice_corners(cs, k), reach, depth_reach, casts);
+                        casts = slice_casters(axis, slice_corners(cs, k), lookup_reach(texel, slack), depth_reach,
+                                              casts);
                     }
                     draw_layer(e.first_layer + k, m, glm::dvec3(0.0), SHADOW_CASCADES, axis, casts, whole, whole,
                                unbounded, faces);
@@ -854,9 +853,19 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
             glUniformMatrix4fv(2, 1, GL_FALSE, &m.cols[0].x);
             glUniform4f(3, 0.0f, 0.0f, 0.0f, float(SHADOW_CASCADES));
             glUniform3f(4, float(axis.x), float(axis.y), float(axis.z));
-            // Both sides: the map keeps the farthest surface too.
+            // Both sides: the map keeps the farthest surface too. Casters
+            // whose projection keeps clear of the whole lookup volume's
+            // are read by no lookup (slice_casters, without its depth
+            // test: the far side serves the opposite direction).
+            CasterTest casts = ortho_casters(axis, receivers_center_, receivers_radius_, false);
+            if (lookups_known_) {
+                const double texel = 2.0 * padded(receivers_radius_, world_allocated_) / double(world_allocated_);
+                const double slack = 1e-5 * (glm::length(receivers_center_) + receivers_radius_);
+                casts = slice_casters(axis, lookup_corners(camera_.clip_start, camera_.clip_end),
+                                      lookup_reach(texel, slack), 1e300, casts);
+            }
             begin_fragment_count();
-            draw_casters(ortho_casters(axis, receivers_center_, receivers_radius_, false), true, style, nullptr);
+            draw_casters(casts, true, style, nullptr);
             end_fragment_count();
             ++layers_rendered_;
             texels_rendered_ += std::uint64_t(world_allocated_) * std::uint64_t(world_allocated_);

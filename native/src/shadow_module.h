@@ -183,6 +183,14 @@ private:
     // split for cascade 0, beyond the last but one for cascade 3, so those
     // two reach the clip range's ends), camera-relative.
     std::array<glm::dvec3, 8> slice_corners(const Cascades& cs, int k) const;
+    // The lookup volume's corners between two view depths.
+    std::array<glm::dvec3, 8> lookup_corners(double near, double far) const;
+    // How far across an orthographic map's axis a lookup lands from the
+    // surface it shades: the terminator's lift, 1.5 texels of normal offset
+    // (shadow_lib.glsl's Pb) and the 0.71 to the texel's centre, rounded up
+    // to 3 texels, and `slack` for the float error of camera-relative
+    // positions.
+    double lookup_reach(double texel, double slack) const { return lookups_.lift + 3.0 * texel + slack; }
     Cascades cascades() const;
     void begin_fragment_count();
     void end_fragment_count();

@@ -205,7 +205,7 @@ FrameResult slices_frame(const char* receiver_culling, bool ortho, bool balls) {
     s.filter_width = 4.0f;
     s.shadow_resolution = 128;
     s.samples = 8;
-    s.passes = {Pass::Combined, Pass::Shadow, Pass::Depth};
+    s.passes = {Pass::Combined, Pass::Shadow, Pass::AO, Pass::Depth};
     FrameResult f = r.render(cam, s);
     unsetenv("DEFERRED_SHADOW_RECEIVER_CULLING");
     return f;
@@ -310,7 +310,7 @@ TEST(DrawStyle, CascadesLeaveOutOnlyCastersNoLookupSees) {
         // Most posts lie outside the view, beside or behind it.
         EXPECT_LT(double(culled.timings.shadow_instances_drawn), 0.95 * double(every.timings.shadow_instances_drawn))
             << name;
-        for (Pass pass : {Pass::Combined, Pass::Shadow, Pass::Depth}) {
+        for (Pass pass : {Pass::Combined, Pass::Shadow, Pass::AO, Pass::Depth}) {
             const PassImage& a = *culled.find(pass);
             const PassImage& b = *every.find(pass);
             ASSERT_EQ(a.pixels.size(), b.pixels.size());

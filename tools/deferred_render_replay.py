@@ -129,6 +129,12 @@ def main(argv=None):
     rays = ap.add_mutually_exclusive_group()
     rays.add_argument("--shadow-rays", action="store_true", help="shadow rays instead of the captured method")
     rays.add_argument("--shadow-maps", action="store_true", help="shadow maps instead of the captured method")
+    ap.add_argument("--shadow-quality", type=float,
+                    help="shadow map texels per pixel of the surfaces a light reaches (native "
+                         "RenderSettings.shadow_quality) instead of the captured setting")
+    ap.add_argument("--shadow-resolution", type=int,
+                    help="the most texels per side of a shadow map (native RenderSettings.shadow_resolution) instead "
+                         "of the captured setting")
     ap.add_argument("--filter-splat", choices=["on", "off"],
                     help="the film's filter splatting (native RenderSettings.filter_splat) instead of the captured "
                          "setting")
@@ -174,6 +180,10 @@ def main(argv=None):
         kwargs["light_samples"] = args.light_samples
     if args.shadow_rays or args.shadow_maps:
         kwargs["shadow_rays"] = bool(args.shadow_rays)
+    if args.shadow_quality is not None:
+        kwargs["shadow_quality"] = args.shadow_quality
+    if args.shadow_resolution is not None:
+        kwargs["shadow_resolution"] = args.shadow_resolution
     if args.filter_splat:
         kwargs["filter_splat"] = args.filter_splat == "on"
     if args.visibility_buffer:
@@ -203,6 +213,7 @@ def main(argv=None):
               "gl_version": info.get("version"), "size": [width, height], "samples": kwargs.get("samples"),
               "light_samples": kwargs.get("light_samples", 0), "shadow_rays": kwargs.get("shadow_rays", False),
               "filter_splat": kwargs.get("filter_splat", True),
+              "shadow_quality": kwargs.get("shadow_quality"), "shadow_resolution": kwargs.get("shadow_resolution"),
               "fragments_counted": bool(args.count_fragments),
               "visibility_buffer": bool(runs and runs[-1].get("visibility_buffer")),
               "passes": sorted(images), "context_ms": t_context * 1e3, "scene_ms": t_scene * 1e3,

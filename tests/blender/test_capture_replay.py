@@ -91,6 +91,15 @@ def main():
                      f"largest difference {worst[0]:.3g} in {worst[1]}")
         combined = theirs["ViewLayer.Combined.R"]
         checks.check(float(combined.mean()) > 0.01, "and it is lit", f"mean R {combined.mean():.4f}")
+        # Twice the shadow quality: finer maps, more texels drawn.
+        texels = result["runs"][-1]["shadow_texels"]
+        code, stdout, stderr = replay(path, "--shadow-quality", "2", "--json")
+        checks.check(code == 0, "replay --shadow-quality 2 exits 0", stderr.strip()[-300:])
+        if code == 0:
+            finer = json.loads(stdout)
+            checks.check(finer["shadow_quality"] == 2.0 and finer["runs"][-1]["shadow_texels"] > 2 * texels,
+                         "--shadow-quality 2 draws finer maps",
+                         f"{finer['shadow_quality']}: {finer['runs'][-1]['shadow_texels']} against {texels} texels")
 
     # The same capture with the G-buffer from the visibility buffer (the
     # benchmark's switch on a GPU server): taken, and the same image to

@@ -40,6 +40,23 @@ bool ViewVolume::contains(const glm::dvec3& c, double r) const {
     return inside(v.x, left, right) && inside(v.y, bottom, top);
 }
 
+namespace {
+
+// The most `linear` stretches any vector (its spectral norm): the square
+// root of the largest eigenvalue of L^T L, at most Gershgorin's largest
+// absolute row sum of it. Exact where L^T L is diagonal (a rotation times
+// a scale); a shear gets a little more. The longest column, used before, is
+// exact there too but falls short of a shear's stretch (sqrt 2 against
+// 1.618 for a unit shear), so its sphere could miss a corner in view.
+double largest_stretch(const glm::dmat3& linear) {
+    const glm::dmat3 g = glm::transpose(linear) * linear;
+    double row = 0.0;
+    for (int i = 0; i < 3; ++i) row = std::max(row, std::abs(g[0][i]) + std::abs(g[1][i]) + std::abs(g[2][i]));
+    return std::sqrt(row);
+}
+
+}  // namespace
+
 // An instance's world matrix -> its camera-relative model, normal matrix,
 // mirrored flag (ids.w bit 0) and bounding sphere.
 void FrameScene::place(const glm::dmat4& world, const GpuMesh& mesh, gpu::GpuInstance& g, Bound& bound) const {
@@ -47,7 +64,7 @@ void FrameScene::place(const glm::dmat4& world, const GpuMesh& mesh, gpu::GpuIns
     model[3] = glm::dvec4(glm::dvec3(model[3]) - camera_position_, 1.0);
     const glm::dmat3 linear(model);
     const double det = glm::determinant(linear);
-    const double scale = std::max({glm::length(linear[0]), glm::length(linear[1]), glm::length(linear[2])});
+    const double scale = largest_stretch(linear);
     bound = {glm::dvec3(model * glm::dvec4(mesh.bound_center[0], mesh.bound_center[1], mesh.bound_center[2], 1.0)),
              mesh.bound_radius * scale};
     const glm::dmat3 nm = std::abs(det) > 1e-300 ? glm::transpose(glm::inverse(linear)) : glm::dmat3(1.0);
@@ -96,16 +113,11 @@ void FrameScene::build(const SceneStore& scene, const MaterialModule& materials,
             g.color = {b.colors[i * 4], b.colors[i * 4 + 1], b.colors[i * 4 + 2], b.colors[i * 4 + 3]};
             g.info = {b.randoms[i], b.terminator_offsets[i], 0.0f, 0.0f};
             if (b.terminator_offsets[i] > 0.0f && mesh.terminator_reach > 0.0) {
-                // Frobenius norms bound a matrix's largest stretch; a moving
-                // instance's at each step of the shutter.
-                auto frobenius = [](const glm::dmat4& w) {
-                    return std::sqrt(glm::dot(glm::dvec3(w[0]), glm::dvec3(w[0])) +
-                                     glm::dot(glm::dvec3(w[1]), glm::dvec3(w[1])) +
-                                     glm::dot(glm::dvec3(w[2]), glm::dvec3(w[2])));
-                };
-                double stretch = frobenius(world);
+                // A moving instance's at each step of the shutter.
+                double stretch = largest_stretch(glm::dmat3(world));
                 if (!moving_.empty() && moving_.back().index == instances_.size())
-                    for (const glm::dmat4& w : moving_.back().steps) stretch = std::max(stretch, frobenius(w));
+                    for (const glm::dmat4& w : moving_.back().steps)
+                        stretch = std::max(stretch, largest_stretch(glm::dmat3(w)));
                 terminator_lift_ = std::max(terminator_lift_, stretch * mesh.terminator_reach);
             }
             instances_.push_back(g);

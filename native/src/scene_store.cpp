@@ -241,8 +241,8 @@ namespace {
 // |a|, |b|, |c| <= 2 G and u(1 - u), v(1 - v), uv <= 1/4 inside the
 // triangle, the parabola is at most 2.5 G, halved 1.25 G; so |h| <= 2 G.
 // The offset is h along the interpolated normal through the instance's
-// matrix, at most max |N_i| times its largest stretch (at most its
-// Frobenius norm, FrameScene::terminator_lift). 2.2 instead of 2: slack for
+// matrix, at most max |N_i| times its largest stretch
+// (FrameScene::terminator_lift). 2.2 instead of 2: slack for
 // barycentrics a hair outside the triangle.
 double terminator_reach(const MeshData& m) {
     if (!m.corner_normals) return 0.0;

@@ -324,3 +324,40 @@ TEST(DrawStyle, CascadesLeaveOutOnlyCastersNoLookupSees) {
         }
     }
 }
+
+// An instance's bounding sphere (FrameScene::place, the cull of every
+// stage) holds its mesh under a shear: a box sheared by x += y and turned
+// so its corner (1, 1) points along +x reaches 8.94 m out along x, where a
+// sphere over the longest column (8 m) stops. Placed so that sphere ends
+// beyond the view's left edge while the corner's tip is in view, the tip
+// is drawn.
+TEST(Culling, ShearedInstancesKeepTheirCornersInTheirSphere) {
+    Renderer r;
+    const tools::MeshArrays slab = tools::make_box(4.0f, 4.0f, 0.05f);
+    const std::uint32_t mesh = r.add_mesh(slab.view());
+    const std::uint32_t mat = r.add_material(grey());
+    const double t = -std::atan2(1.0, 2.0), c = std::cos(t), s = std::sin(t);
+    // Columns of R(t) * [[1, 1, 0], [0, 1, 0], [0, 0, 1]].
+    Mat4d m = identity_matrix();
+    m[0] = c;
+    m[1] = s;
+    m[4] = c - s;
+    m[5] = s + c;
+    m[12] = -11.4;
+    const std::uint32_t index = 7;
+    r.add_instances(mesh, m.data(), 1, &index, {mat});
+    deferred::testing::set_world_color(r, 0.1f, 0.1f, 0.1f);
+    RenderSettings settings;
+    settings.width = settings.height = 64;
+    settings.samples = 1;
+    settings.passes = {Pass::Combined, Pass::IndexOB};
+    // Top down over x, y in [-3, 3]: the tip reaches x = -2.46.
+    const FrameResult f = r.render(deferred::testing::top_down_ortho(10.0, 6.0f), settings);
+    const PassImage& ids = *f.find(Pass::IndexOB);
+    int tip = 0;
+    for (int y = 0; y < ids.height; ++y)
+        for (int x = 0; x < ids.width; ++x) tip += ids.pixels[std::size_t(y * ids.width + x) * ids.channels] == 7.0f;
+    // The tip: a triangle about 0.54 m deep (5.8 px) and twice as wide.
+    EXPECT_GE(tip, 10) << "pixels of the sheared slab's tip in view";
+    std::printf("%d pixels of the sheared slab's tip\n", tip);
+}

@@ -1091,9 +1091,24 @@ void Renderer::Impl::fit_shadow_maps(Frame& f) {
         if (far > 0.0) visible_depths = {std::max(near, double(cam.clip_start)), far};
     }
     // Where later samples' lookups land: the frame's view volume (the
-    // sample cameras' own, unless the camera moves) and the terminator's lift.
+    // sample cameras' own, unless the camera moves) between the depths of
+    // the bounding spheres in it (every visible surface lies in one; not
+    // where something moves or deforms over the shutter, beyond its
+    // sphere), and the terminator's lift.
     ShadowModule::LookupVolume lookups;
     lookups.viewplane = {f.view.left, f.view.right, f.view.bottom, f.view.top};
+    lookups.depths = {cam.clip_start, cam.clip_end};
+    if (!f.casters_move) {
+        const glm::dmat3 to_view(cam.view);
+        double near = 1e300, far = -1e300;
+        for (const FrameScene::Bound& b : f.scene.bounds())
+            if (f.view.contains(b.center, b.radius)) {
+                const double d = -(to_view * b.center).z;
+                near = std::min(near, d - b.radius);
+                far = std::max(far, d + b.radius);
+            }
+        if (far >= near) lookups.depths = {std::max(near, double(cam.clip_start)), std::min(far, double(cam.clip_end))};
+    }
     lookups.lift = f.scene.terminator_lift();
     shadows.fit(receivers, visible_depths, f.camera_moves ? nullptr : &lookups);
 }

@@ -447,8 +447,9 @@ std::vector<int> ShadowModule::allocate(std::size_t light_count) {
 
 std::array<glm::dvec3, 8> ShadowModule::slice_corners(const Cascades& cs, int k) const {
     // A float view depth against the double splits: 1e-4 of slack each side.
-    return lookup_corners(k == 0 ? camera_.clip_start : cs.split[k] * (1.0 - 1e-4),
-                          k == SHADOW_CASCADE_COUNT - 1 ? camera_.clip_end : cs.split[k + 1] * (1.0 + 1e-4));
+    const double near = k == 0 ? lookups_.depths.x : cs.split[k] * (1.0 - 1e-4);
+    const double far = k == SHADOW_CASCADE_COUNT - 1 ? lookups_.depths.y : cs.split[k + 1] * (1.0 + 1e-4);
+    return lookup_corners(near, std::max(far, near));
 }
 
 std::array<glm::dvec3, 8> ShadowModule::lookup_corners(double near, double far) const {
@@ -861,7 +862,7 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
             if (lookups_known_) {
                 const double texel = 2.0 * padded(receivers_radius_, world_allocated_) / double(world_allocated_);
                 const double slack = 1e-5 * (glm::length(receivers_center_) + receivers_radius_);
-                casts = slice_casters(axis, lookup_corners(camera_.clip_start, camera_.clip_end),
+                casts = slice_casters(axis, lookup_corners(lookups_.depths.x, lookups_.depths.y),
                                       lookup_reach(texel, slack), 1e300, casts);
             }
             begin_fragment_count();

@@ -105,8 +105,11 @@ public:
     // casters whose shadow can fall on its own slice of that volume
     // (slice_casters in shadow_module.cpp) and no texel any lookup reads
     // changes; without it, every caster in the cascade's square.
+    // `depths`: the view depths any visible surface can have (the bounding
+    // spheres in view of every instance), within the clip range.
     struct LookupVolume {
         glm::dvec4 viewplane{0.0};  // left, right, bottom, top (tan units, or metres for orthographic)
+        glm::dvec2 depths{0.0};     // nearest, farthest
         double lift = 0.0;
     };
     void fit(const std::vector<Receiver>& receivers, std::pair<double, double> visible_depths = {0.0, 0.0},
@@ -181,7 +184,7 @@ private:
     // The corners of the part of the lookup volume whose view depths select
     // cascade k (shadow_lib.glsl shadow_visibility_kind: up to the first
     // split for cascade 0, beyond the last but one for cascade 3, so those
-    // two reach the clip range's ends), camera-relative.
+    // two reach the lookup volume's ends), camera-relative.
     std::array<glm::dvec3, 8> slice_corners(const Cascades& cs, int k) const;
     // The lookup volume's corners between two view depths.
     std::array<glm::dvec3, 8> lookup_corners(double near, double far) const;

@@ -453,14 +453,17 @@ std::array<glm::dvec3, 8> ShadowModule::slice_corners(const Cascades& cs, int k)
 }
 
 std::array<glm::dvec3, 8> ShadowModule::lookup_corners(double near, double far) const {
-    const glm::dvec4& vp = lookups_.viewplane;
+    return frustum_corners(lookups_.viewplane, near, far);
+}
+
+std::array<glm::dvec3, 8> ShadowModule::frustum_corners(const glm::dvec4& vp, double near, double far) const {
     std::array<glm::dvec3, 8> corners;
-    int ci = 0;
+    std::size_t ci = 0;
     for (double depth : {near, far})
         for (double x : {vp.x, vp.y})
             for (double y : {vp.z, vp.w}) {
                 const double s = camera_.orthographic ? 1.0 : depth;
-                corners[std::size_t(ci++)] = camera_.rotation * glm::dvec3(x * s, y * s, -depth);
+                corners[ci++] = camera_.rotation * glm::dvec3(x * s, y * s, -depth);
             }
     return corners;
 }
@@ -474,17 +477,9 @@ ShadowModule::Cascades ShadowModule::cascades() const {
         const double t = double(k) / SHADOW_CASCADE_COUNT;
         c.split[k] = 0.75 * n * std::pow(f / n, t) + 0.25 * (n + (f - n) * t);
     }
-    const glm::dvec4& vp = camera_.viewplane;
     for (int k = 0; k < SHADOW_CASCADE_COUNT; ++k) {
         // Bounding sphere of the frustum slice (camera-relative).
-        glm::dvec3 corners[8];
-        int ci = 0;
-        for (double depth : {c.split[k], c.split[k + 1]})
-            for (double x : {vp.x, vp.y})
-                for (double y : {vp.z, vp.w}) {
-                    const double s = camera_.orthographic ? 1.0 : depth;
-                    corners[ci++] = camera_.rotation * glm::dvec3(x * s, y * s, -depth);
-                }
+        const std::array<glm::dvec3, 8> corners = frustum_corners(camera_.viewplane, c.split[k], c.split[k + 1]);
         glm::dvec3 center(0.0);
         for (auto& p : corners) center += p / 8.0;
         double radius = 0;

@@ -188,6 +188,9 @@ private:
     std::array<glm::dvec3, 8> slice_corners(const Cascades& cs, int k) const;
     // The lookup volume's corners between two view depths.
     std::array<glm::dvec3, 8> lookup_corners(double near, double far) const;
+    // The corners of the camera's frustum with sides at `viewplane` (left,
+    // right, bottom, top) between two view depths, camera-relative.
+    std::array<glm::dvec3, 8> frustum_corners(const glm::dvec4& viewplane, double near, double far) const;
     // How far across an orthographic map's axis a lookup lands from the
     // surface it shades: the terminator's lift, 1.5 texels of normal offset
     // (shadow_lib.glsl's Pb) and the 0.71 to the texel's centre, rounded up

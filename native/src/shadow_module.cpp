@@ -197,6 +197,64 @@ ShadowModule::CasterTest slice_casters(const glm::dvec3& axis, const std::array<
     };
 }
 
+// Casters of a cube face from `origin` whose shadow can reach a lookup of
+// the view. A lookup at Q reads the texel holding Q's direction from the
+// origin, written by the casters covering that texel's centre direction
+// (at any distance: a caster beyond Q along it is still in the cone).
+// Q lies within `lift` of the lookup volume (the convex hull of `corners`),
+// and the centre direction within `spread` radians of Q's (the normal
+// offset and half a texel's diagonal). So a caster counts only where its
+// directions come within asin(lift / d) + spread of the cone the volume
+// fills seen from the origin, d a lower bound of the origin's distance to
+// the volume (`distance`); outside one of the cone's supporting planes by
+// more than that, it covers no texel a lookup reads. Where the origin lies
+// in the volume, or within `lift` of it, every caster counts. Planes are
+// tested one at a time (mitred: a few more kept, never fewer). `face`: the
+// face's own test.
+ShadowModule::CasterTest cone_casters(const glm::dvec3& origin, const std::array<glm::dvec3, 8>& corners,
+                                      double distance, double lift, double spread, ShadowModule::CasterTest face) {
+    if (!(distance > lift)) return face;
+    std::array<glm::dvec3, 8> w;
+    for (std::size_t i = 0; i < 8; ++i) {
+        const glm::dvec3 d = corners[i] - origin;
+        const double len = glm::length(d);
+        if (!(len > 0.0)) return face;
+        w[i] = d / len;
+    }
+    // Outward unit normals of the planes through the origin and two
+    // corners with every corner on one side.
+    std::vector<glm::dvec3> planes;
+    for (std::size_t i = 0; i < 8; ++i)
+        for (std::size_t j = i + 1; j < 8; ++j) {
+            glm::dvec3 n = glm::cross(w[i], w[j]);
+            const double len = glm::length(n);
+            if (!(len > 1e-12)) continue;
+            n /= len;
+            bool below = true, above = true;
+            for (const glm::dvec3& v : w) {
+                const double t = glm::dot(n, v);
+                below = below && t <= 1e-12;
+                above = above && t >= -1e-12;
+            }
+            if (above && !below) n = -n;
+            if (above != below) planes.push_back(n);
+        }
+    if (planes.empty()) return face;
+    const double margin = std::asin(std::min(lift / distance, 1.0)) + spread;
+    return [=](const glm::dvec3& c, double r) {
+        if (!face(c, r)) return false;
+        const glm::dvec3 v = c - origin;
+        const double dc = glm::length(v);
+        if (dc <= r) return true;
+        const double angle = std::asin(std::min(r / dc, 1.0)) + margin;
+        if (angle >= M_PI / 2) return true;
+        const double limit = std::sin(angle) * dc;
+        for (const glm::dvec3& n : planes)
+            if (glm::dot(n, v) > limit) return false;
+        return true;
+    };
+}
+
 // Where a light with a cube map shines. An area light lights only what lies
 // in front of its plane (one-sided, light_lib.glsl); a spot only its cone
 // (Cycles 3.4's spot_attenuation is 0 at and beyond cos = cos(spot_size / 2)),
@@ -452,6 +510,22 @@ std::array<glm::dvec3, 8> ShadowModule::slice_corners(const Cascades& cs, int k)
     return lookup_corners(near, std::max(far, near));
 }
 
+double ShadowModule::lookup_distance(const glm::dvec3& p) const {
+    // The largest of its signed distances to the volume's six planes (view
+    // space: the camera's rotation only), at most its distance to the volume.
+    const glm::dvec3 v = glm::dmat3(camera_.view) * p;
+    const double d = -v.z;
+    const glm::dvec4& vp = lookups_.viewplane;
+    double out = std::max(lookups_.depths.x - d, d - lookups_.depths.y);
+    if (camera_.orthographic)
+        return std::max({out, vp.x - v.x, v.x - vp.y, vp.z - v.y, v.y - vp.w});
+    // Side planes x = l d (and the others): unit normals (1, 0, l) / sqrt(1 + l^2)...
+    return std::max({out, (vp.x * d - v.x) / std::sqrt(1.0 + vp.x * vp.x),
+                     (v.x - vp.y * d) / std::sqrt(1.0 + vp.y * vp.y),
+                     (vp.z * d - v.y) / std::sqrt(1.0 + vp.z * vp.z),
+                     (v.y - vp.w * d) / std::sqrt(1.0 + vp.w * vp.w)});
+}
+
 std::array<glm::dvec3, 8> ShadowModule::lookup_corners(double near, double far) const {
     return frustum_corners(lookups_.viewplane, near, far);
 }
@@ -695,6 +769,7 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
 
     if (!rays_) glEnable(GL_SCISSOR_TEST);
     const Cascades cs = cascades();
+    const std::array<glm::dvec3, 8> view_corners = lookup_corners(lookups_.depths.x, lookups_.depths.y);
     std::vector<glm::dvec3> world_axes(std::size_t(world_count_), glm::dvec3(0.0));
     std::vector<glm::dmat4> world_matrices(std::size_t(world_count_), glm::dmat4(0.0));
     for (std::size_t i = 0; i < entries_.size(); ++i) {
@@ -806,8 +881,17 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
                 faces.origin = pf;
                 faces.near = 2.0 * kCubeNear;
                 faces.facing_ccw = facing_is_ccw(m, pf + F, -F);
-                draw_layer(e.first_layer + face, m, pf, SHADOW_CUBE, glm::dvec3(0.0), face_casters(face, pf, reach),
-                           whole, scissor, region, faces);
+                CasterTest casts = face_casters(face, pf, reach);
+                if (lookups_known_) {
+                    // Directions: 1.5 texels of normal offset (shadow_lib.glsl's
+                    // Pb) and 0.71 to the texel's centre, rounded up to 3,
+                    // a texel spanning at most 2 overlap / resolution radians.
+                    const double slack = 1e-5 * (glm::length(pf) + 1.0);
+                    casts = cone_casters(pf, view_corners, lookup_distance(pf), lookups_.lift + slack,
+                                         3.0 * 2.0 * SHADOW_CUBE_OVERLAP / e.resolution, casts);
+                }
+                draw_layer(e.first_layer + face, m, pf, SHADOW_CUBE, glm::dvec3(0.0), casts, whole, scissor, region,
+                           faces);
             }
             g.point = {float(p.x), float(p.y), float(p.z), float(e.first_layer)};
             g.params = {float(SHADOW_CUBE), float(e.resolution), float(2.0 * SHADOW_CUBE_OVERLAP / e.resolution),

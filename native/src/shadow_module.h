@@ -186,6 +186,9 @@ private:
     // split for cascade 0, beyond the last but one for cascade 3, so those
     // two reach the lookup volume's ends), camera-relative.
     std::array<glm::dvec3, 8> slice_corners(const Cascades& cs, int k) const;
+    // A lower bound of camera-relative point p's distance to the lookup
+    // volume (<= 0: inside it).
+    double lookup_distance(const glm::dvec3& p) const;
     // The lookup volume's corners between two view depths.
     std::array<glm::dvec3, 8> lookup_corners(double near, double far) const;
     // The corners of the camera's frustum with sides at `viewplane` (left,

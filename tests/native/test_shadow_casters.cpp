@@ -142,8 +142,11 @@ FrameResult casters_frame(const char* by_vertex, const char* face_culling) {
 // perspective one looking along the field. The sun's cascades draw the
 // casters that can shadow a lookup of their slice
 // (DEFERRED_SHADOW_RECEIVER_CULLING, shadow_module.cpp slice_casters), or
-// every one in their square ("off").
-FrameResult slices_frame(const char* receiver_culling, bool ortho, bool balls) {
+// every one in their square ("off"). `lamp`: a sphere light behind and
+// beside the camera, out of the view volume, instead of the sun, under a
+// black world: its cube faces draw the casters in the cone the view
+// volume fills from its point (cone_casters), or every one in the face.
+FrameResult slices_frame(const char* receiver_culling, bool ortho, bool balls, bool lamp = false) {
     setenv("DEFERRED_SHADOW_RECEIVER_CULLING", receiver_culling, 1);
     Renderer r;
     const std::uint32_t mat = deferred::testing::add_plane(r, grey(), 40.0f, 4);
@@ -174,14 +177,24 @@ FrameResult slices_frame(const char* receiver_culling, bool ortho, bool balls) {
     for (const Mat4d& at : {tools::translation(3.2, -6.0, 1.2), tools::translation(-2.0, 4.0, 1.0),
                             tools::translation(6.0, 10.0, 1.0)})
         if (balls) r.add_instances(ball_mesh, at.data(), 1, nullptr, {mat}, true, nullptr, nullptr, nullptr, false, 0, &offset);
-    Light sun;
-    sun.type = LightType::Sun;
-    const double from[3] = {-10.0, -4.0, 7.0}, to[3] = {0.0, 0.0, 0.0};
-    sun.matrix = tools::look_at(from, to);
-    sun.energy = 3.0f;
-    sun.angle = float(2.0 * M_PI / 180.0);
-    r.add_light(sun);
-    deferred::testing::set_world_color(r, 0.02f, 0.02f, 0.03f);
+    if (lamp) {
+        Light point;
+        point.type = LightType::Point;
+        point.matrix = tools::translation(-8.0, -22.0, 5.0);
+        point.energy = 20000.0f;
+        point.radius = 0.3f;
+        r.add_light(point);
+        deferred::testing::set_world_color(r, 0.0f, 0.0f, 0.0f);
+    } else {
+        Light sun;
+        sun.type = LightType::Sun;
+        const double from[3] = {-10.0, -4.0, 7.0}, to[3] = {0.0, 0.0, 0.0};
+        sun.matrix = tools::look_at(from, to);
+        sun.energy = 3.0f;
+        sun.angle = float(2.0 * M_PI / 180.0);
+        r.add_light(sun);
+        deferred::testing::set_world_color(r, 0.02f, 0.02f, 0.03f);
+    }
 
     Camera cam;
     if (ortho) {
@@ -293,18 +306,21 @@ TEST(DrawStyle, ByVertexAndFrontFacesOnlyChangeNoPixel) {
 }
 
 // A sun's cascade draws only the casters whose shadow can fall on a lookup
-// of its own slice of the view (shadow_module.cpp slice_casters): the maps
+// of its own slice of the view (shadow_module.cpp slice_casters), the
+// world's maps those beside the view's projection, a light's cube face
+// those in the cone the view fills from its point (cone_casters): the maps
 // differ only in texels no lookup reads, so the image is the same to the bit.
-TEST(DrawStyle, CascadesLeaveOutOnlyCastersNoLookupSees) {
+TEST(DrawStyle, ShadowMapsLeaveOutOnlyCastersNoLookupSees) {
     struct EnvGuard {
         ~EnvGuard() { unsetenv("DEFERRED_SHADOW_RECEIVER_CULLING"); }
     } guard;
-    for (int view = 0; view < 4; ++view) {
-        const bool ortho = view & 1, balls = view & 2;
-        const FrameResult every = slices_frame("off", ortho, balls);
-        const FrameResult culled = slices_frame("on", ortho, balls);
-        const std::string name = std::string(ortho ? "orthographic" : "perspective") + (balls ? ", spheres" : "");
-        std::printf("%s: %llu of %llu instances drawn into the cascades\n", name.c_str(),
+    for (int view = 0; view < 6; ++view) {
+        const bool ortho = view & 1, balls = view & 2, lamp = view >= 4;
+        const FrameResult every = slices_frame("off", ortho, balls, lamp);
+        const FrameResult culled = slices_frame("on", ortho, balls, lamp);
+        const std::string name = std::string(ortho ? "orthographic" : "perspective") + (balls ? ", spheres" : "") +
+                                 (lamp ? ", a light out of view" : ", the sun");
+        std::printf("%s: %llu of %llu instances drawn into the maps\n", name.c_str(),
                     static_cast<unsigned long long>(culled.timings.shadow_instances_drawn),
                     static_cast<unsigned long long>(every.timings.shadow_instances_drawn));
         // Most posts lie outside the view, beside or behind it.

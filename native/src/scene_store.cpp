@@ -232,18 +232,7 @@ std::int64_t SceneStore::find_mesh(const std::string& key) {
     return std::int64_t(found->second);
 }
 
-namespace {
-
-// A bound on the shadow terminator offset's length over the mesh, before
-// its instance's matrix (geometry_frag.glsl terminator_offset: Cycles 3.4's
-// shadow_ray_smooth_surface_offset). With G = max |Gij| = |dot(V_j - V_i,
-// N_i)| over the triangles' corners: |D_i| <= G, so each h_i <= 2 G; with
-// |a|, |b|, |c| <= 2 G and u(1 - u), v(1 - v), uv <= 1/4 inside the
-// triangle, the parabola is at most 2.5 G, halved 1.25 G; so |h| <= 2 G.
-// The offset is h along the interpolated normal through the instance's
-// matrix, at most max |N_i| times its largest stretch
-// (FrameScene::terminator_lift). 2.2 instead of 2: slack for
-// barycentrics a hair outside the triangle.
+// The bound's derivation: scene_store.h.
 double terminator_reach(const MeshData& m) {
     if (!m.corner_normals) return 0.0;
     double g = 0.0, n_max = 0.0;
@@ -262,10 +251,8 @@ double terminator_reach(const MeshData& m) {
                 if (i != j) g = std::max(g, std::abs(glm::dot(v[j] - v[i], n[i])));
         }
     }
-    return 2.2 * g * n_max;
+    return 1.8 * g * n_max;
 }
-
-}  // namespace
 
 std::uint32_t SceneStore::add_mesh(const MeshData& m, const std::string& key) {
     const std::int32_t max_mat = validate_mesh(m);

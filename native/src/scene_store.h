@@ -47,8 +47,8 @@ struct GpuMesh {
     // and facing out/in, whose back faces a draw may leave out; 0 both sides.
     int closed = 0;
     // The most any point of it is lifted by the shadow terminator offset,
-    // over the largest column of its instance's matrix (object units;
-    // terminator_reach in scene_store.cpp). 0 without normals.
+    // before its instance's matrix stretches it (object units;
+    // terminator_reach() below). 0 without normals.
     double terminator_reach = 0.0;
     // Its ray hierarchy (ray_scene.h), built on first use by shadow rays.
     mutable std::shared_ptr<const MeshBvh> bvh;
@@ -75,6 +75,20 @@ struct InputLimits {
 // Validation only (plain CPU, no GL: usable by tests and sanitizer builds).
 // Each throws InvalidInput("<field>: <problem>"); validate_mesh returns the
 // largest material index used (0 without material indices).
+// A bound on the shadow terminator offset's length over the mesh, before
+// its instance's matrix (geometry_frag.glsl terminator_offset: Cycles 3.4's
+// shadow_ray_smooth_surface_offset). With G = max |Gij| = |dot(V_j - V_i,
+// N_i)| over the triangles' corners: |D_i| <= (1 - b_i) G (b_i corner i's
+// weight), so h_i <= (2 - b_i) G, and the corner with the largest weight
+// (>= 1/3) gives min(h0, h1, h2) <= 5/3 G; with |a|, |b|, |c| <= 2 G and
+// u(1 - u), v(1 - v), uv <= 1/4 inside the triangle, the parabola is at
+// most 2.5 G, halved 1.25 G; so |h| <= 5/3 G. The offset is h along the
+// interpolated normal through the instance's matrix, at most max |N_i|
+// times its largest stretch (FrameScene::terminator_lift). 1.8 instead of
+// 5/3: slack for barycentrics a hair outside the triangle
+// (Culling.TheTerminatorOffsetStaysWithinItsBound checks it).
+double terminator_reach(const MeshData& mesh);
+
 std::int32_t validate_mesh(const MeshData& mesh);
 void validate_material(const Material& material);
 void validate_instances(const double* matrices, std::size_t count);

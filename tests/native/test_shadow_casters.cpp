@@ -5,6 +5,7 @@
 // and both sides (DEFERRED_DRAW_BY_VERTEX=off, DEFERRED_FACE_CULLING=off).
 // Which meshes are closed, and which way they face, is mesh_topology.h's.
 #include "mesh_topology.h"
+#include "scene_store.h"
 #include "test_helpers.h"
 
 #include <gtest/gtest.h>
@@ -376,4 +377,66 @@ TEST(Culling, ShearedInstancesKeepTheirCornersInTheirSphere) {
     // The tip: a triangle about 0.54 m deep (5.8 px) and twice as wide.
     EXPECT_GE(tip, 10) << "pixels of the sheared slab's tip in view";
     std::printf("%d pixels of the sheared slab's tip\n", tip);
+}
+
+// geometry_frag.glsl terminator_offset's lift h along the interpolated
+// normal, for corners V, normals N, weights (u, v) and which side the
+// normal faces (front: dot(v_term_dir, Ng) > 0), in double.
+static double terminator_lift(const glm::dvec3 V[3], const glm::dvec3 N[3], double u, double v, bool front) {
+    const double G01 = glm::dot(V[1] - V[0], N[0]), G02 = glm::dot(V[2] - V[0], N[0]);
+    const double G10 = glm::dot(V[0] - V[1], N[1]), G12 = glm::dot(V[2] - V[1], N[1]);
+    const double G20 = glm::dot(V[0] - V[2], N[2]), G21 = glm::dot(V[1] - V[2], N[2]);
+    const double w = 1.0 - u - v;
+    const double D0 = -(v * G01 + w * G02), D1 = -(u * G10 + w * G12), D2 = -(u * G20 + v * G21);
+    const double a = G20 + G02, b = G21 + G12, c = -(G10 + G01);
+    double h = a * u * (u - 1.0) + (a + b + c) * u * v + b * v * (v - 1.0);
+    if (front) {
+        const double h0 = std::max(D0 + std::max({G01, G02, 0.0}), 0.0);
+        const double h1 = std::max(D1 + std::max({G10, G12, 0.0}), 0.0);
+        const double h2 = std::max(D2 + std::max({G20, G21, 0.0}), 0.0);
+        return std::max(std::min({h0, h1, h2}), h * 0.5);
+    }
+    const double h0 = std::max(-D0 + std::max({-G01, -G02, 0.0}), 0.0);
+    const double h1 = std::max(-D1 + std::max({-G10, -G12, 0.0}), 0.0);
+    const double h2 = std::max(-D2 + std::max({-G20, -G21, 0.0}), 0.0);
+    return std::min(-std::min({h0, h1, h2}), h * 0.5);
+}
+
+// The shadow lookups' margin for the terminator (scene_store.h
+// terminator_reach): every offset over every triangle, both sides, stays
+// within it: a coarse smooth sphere, and triangles with random normals of
+// random length.
+TEST(Culling, TheTerminatorOffsetStaysWithinItsBound) {
+    tools::MeshArrays ball = tools::make_uv_sphere(1.5f, 6, 4);
+    tools::MeshArrays wild = tools::make_plane(1.0f, 3);
+    unsigned seed = 7u;
+    auto next = [&seed]() {
+        seed = seed * 1664525u + 1013904223u;
+        return double(seed >> 8) / double(1u << 24) * 2.0 - 1.0;
+    };
+    for (float& n : wild.normals) n = float(next());
+    for (std::size_t i = 2; i < wild.positions.size(); i += 3) wild.positions[i] = float(0.3 * next());
+    for (const tools::MeshArrays* m : {&ball, &wild}) {
+        const double bound = terminator_reach(m->view());
+        double worst = 0.0;
+        for (std::size_t t = 0; t < m->indices.size() / 3; ++t) {
+            glm::dvec3 V[3], N[3];
+            for (int k = 0; k < 3; ++k) {
+                const std::uint32_t i = m->indices[3 * t + std::size_t(k)];
+                V[k] = glm::dvec3(m->positions[3 * i], m->positions[3 * i + 1], m->positions[3 * i + 2]);
+                const float* n = &m->normals[(3 * t + std::size_t(k)) * 3];
+                N[k] = glm::dvec3(n[0], n[1], n[2]);
+            }
+            for (int iu = 0; iu <= 20; ++iu)
+                for (int iv = 0; iu + iv <= 20; ++iv) {
+                    const double u = iu / 20.0, v = iv / 20.0;
+                    const glm::dvec3 n = u * N[0] + v * N[1] + (1.0 - u - v) * N[2];
+                    for (bool front : {true, false})
+                        worst = std::max(worst, std::abs(terminator_lift(V, N, u, v, front)) * glm::length(n));
+                }
+        }
+        std::printf("largest terminator offset %.4f, bound %.4f\n", worst, bound);
+        EXPECT_GT(worst, 0.0);
+        EXPECT_LE(worst, bound);
+    }
 }

@@ -101,12 +101,14 @@ public:
     // volume with its sides at `viewplane` (the camera's, widened by the
     // pixel filter's reach: FrameScene's ViewVolume), each lookup point
     // moved by at most `lift` metres (the shadow terminator offset,
-    // FrameScene::terminator_lift). A sun's cascade then draws only the
-    // casters whose shadow can fall on its own slice of that volume
-    // (slice_casters in shadow_module.cpp) and no texel any lookup reads
-    // changes; without it, every caster in the cascade's square.
-    // `depths`: the view depths any visible surface can have (the bounding
-    // spheres in view of every instance), within the clip range.
+    // FrameScene::terminator_lift), between `depths`: the view depths any
+    // visible surface can have (the bounding spheres in view of every
+    // instance), within the clip range. The maps then draw only the casters
+    // whose shadow a lookup can read (shadow_module.cpp): a sun's cascade
+    // those over its own slice of the volume (slice_casters), the world's
+    // maps those over the whole volume, a light's cube face those in the
+    // cone the volume fills from its point (cone_casters); no texel any
+    // lookup reads changes. Without it, every caster of the map's own test.
     struct LookupVolume {
         glm::dvec4 viewplane{0.0};  // left, right, bottom, top (tan units, or metres for orthographic)
         glm::dvec2 depths{0.0};     // nearest, farthest

@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <initializer_list>
 #include <string>
 #include <utility>
 #include <vector>
@@ -225,6 +226,24 @@ FrameResult slices_frame(const char* receiver_culling, bool ortho, bool balls, b
     return f;
 }
 
+// Every value of each pass in `passes` of `a` equal to `b`'s, to the bit.
+void expect_same_passes(const FrameResult& a, const FrameResult& b, std::initializer_list<Pass> passes,
+                        const std::string& name) {
+    for (Pass pass : passes) {
+        const PassImage* x = a.find(pass);
+        const PassImage* y = b.find(pass);
+        ASSERT_TRUE(x && y) << name << ", pass " << int(pass) << " missing";
+        ASSERT_EQ(x->pixels.size(), y->pixels.size());
+        std::size_t differ = 0;
+        double worst = 0;
+        for (std::size_t i = 0; i < x->pixels.size(); ++i) {
+            differ += x->pixels[i] != y->pixels[i];
+            worst = std::max(worst, double(std::abs(x->pixels[i] - y->pixels[i])));
+        }
+        EXPECT_EQ(differ, 0u) << name << ", pass " << int(pass) << ": largest difference " << worst;
+    }
+}
+
 }  // namespace
 
 TEST(MeshTopology, ClosedMeshesAndTheSideTheyFace) {
@@ -290,19 +309,10 @@ TEST(DrawStyle, ByVertexAndFrontFacesOnlyChangeNoPixel) {
                 static_cast<unsigned long long>(one_sided.timings.shadow_instances_drawn));
     for (const FrameResult* f : {&by_vertex, &one_sided}) {
         const char* name = f == &by_vertex ? "by vertex" : "by vertex, front faces only";
-        for (Pass pass : {Pass::Combined, Pass::DiffDir, Pass::GlossDir, Pass::Shadow, Pass::AO, Pass::Depth,
-                          Pass::Normal, Pass::IndexOB, Pass::UV}) {
-            const PassImage& a = *f->find(pass);
-            const PassImage& b = *reference.find(pass);
-            ASSERT_EQ(a.pixels.size(), b.pixels.size());
-            std::size_t differ = 0;
-            double worst = 0;
-            for (std::size_t i = 0; i < a.pixels.size(); ++i) {
-                differ += a.pixels[i] != b.pixels[i];
-                worst = std::max(worst, double(std::abs(a.pixels[i] - b.pixels[i])));
-            }
-            EXPECT_EQ(differ, 0u) << name << ", pass " << int(pass) << ": largest difference " << worst;
-        }
+        expect_same_passes(*f, reference,
+                           {Pass::Combined, Pass::DiffDir, Pass::GlossDir, Pass::Shadow, Pass::AO, Pass::Depth,
+                            Pass::Normal, Pass::IndexOB, Pass::UV},
+                           name);
     }
 }
 
@@ -327,18 +337,7 @@ TEST(DrawStyle, ShadowMapsLeaveOutOnlyCastersNoLookupSees) {
         // Most posts lie outside the view, beside or behind it.
         EXPECT_LT(double(culled.timings.shadow_instances_drawn), 0.95 * double(every.timings.shadow_instances_drawn))
             << name;
-        for (Pass pass : {Pass::Combined, Pass::Shadow, Pass::AO, Pass::Depth}) {
-            const PassImage& a = *culled.find(pass);
-            const PassImage& b = *every.find(pass);
-            ASSERT_EQ(a.pixels.size(), b.pixels.size());
-            std::size_t differ = 0;
-            double worst = 0;
-            for (std::size_t i = 0; i < a.pixels.size(); ++i) {
-                differ += a.pixels[i] != b.pixels[i];
-                worst = std::max(worst, double(std::abs(a.pixels[i] - b.pixels[i])));
-            }
-            EXPECT_EQ(differ, 0u) << name << ", pass " << int(pass) << ": largest difference " << worst;
-        }
+        expect_same_passes(culled, every, {Pass::Combined, Pass::Shadow, Pass::AO, Pass::Depth}, name);
     }
 }
 

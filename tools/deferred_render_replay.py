@@ -206,7 +206,8 @@ def main(argv=None):
                      "shadow_texels": timings.get("shadow_texels_rendered"),
                      "shadow_fragments": timings.get("shadow_fragments"),
                      "shadow_instances": timings.get("shadow_instances_drawn"),
-                     "shadow_instances_one_sided": timings.get("shadow_instances_one_sided")})
+                     "shadow_instances_one_sided": timings.get("shadow_instances_one_sided"),
+                     "shadow_resolutions": list(timings.get("shadow_resolutions") or [])})
     warnings = list(renderer.last_warnings)
 
     result = {"capture": os.path.abspath(args.capture), "gl_renderer": info.get("renderer"),

@@ -241,6 +241,29 @@ bool FrameScene::place_at(double r) {
     return casters_moved;
 }
 
+std::vector<Box> FrameScene::boxes_in_view(const ViewVolume& view) const {
+    std::vector<Box> boxes;
+    for (const Draw& d : draws_) {
+        const GpuMesh& mesh = scene_->meshes()[d.mesh];
+        if (mesh.triangle_count == 0) continue;
+        for (std::uint32_t i = d.first; i < d.first + d.count; ++i) {
+            if (!view.contains(bounds_[i].center, bounds_[i].radius)) continue;
+            // The packed matrix the vertex stage uses (float: box_in_volume's
+            // widening covers its rounding).
+            const gpu::mat4& m = instances_[i].model;
+            auto column = [&](int c) { return glm::dvec3(m.cols[c].x, m.cols[c].y, m.cols[c].z); };
+            Box b;
+            b.center = column(3);
+            for (int k = 0; k < 3; ++k) {
+                b.center += column(k) * mesh.bound_center[k];
+                b.half[std::size_t(k)] = column(k) * mesh.bound_half[k];
+            }
+            boxes.push_back(b);
+        }
+    }
+    return boxes;
+}
+
 void FrameScene::bind_buffers() const {
     glBindVertexArray(empty_vao_);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_INSTANCES, instance_buffer_.get());

@@ -13,6 +13,7 @@
 #pragma once
 
 #include "camera.h"
+#include "convex_geometry.h"
 #include "draw_style.h"
 #include "gl_util.h"
 #include "ray_scene.h"
@@ -89,6 +90,9 @@ public:
 
     std::size_t instance_count() const { return instances_.size(); }
     const std::vector<Bound>& bounds() const { return bounds_; }
+    // The boxes of the instances whose bounding sphere `view` contains: each
+    // its mesh's axis-aligned bounds through its matrix (camera-relative).
+    std::vector<Box> boxes_in_view(const ViewVolume& view) const;
     const std::vector<std::uint32_t>& crypto_hashes() const { return crypto_; }
     const gpu::GpuMaterial& material(std::uint32_t id) const { return gpu_materials_[id]; }
     const Material& scene_material(std::uint32_t id) const { return scene_->materials()[id]; }

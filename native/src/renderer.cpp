@@ -1108,6 +1108,9 @@ void Renderer::Impl::fit_shadow_maps(Frame& f) {
                 far = std::max(far, d + b.radius);
             }
         if (far >= near) lookups.depths = {std::max(near, double(cam.clip_start)), std::min(far, double(cam.clip_end))};
+        // Where nothing moves or deforms, each visible surface lies in its
+        // instance's box.
+        lookups.boxes = f.scene.boxes_in_view(f.view);
     }
     lookups.lift = f.scene.terminator_lift();
     shadows.fit(receivers, visible_depths, f.camera_moves ? nullptr : &lookups);

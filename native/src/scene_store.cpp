@@ -267,7 +267,10 @@ std::uint32_t SceneStore::add_mesh(const MeshData& m, const std::string& key) {
                 lo[k] = std::min(lo[k], double(m.positions[v * 3 + k]));
                 hi[k] = std::max(hi[k], double(m.positions[v * 3 + k]));
             }
-        for (int k = 0; k < 3; ++k) g.bound_center[k] = 0.5 * (lo[k] + hi[k]);
+        for (int k = 0; k < 3; ++k) {
+            g.bound_center[k] = 0.5 * (lo[k] + hi[k]);
+            g.bound_half[k] = 0.5 * (hi[k] - lo[k]);
+        }
         double r2 = 0.0;
         for (std::size_t v = 0; v < m.vertex_count; ++v) {
             double d2 = 0.0;

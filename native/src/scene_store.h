@@ -43,6 +43,10 @@ struct GpuMesh {
     // out of shadow maps.
     double bound_center[3] = {0.0, 0.0, 0.0};
     double bound_radius = 0.0;
+    // Half the extent of the vertices' axis-aligned box around bound_center
+    // (object space): with the instance's matrix, a box that holds it
+    // (FrameScene::receiver_boxes).
+    double bound_half[3] = {0.0, 0.0, 0.0};
     // closed_orientation() of its triangles (mesh_topology.h): +1/-1 closed
     // and facing out/in, whose back faces a draw may leave out; 0 both sides.
     int closed = 0;

@@ -131,34 +131,12 @@ ShadowModule::CasterTest ortho_casters(const glm::dvec3& axis, const glm::dvec3&
     };
 }
 
-// The convex hull of `p` (counter-clockwise, Andrew's monotone chain;
-// collinear points dropped).
-std::vector<glm::dvec2> convex_hull(std::vector<glm::dvec2> p) {
-    std::sort(p.begin(), p.end(), [](const glm::dvec2& a, const glm::dvec2& b) {
-        return a.x < b.x || (a.x == b.x && a.y < b.y);
-    });
-    auto turn = [](const glm::dvec2& o, const glm::dvec2& a, const glm::dvec2& b) {
-        return (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x);
-    };
-    std::vector<glm::dvec2> h(2 * p.size() + 1);
-    std::size_t k = 0;
-    for (std::size_t i = 0; i < p.size(); ++i) {
-        while (k >= 2 && turn(h[k - 2], h[k - 1], p[i]) <= 0.0) --k;
-        h[k++] = p[i];
-    }
-    for (std::size_t i = p.size() - 1, lower = k + 1; i-- > 0;) {
-        while (k >= lower && turn(h[k - 2], h[k - 1], p[i]) <= 0.0) --k;
-        h[k++] = p[i];
-    }
-    h.resize(k > 0 ? k - 1 : 0);
-    return h;
-}
-
 // Casters of a sun's cascade whose shadow can fall on a lookup of its slice.
 // A lookup at point Q reads the texel holding Q's place across the map,
 // written by the casters covering that texel's centre before Q along the
 // axis. Every Q lies within `reach` (metres, across the axis) of the
-// slice's volume, the convex hull of `corners`, so its projection along the
+// slice's receivers, in the convex hull of `corners` (the slice's, or the
+// receiver boxes' part of it: receiver_points), so its projection along the
 // axis is within `reach` of the hull of the corners' projections; a caster
 // (a sphere) whose projection keeps farther than that from it covers no
 // texel any lookup reads. Nor does one that starts beyond every lookup's
@@ -166,11 +144,14 @@ std::vector<glm::dvec2> convex_hull(std::vector<glm::dvec2> p) {
 // the stored depth where that depth is already lit. Each test is applied
 // edge by edge, so the corners of the widened polygon are mitred: a few
 // more casters are kept, never fewer. `square`: the map's own test.
-ShadowModule::CasterTest slice_casters(const glm::dvec3& axis, const std::array<glm::dvec3, 8>& corners,
+ShadowModule::CasterTest slice_casters(const glm::dvec3& axis, const std::vector<glm::dvec3>& corners,
                                        double reach, double depth_reach, ShadowModule::CasterTest square) {
+    // No lookup there (no receiver in the slice): no caster.
+    if (corners.empty()) return [](const glm::dvec3&, double) { return false; };
     const glm::dvec3 R = glm::normalize(glm::cross(axis, std::abs(axis.z) < 0.999 ? glm::dvec3(0, 0, 1) : glm::dvec3(1, 0, 0)));
     const glm::dvec3 U = glm::cross(R, axis);
     std::vector<glm::dvec2> across;
+    across.reserve(corners.size());
     double far_end = -1e300;
     for (const glm::dvec3& c : corners) {
         across.emplace_back(glm::dot(c, R), glm::dot(c, U));
@@ -503,11 +484,54 @@ std::vector<int> ShadowModule::allocate(std::size_t light_count) {
     return index;
 }
 
-std::array<glm::dvec3, 8> ShadowModule::slice_corners(const Cascades& cs, int k) const {
+std::pair<double, double> ShadowModule::slice_depths(const Cascades& cs, int k) const {
     // A float view depth against the double splits: 1e-4 of slack each side.
     const double near = k == 0 ? lookups_.depths.x : cs.split[k] * (1.0 - 1e-4);
     const double far = k == SHADOW_CASCADE_COUNT - 1 ? lookups_.depths.y : cs.split[k + 1] * (1.0 + 1e-4);
-    return lookup_corners(near, std::max(far, near));
+    return {near, std::max(far, near)};
+}
+
+std::array<glm::dvec3, 8> ShadowModule::slice_corners(const Cascades& cs, int k) const {
+    const auto [near, far] = slice_depths(cs, k);
+    return lookup_corners(near, far);
+}
+
+std::vector<glm::dvec3> ShadowModule::receiver_points(double near, double far) const {
+    // In view space (x right, y up, depth -z): the volume's six half-spaces
+    // and its corners (frustum_corners' order: depth, then x, then y).
+    const glm::dmat3 to_view(camera_.view), from_view = glm::transpose(to_view);
+    const glm::dvec4& vp = lookups_.viewplane;
+    std::vector<HalfSpace> volume = {{{0, 0, 1}, -near}, {{0, 0, -1}, far}};
+    if (camera_.orthographic) {
+        volume.push_back({{-1, 0, 0}, -vp.x});
+        volume.push_back({{1, 0, 0}, vp.y});
+        volume.push_back({{0, -1, 0}, -vp.z});
+        volume.push_back({{0, 1, 0}, vp.w});
+    } else {
+        // x >= l d with d = -z: -x - l z <= 0, and so on.
+        volume.push_back({{-1, 0, -vp.x}, 0.0});
+        volume.push_back({{1, 0, vp.y}, 0.0});
+        volume.push_back({{0, -1, -vp.z}, 0.0});
+        volume.push_back({{0, 1, vp.w}, 0.0});
+    }
+    std::array<glm::dvec3, 8> corners;
+    std::size_t ci = 0;
+    for (double depth : {near, far})
+        for (double x : {vp.x, vp.y})
+            for (double y : {vp.z, vp.w}) {
+                const double s = camera_.orthographic ? 1.0 : depth;
+                corners[ci++] = glm::dvec3(x * s, y * s, -depth);
+            }
+    std::vector<glm::dvec3> points;
+    for (const Box& b : lookups_.boxes) {
+        Box v;
+        v.center = to_view * b.center;
+        for (std::size_t i = 0; i < 3; ++i) v.half[i] = to_view * b.half[i];
+        const std::size_t before = points.size();
+        box_in_volume(v, volume, corners, points);
+        for (std::size_t i = before; i < points.size(); ++i) points[i] = from_view * points[i];
+    }
+    return points;
 }
 
 double ShadowModule::lookup_distance(const glm::dvec3& p) const {
@@ -588,6 +612,18 @@ void ShadowModule::fit(const std::vector<Receiver>& receivers, std::pair<double,
     const Cascades cs = cascades();
     layers_rendered_ = 0;
     texels_rendered_ = 0;
+    receiver_points_known_ = lookups_known_ && !lookups_.boxes.empty() && !rays_;
+    for (auto& points : slice_points_) points.clear();
+    volume_points_.clear();
+    if (receiver_points_known_) {
+        const bool sun = std::any_of(entries_.begin(), entries_.end(), [](const Entry& e) { return e.sun; });
+        const bool world = std::any_of(entries_.begin(), entries_.end(), [](const Entry& e) { return e.world; });
+        for (int k = 0; sun && k < SHADOW_CASCADE_COUNT; ++k) {
+            const auto [near_k, far_k] = slice_depths(cs, k);
+            slice_points_[std::size_t(k)] = receiver_points(near_k, far_k);
+        }
+        if (world) volume_points_ = receiver_points(lookups_.depths.x, lookups_.depths.y);
+    }
     receivers_center_ = glm::dvec3(0.0);
     receivers_radius_ = 0.0;
     for (const Receiver& p : receivers) receivers_center_ += p.position / double(receivers.size());
@@ -833,8 +869,11 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
                                              double(e.resolution);
                         const double slack = 1e-5 * (glm::length(cs.center[k]) + cs.radius[k]);
                         const double depth_reach = lookups_.lift + (3.0 + 1.0 / SHADOW_PLANE_MIN_COS) * texel + slack;
-                        casts = slice_casters(axis, slice_corners(cs, k), lookup_reach(texel, slack), depth_reach,
-                                              casts);
+                        const std::array<glm::dvec3, 8> corners = slice_corners(cs, k);
+                        casts = slice_casters(axis,
+                                              receiver_points_known_ ? slice_points_[std::size_t(k)]
+                                                                     : std::vector<glm::dvec3>(corners.begin(), corners.end()),
+                                              lookup_reach(texel, slack), depth_reach, casts);
                     }
                     draw_layer(e.first_layer + k, m, glm::dvec3(0.0), SHADOW_CASCADES, axis, casts, whole, whole,
                                unbounded, faces);
@@ -941,7 +980,10 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
             if (lookups_known_) {
                 const double texel = 2.0 * padded(receivers_radius_, world_allocated_) / double(world_allocated_);
                 const double slack = 1e-5 * (glm::length(receivers_center_) + receivers_radius_);
-                casts = slice_casters(axis, lookup_corners(lookups_.depths.x, lookups_.depths.y),
+                const std::array<glm::dvec3, 8> corners = lookup_corners(lookups_.depths.x, lookups_.depths.y);
+                casts = slice_casters(axis,
+                                      receiver_points_known_ ? volume_points_
+                                                             : std::vector<glm::dvec3>(corners.begin(), corners.end()),
                                       lookup_reach(texel, slack), 1e300, casts);
             }
             begin_fragment_count();

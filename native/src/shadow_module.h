@@ -36,6 +36,7 @@
 #pragma once
 
 #include "camera.h"
+#include "convex_geometry.h"
 #include "draw_style.h"
 #include "gl_util.h"
 #include "shader_library.h"
@@ -109,10 +110,21 @@ public:
     // maps those over the whole volume, a light's cube face those in the
     // cone the volume fills from its point (cone_casters); no texel any
     // lookup reads changes. Without it, every caster of the map's own test.
+    //
+    // `boxes`, where known (empty: not): boxes that hold every visible
+    // surface (each instance in view: its mesh's bounds through its matrix;
+    // not where something moves or deforms over the shutter). The cascades
+    // and the world's maps then take the part of these boxes inside their
+    // slice or volume (receiver_points) instead of the whole of it: the sky
+    // above a field, the air in front of a wall hold no lookup. (A cube
+    // face's cone is not narrowed so: its plane-depth comparison reaches up
+    // to 1 / SHADOW_PLANE_MIN_COS texels beyond a lookup, the cone's margin
+    // grows with that, and on the instancing capture it left out 2 % more.)
     struct LookupVolume {
         glm::dvec4 viewplane{0.0};  // left, right, bottom, top (tan units, or metres for orthographic)
         glm::dvec2 depths{0.0};     // nearest, farthest
         double lift = 0.0;
+        std::vector<Box> boxes;  // camera-relative
     };
     void fit(const std::vector<Receiver>& receivers, std::pair<double, double> visible_depths = {0.0, 0.0},
              const LookupVolume* lookups = nullptr);
@@ -188,11 +200,17 @@ private:
     // split for cascade 0, beyond the last but one for cascade 3, so those
     // two reach the lookup volume's ends), camera-relative.
     std::array<glm::dvec3, 8> slice_corners(const Cascades& cs, int k) const;
+    std::pair<double, double> slice_depths(const Cascades& cs, int k) const;  // slice_corners' near, far
     // A lower bound of camera-relative point p's distance to the lookup
     // volume (<= 0: inside it).
     double lookup_distance(const glm::dvec3& p) const;
     // The lookup volume's corners between two view depths.
     std::array<glm::dvec3, 8> lookup_corners(double near, double far) const;
+    // The vertices of each receiver box's part between two view depths of
+    // the lookup volume (camera-relative): every visible surface point there
+    // lies in their convex hull.
+    std::vector<glm::dvec3> receiver_points(double near, double far) const;
+
     // The corners of the camera's frustum with sides at `viewplane` (left,
     // right, bottom, top) between two view depths, camera-relative.
     std::array<glm::dvec3, 8> frustum_corners(const glm::dvec4& viewplane, double near, double far) const;
@@ -224,6 +242,11 @@ private:
     double split_near_ = 0.0, split_far_ = 0.0;  // the cascades' depth range (fit)
     bool lookups_known_ = false;                   // fit() was given a LookupVolume
     LookupVolume lookups_{};
+    // Where lookups_ has boxes: receiver_points() of each cascade's slice
+    // (slice_corners' depths) and of the whole volume, from fit().
+    bool receiver_points_known_ = false;
+    std::array<std::vector<glm::dvec3>, SHADOW_CASCADE_COUNT> slice_points_;
+    std::vector<glm::dvec3> volume_points_;
     int resolution_ = 1024;
     std::size_t budget_ = 0, bytes_ = 0;
     std::vector<Entry> entries_;

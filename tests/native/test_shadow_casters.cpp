@@ -317,8 +317,10 @@ TEST(DrawStyle, ByVertexAndFrontFacesOnlyChangeNoPixel) {
 }
 
 // A sun's cascade draws only the casters whose shadow can fall on a lookup
-// of its own slice of the view (shadow_module.cpp slice_casters), the
-// world's maps those beside the view's projection, a light's cube face
+// of its own slice of the view (shadow_module.cpp slice_casters: over the
+// part of the visible instances' boxes in the slice, receiver_points), the
+// world's maps those beside the projection of the boxes in view (the
+// floor's among them: a flat box), a light's cube face
 // those in the cone the view fills from its point (cone_casters): the maps
 // differ only in texels no lookup reads, so the image is the same to the bit.
 TEST(DrawStyle, ShadowMapsLeaveOutOnlyCastersNoLookupSees) {
@@ -334,8 +336,12 @@ TEST(DrawStyle, ShadowMapsLeaveOutOnlyCastersNoLookupSees) {
         std::printf("%s: %llu of %llu instances drawn into the maps\n", name.c_str(),
                     static_cast<unsigned long long>(culled.timings.shadow_instances_drawn),
                     static_cast<unsigned long long>(every.timings.shadow_instances_drawn));
-        // Most posts lie outside the view, beside or behind it.
-        EXPECT_LT(double(culled.timings.shadow_instances_drawn), 0.95 * double(every.timings.shadow_instances_drawn))
+        // Most posts lie outside the view, beside or behind it. Under the
+        // sun, the cascades and the world's map take only the instances'
+        // boxes in their slice (the floor's strip, not the air above it):
+        // 38-49 % drawn, 64-82 % over the whole slices.
+        EXPECT_LT(double(culled.timings.shadow_instances_drawn),
+                  (lamp ? 0.95 : 0.6) * double(every.timings.shadow_instances_drawn))
             << name;
         expect_same_passes(culled, every, {Pass::Combined, Pass::Shadow, Pass::AO, Pass::Depth}, name);
     }

@@ -28,6 +28,9 @@ glm::dvec3 v3(const gpu::vec4& v) { return {v.x, v.y, v.z}; }
 // up to 7.6 % too high, i.e. occlusion missed; at 4x within 1.2 %).
 constexpr double kWorldQuality = 4.0;
 
+// The most points receiver_points() keeps for one slice or volume.
+constexpr std::size_t kMaxReceiverPoints = 1u << 20;
+
 // The cube face basis of shadow_lib.glsl's cube_face(): forward F, right R, up U.
 void face_basis(int face, glm::dvec3& F, glm::dvec3& R, glm::dvec3& U) {
     const int axis = face / 2;
@@ -530,6 +533,12 @@ std::vector<glm::dvec3> ShadowModule::receiver_points(double near, double far) c
         const std::size_t before = points.size();
         box_in_volume(v, volume, corners, points);
         for (std::size_t i = before; i < points.size(); ++i) points[i] = from_view * points[i];
+        // Memory and each sample's hull stay bounded (a million points,
+        // 24 MB): past that, the volume's own corners.
+        if (points.size() > kMaxReceiverPoints) {
+            const std::array<glm::dvec3, 8> whole = lookup_corners(near, far);
+            return {whole.begin(), whole.end()};
+        }
     }
     return points;
 }

@@ -229,6 +229,12 @@ void declare_renderer(py::module_& m) {
                  self.get().clear_scene();
              },
              "Drops the scene and keeps the GL context, compiled programs and keyed images for the next one.")
+        .def("release_scene_memory", [](PyRenderer& self) {
+                 py::gil_scoped_release release;
+                 self.get().release_scene_memory();
+             },
+             "Drops the scene, kept meshes and images, frame targets and shadow maps; keeps the GL context and "
+             "the compiled programs (what a render without Persistent Data keeps for the next one).")
         .def("cancel", [](PyRenderer& self) { self.get().cancel(); },
              "Stop a render() running on another thread at its next sample (it raises Cancelled).")
         .def("add_mesh",

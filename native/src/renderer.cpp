@@ -169,26 +169,36 @@ struct Renderer::Impl {
     ~Impl() {
         thread.run([this] {
             // Release every GL object while the context is still current.
-            gbuffer = GBuffer();
-            visibility = VisibilityBuffer();
-            lights = LightModule();
-            culling = LightCulling();
-            shadows = ShadowModule();
-            ray_scene.release();
-            world_module.release();
-            emitters.release();
-            forward.release();
-            cryptomatte.release();
-            aovs.release();
-            motion.release();
-            scene.release_all();
-            materials.release_all();
+            release_scene_memory();
             shaders.reset();
             empty_vao.reset();
             dummy_ssbo.reset();
-            receiver_grid.reset();
             context.reset();
         });
+    }
+
+    // Everything a scene and its frames hold (on the render thread): the
+    // frame's targets and maps, the meshes and images, kept ones too. What
+    // stays is what any scene reuses: the context, the compiled programs
+    // (and the driver's code for them), two empty objects.
+    void release_scene_memory() {
+        gbuffer = GBuffer();
+        visibility = VisibilityBuffer();
+        lights = LightModule();
+        culling = LightCulling();
+        shadows = ShadowModule();
+        ray_scene.release();
+        world_module.release();
+        emitters.release();
+        forward.release();
+        cryptomatte.release();
+        aovs.release();
+        motion.release();
+        scene.release_all();
+        materials.release_all();
+        world_graph = -1;
+        receiver_grid.reset();
+        receiver_grid_bytes = 0;
     }
 
     void init(const ContextOptions& options) {
@@ -1197,6 +1207,10 @@ void Renderer::clear_scene() {
         impl_->materials.clear();
         impl_->world_graph = -1;
     });
+}
+
+void Renderer::release_scene_memory() {
+    impl_->thread.run([&] { impl_->release_scene_memory(); });
 }
 
 std::uint32_t Renderer::add_mesh(const MeshData& mesh, const std::string& key) {

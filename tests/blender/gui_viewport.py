@@ -440,19 +440,23 @@ def steps():
     # 8. Resources: leaving Rendered mode frees the engine and its renderer,
     # also after many viewports came and went, after switching engines, after
     # reloading the file and after disabling the add-on.
+    # The final render's renderer (the F12 above) stays with its context and
+    # programs (engine/session.py): the one renderer not the viewport's.
     from deferred_render import native
+    from deferred_render.engine import session
     mod = native.load()
 
     def released(what, rss_before=None):
         for _ in range(20):
             yield
-            if not viewport.sessions() and mod.live_renderers() == 0:
+            if not viewport.sessions() and mod.live_renderers() == session.renderers_held():
                 break
-        detail = f"{len(viewport.sessions())} sessions, {mod.live_renderers()} native renderers alive"
+        detail = (f"{len(viewport.sessions())} sessions, {mod.live_renderers()} native renderers alive, "
+                  f"{session.renderers_held()} of them the final render's")
         if rss_before is not None:
             detail += f", resident memory {rss_before / 2**20:.0f} -> {resident() / 2**20:.0f} MiB"
-        check(not viewport.sessions() and mod.live_renderers() == 0, f"{what} releases the viewport's renderer",
-              detail)
+        check(not viewport.sessions() and mod.live_renderers() == session.renderers_held(),
+              f"{what} releases the viewport's renderer", detail)
 
     space.shading.type = 'SOLID'
     yield from released("leaving Rendered shading")

@@ -306,7 +306,8 @@ def test_persistent_data(checks, scene, plane):
     renders: the second render of an unchanged scene compiles nothing (the
     disk cache is off, so this is the kept programs) and uploads no image
     (found by its content key); a changed image is uploaded again; turning
-    the option off releases the kept renderer."""
+    the option off releases the kept renderer's data and keeps its context
+    and programs (the next render links nothing and uploads its image)."""
     from deferred_render.engine import final, session
     os.environ["DEFERRED_SHADER_CACHE"] = "off"
     try:
@@ -345,9 +346,31 @@ def test_persistent_data(checks, scene, plane):
                      "a changed image is uploaded again", str(t3))
         checks.check(np.abs(images["Combined"] - second).max() > 0.1, "and the new content is rendered")
 
+        # Off: the data goes (the kept renderer releases it at the render's
+        # start and at its end), the context and its programs stay.
         scene.render.use_persistent_data = False
-        render_combined(scene, plane, mat, "persistent_off")
-        checks.check(not session.kept(), "with the option off, nothing is kept after the render")
+        off = []
+        for tag in ("persistent_off_1", "persistent_off_2"):
+            images, _ = render_combined(scene, plane, mat, tag)
+            off.append((images["Combined"], dict(final.last_timings)))
+            checks.check(not session.kept() and session.renderers_held() == 1,
+                         f"with the option off ({tag}), no data is kept after the render, only the renderer",
+                         f"kept {session.kept()}, held {session.renderers_held()}")
+        for (pixels, t), tag in zip(off, ("first", "second")):
+            checks.check(t.get("images_uploaded") == 1 and t.get("images_reused") == 0,
+                         f"the {tag} render with the option off uploads its image again", str(t))
+            checks.check(t.get("programs_compiled") == 0 and t.get("programs_loaded") == 0,
+                         "and compiles and loads no program (the context's are kept)", str(t))
+            checks.check(np.array_equal(pixels, images["Combined"]) and
+                         np.array_equal(off[0][0], off[1][0]) and pixels.max() > 0.1,
+                         "and renders the same image", f"max {pixels.max():.3f}")
+        # A renderer that starts afresh renders it the same.
+        session.release()
+        fresh, _ = render_combined(scene, plane, mat, "persistent_off_fresh")
+        checks.check(final.last_timings.get("programs_compiled", 0) > 0 and
+                     np.array_equal(fresh["Combined"], off[1][0]),
+                     "a new renderer (programs compiled again) renders the same image",
+                     f"max |diff| {np.abs(fresh['Combined'] - off[1][0]).max():.2e}")
     finally:
         scene.render.use_persistent_data = False
         session.release()

@@ -108,6 +108,39 @@ TEST(KeptMeshes, UnkeyedAndUnusedMeshesAreDropped) {
     EXPECT_EQ(r.find_mesh("other"), std::int64_t(other));
 }
 
+// What a final render without Persistent Data leaves for the next one
+// (addon engine/session.py): no mesh, kept or not, no target; the context's
+// programs, so the next render links none, and the same image.
+TEST(KeptMeshes, ReleasedSceneMemoryKeepsOnlyTheProgramsAndRendersTheSame) {
+    Renderer r;
+    tools::MeshArrays floor = tools::make_plane(10.0f, 1), pane = tools::make_plane(1.0f, 1);
+    build_scene(r, r.add_mesh(floor.view(), "floor"), r.add_mesh(pane.view(), "pane"));
+    RenderSettings s;
+    s.width = s.height = 32;
+    s.samples = 2;
+    const FrameResult first = r.render(top_down_ortho(10.0, 6.0f), s);
+    EXPECT_GT(first.timings.programs_compiled + first.timings.programs_loaded, 0u);
+    EXPECT_GT(first.timings.shadow_map_bytes, 0u);
+
+    r.release_scene_memory();
+    EXPECT_EQ(r.find_mesh("floor"), -1);  // kept meshes go too
+    EXPECT_EQ(r.find_mesh("pane"), -1);
+    r.clear_scene();
+    build_scene(r, r.add_mesh(floor.view(), "floor"), r.add_mesh(pane.view(), "pane"));
+    const FrameResult second = r.render(top_down_ortho(10.0, 6.0f), s);
+    EXPECT_EQ(second.timings.programs_compiled, 0u);
+    EXPECT_EQ(second.timings.programs_loaded, 0u);
+    EXPECT_EQ(second.timings.meshes_uploaded, 2u);
+    EXPECT_EQ(max_difference(*first.find(Pass::Combined), *second.find(Pass::Combined)), 0.0);
+
+    // Twice in a row, and before any scene: nothing left to release.
+    r.release_scene_memory();
+    r.release_scene_memory();
+    build_scene(r);
+    const FrameResult third = r.render(top_down_ortho(10.0, 6.0f), s);
+    EXPECT_EQ(max_difference(*first.find(Pass::Combined), *third.find(Pass::Combined)), 0.0);
+}
+
 TEST(ProgressivePreview, LastImageIsTheRenderAndVersionsGrowWhileSampling) {
     Renderer r;
     build_scene(r);

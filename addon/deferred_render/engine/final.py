@@ -11,8 +11,9 @@ Stages, with ``test_break()`` between each:
 
 Any exception becomes ``report({'ERROR'}, ...)`` and the (zero-filled)
 result is still ended, so Blender writes an empty but valid image and goes
-on; the native session is released in ``finally`` (or kept for the next
-render when Persistent Data is on and the render succeeded).
+on; in ``finally`` the native session is kept for the next render when
+the render succeeded (with its data when Persistent Data is on, else its
+GL context and programs only; session.py) and released when it failed.
 """
 
 import collections
@@ -212,9 +213,9 @@ class FinalRender:
                 except Exception:
                     pass
                 self._restore_frame = None
-            # Keep the native session for the next render (Persistent Data)
-            # or release it (joins its GL thread, frees the GL context)
-            # before handing the result back.
+            # Keep the native session for the next render (its data too with
+            # Persistent Data) or, after a failure, release it (joins its GL
+            # thread, frees the GL context) before handing the result back.
             if self._session is not None:
                 mod, device_index, persistent = self._session
                 session.hand_back(mod, device_index, renderer, persistent, failed=renderer is None)
@@ -344,8 +345,10 @@ class FinalRender:
         recorder = capture.Recorder() if capture_to else None
         if recorder is not None:
             persistent = False
-        self.status("starting GL" if not (persistent and session.kept()) else
-                    "reusing the renderer kept by the last render (Persistent Data)", 0.02)
+        self.status("reusing the renderer kept by the last render (Persistent Data)"
+                    if persistent and session.kept() else
+                    "reusing the GL context and programs of the last render" if session.renderers_held() else
+                    "starting GL", 0.02)
         renderer, self.reused_renderer = session.acquire(mod, device_index, persistent)
         self._session = (mod, device_index, persistent)
         if recorder is not None:

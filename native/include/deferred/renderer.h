@@ -291,6 +291,12 @@ public:
     // next one can reuse: the GL context, compiled programs, frame targets
     // and keyed images (see add_image).
     void clear_scene();
+    // Drops the scene, the kept meshes and images, and every frame target
+    // and shadow map; keeps the GL context and the compiled programs. What
+    // a render without Persistent Data leaves for the next one (as Blender
+    // keeps EEVEE's shaders): the next render starts no context and links
+    // no program, and nothing of this scene's stays in memory meanwhile.
+    void release_scene_memory();
     // Returns the mesh id. The data is validated and uploaded before returning.
     // With a key (the caller's name for the mesh's content), the mesh
     // outlives clear_scene() while each scene uses it, and find_mesh(key)

@@ -90,6 +90,20 @@ std::size_t memory_budget_bytes() {
     return mb << 20;
 }
 
+// Programs a renderer keeps through release_scene_memory(): past this the
+// library starts afresh, so a long session of edited node materials does
+// not keep every program it ever linked. DEFERRED_MAX_KEPT_PROGRAMS,
+// default 256 (a sample scene links 10-20).
+std::size_t max_kept_programs() {
+    std::size_t n = 256;
+    if (const char* env = std::getenv("DEFERRED_MAX_KEPT_PROGRAMS")) {
+        char* end = nullptr;
+        unsigned long v = std::strtoul(env, &end, 10);
+        if (end && *end == '\0' && end != env) n = v;
+    }
+    return n;
+}
+
 // The settings a frame refuses before it allocates anything.
 void validate_settings(const RenderSettings& settings) {
     if (settings.samples < 1 || settings.samples > 65536)
@@ -1210,7 +1224,13 @@ void Renderer::clear_scene() {
 }
 
 void Renderer::release_scene_memory() {
-    impl_->thread.run([&] { impl_->release_scene_memory(); });
+    impl_->thread.run([&] {
+        impl_->release_scene_memory();
+        if (impl_->shaders->compiled_program_count() > max_kept_programs()) {
+            impl_->shaders.reset();
+            impl_->shaders.emplace();
+        }
+    });
 }
 
 std::uint32_t Renderer::add_mesh(const MeshData& mesh, const std::string& key) {

@@ -443,19 +443,19 @@ def steps():
     # The final render's renderer (the F12 above) stays with its context and
     # programs (engine/session.py): the one renderer not the viewport's.
     from deferred_render import native
-    from deferred_render.engine import session
+    from deferred_render.engine import session as final_session
     mod = native.load()
 
     def released(what, rss_before=None):
         for _ in range(20):
             yield
-            if not viewport.sessions() and mod.live_renderers() == session.renderers_held():
+            if not viewport.sessions() and mod.live_renderers() == final_session.renderers_held():
                 break
         detail = (f"{len(viewport.sessions())} sessions, {mod.live_renderers()} native renderers alive, "
-                  f"{session.renderers_held()} of them the final render's")
+                  f"{final_session.renderers_held()} of them the final render's")
         if rss_before is not None:
             detail += f", resident memory {rss_before / 2**20:.0f} -> {resident() / 2**20:.0f} MiB"
-        check(not viewport.sessions() and mod.live_renderers() == session.renderers_held(),
+        check(not viewport.sessions() and mod.live_renderers() == final_session.renderers_held(),
               f"{what} releases the viewport's renderer", detail)
 
     space.shading.type = 'SOLID'

@@ -277,14 +277,18 @@ def test_emission_pass(checks, scene, plane):
 
 
 def test_program_cache(checks, scene, plane):
-    from deferred_render.engine import final
+    # The disk cache between renderers: each render here starts a new one
+    # (a render keeps its renderer's programs for the next, session.py).
+    from deferred_render.engine import final, session
     os.environ["DEFERRED_SHADER_CACHE"] = tempfile.mkdtemp(prefix="deferred_programs_")
     mat, em = emission_material("cached")
     math_node = mat.node_tree.nodes.new("ShaderNodeMath")
     mat.node_tree.links.new(math_node.outputs[0], em.inputs["Strength"])
+    session.release()
     render_combined(scene, plane, mat, "cache_cold")
     cold = dict(final.last_timings)
     math_node.inputs[0].default_value = 0.75  # a value edit: same program
+    session.release()
     images, _ = render_combined(scene, plane, mat, "cache_warm")
     warm = dict(final.last_timings)
     del os.environ["DEFERRED_SHADER_CACHE"]

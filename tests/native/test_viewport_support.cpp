@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <cstdlib>
 #include <cmath>
 #include <thread>
 
@@ -138,7 +139,17 @@ TEST(KeptMeshes, ReleasedSceneMemoryKeepsOnlyTheProgramsAndRendersTheSame) {
     r.release_scene_memory();
     build_scene(r);
     const FrameResult third = r.render(top_down_ortho(10.0, 6.0f), s);
+    EXPECT_EQ(third.timings.programs_compiled + third.timings.programs_loaded, 0u);
     EXPECT_EQ(max_difference(*first.find(Pass::Combined), *third.find(Pass::Combined)), 0.0);
+
+    // Past DEFERRED_MAX_KEPT_PROGRAMS the programs go too (and come back).
+    setenv("DEFERRED_MAX_KEPT_PROGRAMS", "1", 1);
+    r.release_scene_memory();
+    unsetenv("DEFERRED_MAX_KEPT_PROGRAMS");
+    build_scene(r);
+    const FrameResult fourth = r.render(top_down_ortho(10.0, 6.0f), s);
+    EXPECT_GT(fourth.timings.programs_compiled + fourth.timings.programs_loaded, 0u);
+    EXPECT_EQ(max_difference(*first.find(Pass::Combined), *fourth.find(Pass::Combined)), 0.0);
 }
 
 TEST(ProgressivePreview, LastImageIsTheRenderAndVersionsGrowWhileSampling) {

@@ -45,9 +45,12 @@ def acquire(mod, device_index, persistent):
         kept_mod, kept_device, renderer, holds_data = kept
         kept = None
         if kept_mod is mod and kept_device == device_index:
-            if holds_data and not persistent:
-                renderer.release_scene_memory()
-            return renderer, holds_data and persistent
+            try:
+                if holds_data and not persistent:
+                    renderer.release_scene_memory()
+                return renderer, holds_data and persistent
+            except Exception:  # its GL state is not trusted: a new one below
+                pass
         del renderer
     return mod.Renderer(device_index=device_index), False
 

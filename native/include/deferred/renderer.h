@@ -296,6 +296,8 @@ public:
     // a render without Persistent Data leaves for the next one (as Blender
     // keeps EEVEE's shaders): the next render starts no context and links
     // no program, and nothing of this scene's stays in memory meanwhile.
+    // Past DEFERRED_MAX_KEPT_PROGRAMS programs (default 256) it drops them
+    // too, so edited node materials do not pile up over a long session.
     void release_scene_memory();
     // Returns the mesh id. The data is validated and uploaded before returning.
     // With a key (the caller's name for the mesh's content), the mesh

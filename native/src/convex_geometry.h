@@ -42,9 +42,9 @@ void clip_polygon(std::vector<glm::dvec3>& poly, const std::vector<HalfSpace>& b
 // volume's corners inside the box, and where the edges of one cross the
 // faces of the other: all of them are vertices of the box's faces clipped by
 // the volume or of the volume's faces clipped by the box, so the convex hull
-// of what it appends is the part. The box is widened by a millionth of its
-// size (a flat box, a plane's, gets that thickness), which also covers the
-// float error of the vertices the GPU transforms.
+// of what it appends is the part. A missing axis (a flat box, a plane's)
+// gets a millionth of the box's size as thickness, and the box's own
+// half-spaces (which clip the volume's faces) lie that much outside it.
 void box_in_volume(const Box& b, const std::vector<HalfSpace>& volume, const std::array<glm::dvec3, 8>& volume_corners,
                    std::vector<glm::dvec3>& out);
 

@@ -878,10 +878,13 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
                                              double(e.resolution);
                         const double slack = 1e-5 * (glm::length(cs.center[k]) + cs.radius[k]);
                         const double depth_reach = lookups_.lift + (3.0 + 1.0 / SHADOW_PLANE_MIN_COS) * texel + slack;
+                        // Both branches lvalues: the points are not copied.
                         const std::array<glm::dvec3, 8> corners = slice_corners(cs, k);
+                        const std::vector<glm::dvec3> whole_slice =
+                            receiver_points_known_ ? std::vector<glm::dvec3>()
+                                                   : std::vector<glm::dvec3>(corners.begin(), corners.end());
                         casts = slice_casters(axis,
-                                              receiver_points_known_ ? slice_points_[std::size_t(k)]
-                                                                     : std::vector<glm::dvec3>(corners.begin(), corners.end()),
+                                              receiver_points_known_ ? slice_points_[std::size_t(k)] : whole_slice,
                                               lookup_reach(texel, slack), depth_reach, casts);
                     }
                     draw_layer(e.first_layer + k, m, glm::dvec3(0.0), SHADOW_CASCADES, axis, casts, whole, whole,
@@ -990,9 +993,10 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
                 const double texel = 2.0 * padded(receivers_radius_, world_allocated_) / double(world_allocated_);
                 const double slack = 1e-5 * (glm::length(receivers_center_) + receivers_radius_);
                 const std::array<glm::dvec3, 8> corners = lookup_corners(lookups_.depths.x, lookups_.depths.y);
-                casts = slice_casters(axis,
-                                      receiver_points_known_ ? volume_points_
-                                                             : std::vector<glm::dvec3>(corners.begin(), corners.end()),
+                const std::vector<glm::dvec3> whole_volume =
+                    receiver_points_known_ ? std::vector<glm::dvec3>()
+                                           : std::vector<glm::dvec3>(corners.begin(), corners.end());
+                casts = slice_casters(axis, receiver_points_known_ ? volume_points_ : whole_volume,
                                       lookup_reach(texel, slack), 1e300, casts);
             }
             begin_fragment_count();

@@ -458,9 +458,9 @@ class SceneExporter:
         return True
 
     def _sync_geometry(self, inst, ob):
-        # The 16 values row by row, as a tuple: np.array(Matrix) costs ~7 µs
-        # an instance through the sequence protocol, this ~2.5 (0.11 s ->
-        # 0.03 s for 10 000 instances); flush_instances makes one array of them.
+        # The 16 values row by row, as a tuple (np.array(Matrix) per instance
+        # goes through the sequence protocol, several times slower; the whole
+        # export: bench/warm/bench_export.py); flush_instances makes one array.
         matrix = tuple(itertools.chain.from_iterable(inst.matrix_world))
         # Blender clamps an infinite scale to FLT_MAX; that overflows as well.
         # (A NaN or an infinity makes the sum one too.)

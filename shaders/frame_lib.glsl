@@ -6,6 +6,13 @@ layout(std140, binding = UBO_FRAME) uniform FrameBlock { FrameConstants frame; }
 
 bool frame_is_ortho() { return frame.camera_position.w > 0.5; }
 
+/* A surface's emission (the G-buffer's emission target) that the film
+ * sample's own pixel shares with the emission sub-samples
+ * (native/src/emission_samples.h): not a holdout's (a 0) nor a shadow
+ * catcher's (a 2). The sample adds frame.jitter.w (1/K) of it. */
+bool directly_seen_emission(vec4 emission) { return emission.a > 0.0 && emission.a < 1.5; }
+float directly_seen_emission_share(vec4 emission) { return directly_seen_emission(emission) ? frame.jitter.w : 1.0; }
+
 /* Direction towards the viewer from a camera-relative position. */
 vec3 frame_view_vector(vec3 P) {
     if (frame_is_ortho()) return normalize(frame.inv_view[2].xyz);

@@ -441,7 +441,9 @@ void main() {
     add_to_group(instance_groups[texelFetch(gbuf_ids, pixel, 0).z], emission.rgb);
     store_groups(pixel, share);
 #endif
-    vec4 sample_value = vec4(emission.rgb + total.diffuse + total.glossy, emission.a);
+    /* Emission sub-samples (emission_samples.h) add the rest of it. */
+    vec4 sample_value = vec4(emission.rgb * directly_seen_emission_share(emission) + total.diffuse + total.glossy,
+                             emission.a);
     imageStore(film, pixel, imageLoad(film, pixel) + behind_forward_layer(pixel, sample_value, first_batch) * share);
 #ifdef OUT_SHADOW
     imageStore(shadow_light, pixel, imageLoad(shadow_light, pixel) + vec4(lum_shadowed, lum_unshadowed, 0.0, 0.0) * share);

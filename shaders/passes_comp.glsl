@@ -164,7 +164,11 @@ void main() {
 #elif PASS_ID == PASS_GLOSS_COL || PASS_ID == PASS_GLOSS_DIR
     if (!background) value = vec4(principled_glossy_color(principled_weights(load_surface(pixel))), 0.0);
 #elif PASS_ID == PASS_EMIT
-    value = background ? vec4(0.0) : vec4(texelFetch(gbuf_emission, pixel, 0).rgb, 0.0);
+    if (!background) {
+        /* The emission sub-samples (emission_samples.h) add the rest of it. */
+        vec4 emission = texelFetch(gbuf_emission, pixel, 0);
+        value = vec4(emission.rgb * directly_seen_emission_share(emission), 0.0);
+    }
 #elif PASS_ID == PASS_ENV
 #ifdef HAS_WORLD_MAP
     /* The world map along this sample's ray through the pixel (as camera rays see it). */

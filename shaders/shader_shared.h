@@ -131,7 +131,8 @@ SHARED_ASSERT_SIZE(GpuInstance, 176);
  *                     without one; y the number of maps (consecutive indices); zw the world
  *                     map's width and height (world_lib.glsl; 0 for a constant world)
  *   jitter          : xy this sample's pixel-filter offset in NDC (added by projection), z the
- *                     camera's clip start, w unused
+ *                     camera's clip start, w the share of a directly seen emission each sample
+ *                     or emission sub-sample adds (1/K, emission_samples.h; 1 without them)
  *   motion          : motion blur (motion_module.h): xyz this sample's camera position relative
  *                     to the frame's (camera-relative positions keep the frame's origin; view
  *                     includes the translation), w the sample's relative shutter time in

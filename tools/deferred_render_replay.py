@@ -6,7 +6,7 @@ prints where the time went.
 
     build/tools/deferred_render_replay scene.npz [--size WxH] [--samples N]
         [--passes A,B] [--repeat K] [--json] [--out OUT.exr] [--device N]
-        [--light-samples N] [--shadow-rays | --shadow-maps]
+        [--light-samples N] [--emission-samples K] [--shadow-rays | --shadow-maps]
         [--filter-splat on|off] [--visibility-buffer on|off] [--count-fragments]
 
 Each repeat renders the captured frame again on the same renderer (the first
@@ -126,6 +126,8 @@ def main(argv=None):
     ap.add_argument("--device", type=int, default=-1, help="EGL device index (default: the best one)")
     ap.add_argument("--light-samples", type=int, help="lights per pixel and sample (0: every light) instead of "
                     "the captured setting")
+    ap.add_argument("--emission-samples", type=int, help="camera samples of directly seen emission per sample "
+                    "(1: none) instead of the captured setting")
     rays = ap.add_mutually_exclusive_group()
     rays.add_argument("--shadow-rays", action="store_true", help="shadow rays instead of the captured method")
     rays.add_argument("--shadow-maps", action="store_true", help="shadow maps instead of the captured method")
@@ -178,6 +180,8 @@ def main(argv=None):
         kwargs["passes"] = [p.strip() for p in args.passes.split(",") if p.strip()]
     if args.light_samples is not None:
         kwargs["light_samples"] = args.light_samples
+    if args.emission_samples is not None:
+        kwargs["emission_samples"] = args.emission_samples
     if args.shadow_rays or args.shadow_maps:
         kwargs["shadow_rays"] = bool(args.shadow_rays)
     if args.shadow_quality is not None:
@@ -202,6 +206,7 @@ def main(argv=None):
         timings = dict(renderer.last_timings)
         runs.append({"wall_ms": wall * 1e3, **{k: timings.get(k) for k in STAGES},
                      "visibility_buffer": bool(timings.get("visibility_buffer")),
+                     "emission_samples": timings.get("emission_samples", 1),
                      "shadow_layers": timings.get("shadow_layers_rendered"),
                      "shadow_texels": timings.get("shadow_texels_rendered"),
                      "shadow_fragments": timings.get("shadow_fragments"),
@@ -213,6 +218,7 @@ def main(argv=None):
     result = {"capture": os.path.abspath(args.capture), "gl_renderer": info.get("renderer"),
               "gl_version": info.get("version"), "size": [width, height], "samples": kwargs.get("samples"),
               "light_samples": kwargs.get("light_samples", 0), "shadow_rays": kwargs.get("shadow_rays", False),
+              "emission_samples": runs[-1].get("emission_samples", 1) if runs else 1,
               "filter_splat": kwargs.get("filter_splat", True),
               "shadow_quality": kwargs.get("shadow_quality"), "shadow_resolution": kwargs.get("shadow_resolution"),
               "fragments_counted": bool(args.count_fragments),
@@ -225,7 +231,9 @@ def main(argv=None):
         print(f"{args.capture}: captured from {meta.get('file') or '(unsaved file)'}, frame {meta.get('frame')}, "
               f"on {meta.get('gl_renderer')}")
         print(f"replayed on {info.get('renderer')} ({info.get('version')}): {width}x{height}, "
-              f"{kwargs.get('samples')} samples, passes {', '.join(sorted(images))}")
+              f"{kwargs.get('samples')} samples, passes {', '.join(sorted(images))}"
+              + (f", {runs[-1]['emission_samples']} emission samples each" if runs and runs[-1].get("emission_samples", 1) > 1
+                 else ""))
         print(f"GL context {t_context * 1e3:.0f} ms, scene upload {t_scene * 1e3:.0f} ms")
         print("| run | wall ms | " + " | ".join(s[:-3] for s in STAGES) + " |")
         print("| ---: | ---: | " + " | ".join("---:" for _ in STAGES) + " |")

@@ -200,6 +200,7 @@ void declare_renderer(py::module_& m) {
             d["shadow_instances_drawn"] = self.last.shadow_instances_drawn;
             d["shadow_instances_one_sided"] = self.last.shadow_instances_one_sided;
             d["camera_instances_drawn"] = self.last.camera_instances_drawn;
+            d["emission_samples"] = self.last.emission_samples;
             d["lighting_later_pixels"] = self.last.lighting_later_pixels;
             d["shadow_resolutions"] = self.last.shadow_resolutions;
             d["passes_ms"] = self.last.passes_ms;
@@ -516,8 +517,9 @@ void declare_renderer(py::module_& m) {
                 const std::vector<std::string>& cryptomatte, int cryptomatte_levels,
                 const std::vector<std::pair<std::string, std::string>>& aovs, int light_groups,
                 int preview_interval_ms, const std::string& preview_pass, bool motion_blur, bool filter_splat,
-                bool visibility_buffer, bool count_shadow_fragments) {
+                bool visibility_buffer, bool count_shadow_fragments, int emission_samples) {
                  RenderSettings s;
+                 s.emission_samples = emission_samples;
                  s.count_shadow_fragments = count_shadow_fragments;
                  s.filter_splat = filter_splat;
                  s.visibility_buffer = visibility_buffer;
@@ -627,7 +629,7 @@ void declare_renderer(py::module_& m) {
              py::arg("aovs") = std::vector<std::pair<std::string, std::string>>{}, py::arg("light_groups") = 0,
              py::arg("preview_interval_ms") = -1, py::arg("preview_pass") = "Combined",
              py::arg("motion_blur") = false, py::arg("filter_splat") = true, py::arg("visibility_buffer") = true,
-             py::arg("count_shadow_fragments") = false)
+             py::arg("count_shadow_fragments") = false, py::arg("emission_samples") = 1)
         .def("preview",
              [](const PyRenderer& self, std::uint64_t since) -> py::object {
                  if (!self.renderer) throw Error("the renderer was closed");

@@ -134,21 +134,32 @@ void FilmModule::prefetch(ShaderLibrary& shaders) const {
     if (group_light_.sample) shaders.prefetch_compute("film_splat_comp.glsl", ShaderVariant{{"SPLAT_LAYERS"}});
 }
 
-void FilmModule::begin_sample() const {
+// f(sample, total, layers) for Combined and the Emit pass: what an
+// emission sub-sample writes (emission_samples.h).
+template <typename F> void FilmModule::for_each_emission_splatted(F&& f) const {
+    if (film_.sample) f(film_.sample.get(), film_.total.get(), 0);
+    for (std::size_t k = 0; k < pass_images_.size(); ++k)
+        if (pass_images_[k].first == Pass::Emit && pass_samples_[k])
+            f(pass_samples_[k].get(), pass_images_[k].second.get(), 0);
+}
+
+void FilmModule::begin_sample(bool emission_only) const {
     if (!splatting()) return;
     // The last splat's reads of these images come first.
     glMemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
     const float zero[4] = {0, 0, 0, 0};
-    for_each_splatted([&](GLuint sample, GLuint, int) { glClearTexImage(sample, 0, GL_RGBA, GL_FLOAT, zero); });
+    auto clear = [&](GLuint sample, GLuint, int) { glClearTexImage(sample, 0, GL_RGBA, GL_FLOAT, zero); };
+    if (emission_only) for_each_emission_splatted(clear);
+    else for_each_splatted(clear);
 }
 
-void FilmModule::splat(ShaderLibrary& shaders, const SplatTaps& x, const SplatTaps& y) const {
+void FilmModule::splat(ShaderLibrary& shaders, const SplatTaps& x, const SplatTaps& y, bool emission_only) const {
     if (!splatting()) return;
     glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
     const unsigned groups_x = unsigned((layout_.width + LIGHTING_GROUP_SIZE - 1) / LIGHTING_GROUP_SIZE);
     const unsigned groups_y = unsigned((layout_.height + LIGHTING_GROUP_SIZE - 1) / LIGHTING_GROUP_SIZE);
     GLuint programs[2] = {0, 0};  // 2D, layers
-    for_each_splatted([&](GLuint sample, GLuint total, int layers) {
+    auto add = [&](GLuint sample, GLuint total, int layers) {
         GLuint& program = programs[layers > 0 ? 1 : 0];
         if (!program) {
             program = shaders.compute_program("film_splat_comp.glsl",
@@ -165,7 +176,9 @@ void FilmModule::splat(ShaderLibrary& shaders, const SplatTaps& x, const SplatTa
         glBindImageTexture(IMG_SPLAT_SAMPLE, sample, 0, layered, 0, GL_READ_ONLY, GL_RGBA32F);
         glBindImageTexture(IMG_SPLAT_FILM, total, 0, layered, 0, GL_READ_WRITE, GL_RGBA32F);
         glDispatchCompute(groups_x, groups_y, unsigned(std::max(layers, 1)));
-    });
+    };
+    if (emission_only) for_each_emission_splatted(add);
+    else for_each_splatted(add);
     check_gl("film splat");
     // The preview, the next sample's writes, the resolves and the readback
     // read the accumulations.

@@ -54,14 +54,20 @@ public:
     bool splatting() const { return layout_.splat_margin > 0; }
     // Starts the splat program's compile (ShaderLibrary::prefetch_compute).
     void prefetch(ShaderLibrary& shaders) const;
-    // Before a sample's first write: its scratch images cleared.
-    void begin_sample() const;
+    // Before a sample's first write: its scratch images cleared
+    // (`emission_only`: Combined's and the Emit pass's, all an emission
+    // sub-sample writes, emission_samples.h).
+    void begin_sample(bool emission_only = false) const;
     // After its last write: the scratch images added to the accumulations
-    // with the taps for the sample's jitter on x and y.
-    void splat(ShaderLibrary& shaders, const SplatTaps& x, const SplatTaps& y) const;
+    // with the taps for the sample's jitter on x and y (`emission_only`: as
+    // begin_sample).
+    void splat(ShaderLibrary& shaders, const SplatTaps& x, const SplatTaps& y, bool emission_only = false) const;
 
     // The accumulations (the resolves, the preview and the readback read these).
     GLuint combined() const { return film_.total.get(); }
+    // Where this sample's shaders add to Combined: its scratch image when
+    // splatted, else the accumulation.
+    GLuint combined_target() const { return film_.target(); }
     GLuint diffuse_light() const { return diffuse_light_.total.get(); }
     GLuint glossy_light() const { return glossy_light_.total.get(); }
     GLuint shadow_light() const { return shadow_light_.total.get(); }
@@ -97,6 +103,7 @@ private:
     };
     Accumulation accumulation(const char* name, const float* value, bool splat, int layers = 0) const;
     template <typename F> void for_each_splatted(F&& f) const;
+    template <typename F> void for_each_emission_splatted(F&& f) const;
 
     Layout layout_;
     Accumulation film_, diffuse_light_, glossy_light_, shadow_light_, catcher_hit_, catcher_pass_, group_light_;

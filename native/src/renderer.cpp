@@ -24,6 +24,7 @@
 #include "cpu_rasteriser.h"
 #include "cryptomatte_module.h"
 #include "egl_context.h"
+#include "emission_samples.h"
 #include "emitter_module.h"
 #include "film.h"
 #include "film_module.h"
@@ -115,6 +116,8 @@ void validate_settings(const RenderSettings& settings) {
     if (settings.light_samples < 0 || settings.light_samples > 65536)
         throw InvalidInput("light_samples must be in 0..65536 (0: every light), got " +
                            std::to_string(settings.light_samples));
+    if (settings.emission_samples < 1 || settings.emission_samples > 64)
+        throw InvalidInput("emission_samples must be in 1..64, got " + std::to_string(settings.emission_samples));
     if (!(settings.alpha_threshold >= 0.0f && settings.alpha_threshold <= 1.0f))
         throw InvalidInput("alpha_threshold must be in [0, 1]");
     if (!(settings.shadow_quality > 0.0f && settings.shadow_quality <= 16.0f))
@@ -289,6 +292,7 @@ struct Renderer::Impl {
         GeometryStage geometry;
         LightingStage lighting;
         PassStage passes;
+        EmissionSamples emission_samples;
 
         bool shadow_rays = false;
         std::string rays_fallback;  // why shadow maps answer instead of rays
@@ -328,6 +332,7 @@ struct Renderer::Impl {
     void sync_world_and_emitters(Frame& f);
     void sync_film(Frame& f);
     void prepare_programs(Frame& f);
+    int emission_sample_count(const Frame& f) const;
     void render_sample(Frame& f, int sample);
     void place_at_shutter_time(Frame& f, int sample);
     void fit_shadow_maps(Frame& f);
@@ -886,6 +891,7 @@ void Renderer::Impl::prepare_programs(Frame& f) {
     }
     f.passes.prepare(*shaders, base, f.film, world_module, f.geometry.stochastic_alpha(), settings.width,
                      settings.height);
+    f.emission_samples.prepare(*shaders, base, f.film, emission_sample_count(f), settings.width, settings.height);
     f.geometry.set_alpha_mode(false, settings.alpha_threshold);
     if (f.visibility) visibility.set_alpha_mode(false, settings.alpha_threshold);
     // The caster programs of node materials that drive alpha.
@@ -933,6 +939,17 @@ void Renderer::Impl::place_at_shutter_time(Frame& f, int sample) {
     }
 }
 
+// Emission samples per film sample (emission_samples.h): the setting's
+// where they can change the image, else 1.
+int Renderer::Impl::emission_sample_count(const Frame& f) const {
+    const RenderSettings& s = f.settings;
+    if (s.emission_samples <= 1 || s.samples <= 1 || forward.active() || s.light_groups > 0) return 1;
+    // An emissive mesh in view (with motion blur, any: it may move into view).
+    for (const MeshLight& light : emitters.lights())
+        if (s.motion_blur || f.view.contains(light.center, light.radius)) return s.emission_samples;
+    return 1;
+}
+
 // One film sample: its camera, the G-buffer (and the data G-buffer under
 // transparency), the shadow maps, the tile lists (sample 0), the forward
 // layer, the lighting and the passes, then the progressive preview.
@@ -948,7 +965,8 @@ void Renderer::Impl::render_sample(Frame& f, int sample) {
     jitter[3][1] = 2.0 * oy / settings.height;
     const glm::dmat4 projection = jitter * f.cam.projection;
     f.fc.projection = to_gpu(projection);
-    f.fc.jitter = {float(jitter[3][0]), float(jitter[3][1]), float(f.cam.clip_start), 0.0f};
+    f.fc.jitter = {float(jitter[3][0]), float(jitter[3][1]), float(f.cam.clip_start),
+                   f.emission_samples.own_share()};
     f.fc.inv_projection = to_gpu(glm::inverse(projection));
     if (settings.motion_blur) place_at_shutter_time(f, sample);
     // Where in each light-shape cell (and on the sun's disk) this sample looks.
@@ -992,6 +1010,33 @@ void Renderer::Impl::render_sample(Frame& f, int sample) {
         f.scene.draw_culled(in_view, false);
         motion.end_draws();
     };
+    // Emission sub-samples (emission_samples.h): the G-buffer at K - 1
+    // more jitters, the emission it sees added to Combined and Emit; the
+    // frame constants then go back to this sample's own.
+    if (f.emission_samples.count() > 1) {
+        const gpu::FrameConstants own = f.fc;
+        for (int k = 1; k < f.emission_samples.count(); ++k) {
+            const std::array<float, 2> v = f.emission_samples.point(sample, settings.samples, k);
+            const double vx = f.filter.offset(v[0]), vy = f.filter.offset(v[1]);
+            glm::dmat4 sub_jitter(1.0);
+            sub_jitter[3][0] = 2.0 * vx / settings.width;
+            sub_jitter[3][1] = 2.0 * vy / settings.height;
+            const glm::dmat4 sub_projection = sub_jitter * f.cam.projection;
+            f.fc.projection = to_gpu(sub_projection);
+            f.fc.inv_projection = to_gpu(glm::inverse(sub_projection));
+            f.fc.jitter.x = float(sub_jitter[3][0]);
+            f.fc.jitter.y = float(sub_jitter[3][1]);
+            f.frame_ring->push(&f.fc);
+            f.film.begin_sample(true);
+            draw_gbuffer();
+            f.emission_samples.add(gbuffer);
+            f.film.splat(*shaders, f.filter.splat_taps(float(vx)), f.filter.splat_taps(float(vy)), true);
+        }
+        f.fc = own;
+        f.frame_ring->push(&f.fc);
+        check_gl("emission samples");
+        gpu_timer.lap(f.geometry_ms);
+    }
     // The sample's scratch images, where the film splats (film_module.h).
     f.film.begin_sample();
     // The data passes' own G-buffer (Alpha Threshold coverage).
@@ -1177,6 +1222,7 @@ FrameResult Renderer::Impl::finish(Frame& f) {
     t.shadow_instances_drawn = f.shadow_instances_drawn;
     t.shadow_instances_one_sided = f.shadow_one_sided;
     t.camera_instances_drawn = f.camera_instances_drawn;
+    t.emission_samples = f.emission_samples.count();
     t.shadow_lights_dropped = shadows.dropped();
     t.tile_light_pairs = f.culled ? culling.last_index_count() : 0;
     t.passes_ms = f.passes_ms;

@@ -10,6 +10,8 @@ at max_bounces 0 and 256 samples against ours at 64:
     within SHAPE_LIMIT;
   * a strength of 1e9: finite pixels;
   * only what the scene needs: no emitter, no emitter triangles;
+  * Sampling > Emission Samples reaches the renderer (4 by default, taken
+    with an emitter in view; 1 takes none) and keeps the emitter's radiance;
   * a node material with a constant emission lights as a constant one;
   * textured emission (baked over the emitting triangles): a standing panel
     whose Checker (2 x 2 cells of an orange and a blue radiance) lights the
@@ -231,6 +233,22 @@ def main():
     ours, _ = render(scene, U.ENGINE, 4, "strong")
     checks.check(bool(np.isfinite(ours).all()), "an emitter of strength 1e9: finite pixels",
                  int((~np.isfinite(ours)).sum()))
+
+    # Sampling > Emission Samples (emission_samples.h): the standing panel is
+    # in view, so a render takes the setting's samples (4 by default); 1 takes
+    # none; the panel's mean radiance is the same estimate either way.
+    scene = build("standing")
+    checks.check(scene.deferred_render.emission_samples == 4, "Emission Samples defaults to 4",
+                 scene.deferred_render.emission_samples)
+    more, index = render(scene, U.ENGINE, 16, "emission_samples_4")
+    taken = timings().get("emission_samples")
+    scene.deferred_render.emission_samples = 1
+    plain, _ = render(scene, U.ENGINE, 16, "emission_samples_1")
+    inside = U.interior_mask(index, 2) & (index == 3)
+    ratio = more[inside].mean() / plain[inside].mean()
+    checks.check(taken == 4 and timings().get("emission_samples") == 1 and abs(ratio - 1.0) < 1e-3,
+                 "Emission Samples reaches the renderer: 4 with the panel in view, 1 when set to 1, the same panel",
+                 f"taken {taken}, then {timings().get('emission_samples')}; panel ratio {ratio:.6f}")
 
     scene = build(None)
     render(scene, U.ENGINE, 1, "none")

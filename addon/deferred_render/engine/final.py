@@ -89,7 +89,7 @@ def _visibility_buffer(scene):
 def _light_settings(scene):
     """Culling switch and threshold (the threshold is relative to what the
     view shows, so a brighter exposure lowers it: radiance x 2^exposure),
-    light samples, shadow settings."""
+    light samples, emission samples, shadow settings."""
     settings = getattr(scene, "deferred_render", None)
     culling = bool(getattr(settings, "light_culling", True)) if settings is not None else True
     threshold = float(getattr(settings, "light_threshold", 1e-3)) if settings is not None else 1e-3
@@ -98,7 +98,9 @@ def _light_settings(scene):
     shadow_quality = float(getattr(settings, "shadow_quality", 1.0)) if settings is not None else 1.0
     shadow_rays = settings is not None and getattr(settings, "shadow_method", "MAPS") == "RAYS"
     light_samples = int(getattr(settings, "light_samples", 16)) if settings is not None else 16
+    emission_samples = int(getattr(settings, "emission_samples", 4)) if settings is not None else 4
     return {"light_culling": culling, "light_threshold": threshold / (2.0 ** exposure), "light_samples": light_samples,
+            "emission_samples": emission_samples,
             "shadow_resolution": shadow_resolution, "shadow_quality": shadow_quality,
             "shadow_rays": shadow_rays}
 

@@ -28,6 +28,19 @@ class DeferredRenderSettings(bpy.types.PropertyGroup):
         soft_max=256,
         max=4096,
     )
+    emission_samples: IntProperty(
+        name="Emission Samples",
+        description=(
+            "Camera samples of directly seen emission per sample: small bright emitters in view "
+            "(fairy lights, bulbs) converge as with this many times the samples, for one more "
+            "geometry pass each (no lighting). Used where an emissive mesh is in view, without "
+            "Blend-mode materials or light groups. 1: none"
+        ),
+        default=4,
+        min=1,
+        soft_max=16,
+        max=64,
+    )
     viewport_samples: IntProperty(
         name="Viewport Samples",
         description=(

@@ -41,6 +41,7 @@ class DEFERRED_RENDER_PT_sampling(_EnginePanel, bpy.types.Panel):
         col = layout.column(align=True)
         col.prop(settings, "viewport_samples", text="Viewport")
         col.prop(settings, "samples", text="Render")
+        layout.prop(settings, "emission_samples")
         layout.prop(settings, "filter_splat")
 
 

@@ -123,6 +123,15 @@ struct RenderSettings {
     // warned), so the image converges over the film's samples to the same sum
     // (lighting_comp.glsl LIGHT_SAMPLING).
     int light_samples = 0;
+    // Emission samples: camera samples of directly seen emission per film
+    // sample (1..64). K > 1 adds K - 1 G-buffer passes per film sample, at
+    // jitters of their own, whose surfaces' emission goes to Combined and
+    // the Emit pass (emission_samples.h): a small bright emitter in view
+    // (fairy lights, a bulb) converges as with K times the samples, the
+    // lighting with the film's. Taken only by frames with more than one
+    // sample and an emissive mesh in view, without Blend-mode materials or
+    // light groups (FrameTimings::emission_samples says what a frame took).
+    int emission_samples = 1;
     // Shadow maps for lights whose cast_shadow is on (one set per sample,
     // from that sample's point on the light: soft shadows converge with
     // samples; lights without size are rendered once). Each light's
@@ -239,6 +248,7 @@ struct FrameTimings {
     // outside (draw_style.h; DEFERRED_FACE_CULLING=off: none).
     std::uint64_t shadow_instances_one_sided = 0;
     std::uint64_t camera_instances_drawn = 0;  // instances in the view frustum, over all samples
+    int emission_samples = 1;  // the frame's emission samples per film sample (settings.emission_samples or 1)
     std::size_t shadow_lights_dropped = 0;  // would cast shadows, over the layer/memory limits
     bool shadow_rays = false;              // visibility came from shadow rays (settings.shadow_rays)
     bool visibility_buffer = false;        // the G-buffer came from the visibility buffer (settings.visibility_buffer)

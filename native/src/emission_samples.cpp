@@ -1,0 +1,42 @@
+#include "emission_samples.h"
+
+#include "film.h"
+#include "film_module.h"
+#include "gbuffer.h"
+
+#include "../../shaders/shader_defines.h"
+
+namespace deferred {
+
+void EmissionSamples::prepare(ShaderLibrary& shaders, const ShaderVariant& base, const FilmModule& film, int count,
+                              int width, int height) {
+    shaders_ = &shaders;
+    film_ = &film;
+    count_ = std::max(count, 1);
+    groups_x_ = unsigned((width + LIGHTING_GROUP_SIZE - 1) / LIGHTING_GROUP_SIZE);
+    groups_y_ = unsigned((height + LIGHTING_GROUP_SIZE - 1) / LIGHTING_GROUP_SIZE);
+    if (count_ == 1) return;
+    variant_ = base;
+    if (film.image(Pass::Emit)) variant_.defines.push_back("OUT_EMIT");
+    shaders.prefetch_compute("emission_samples_comp.glsl", variant_);
+}
+
+std::array<float, 2> EmissionSamples::point(int sample, int samples, int k) const {
+    // The film's pixel-filter sequence continued past its `samples` points:
+    // film sample s's sub-samples are points samples + s (K - 1) + k - 1.
+    const std::array<float, 4> u = sample_point(samples + sample * (count_ - 1) + (k - 1));
+    return {u[0], u[1]};
+}
+
+void EmissionSamples::add(const GBuffer& gbuffer) const {
+    glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+    glUseProgram(shaders_->compute_program("emission_samples_comp.glsl", variant_));
+    gbuffer.bind_textures();
+    glBindImageTexture(IMG_FILM, film_->combined_target(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
+    if (const GLuint emit = film_->sample_target(Pass::Emit))
+        glBindImageTexture(IMG_PASS_OUT, emit, 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
+    glDispatchCompute(groups_x_, groups_y_, 1);
+    glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+}
+
+}  // namespace deferred

@@ -344,9 +344,10 @@ void declare_renderer(py::module_& m) {
              "the current scene then counts as using it.")
         .def("add_graph_material",
              [](PyRenderer& self, const py::dict& graph, const py::object& pass_index, const py::object& light_emission,
-               bool emission_varies, bool blend, std::uint32_t crypto) {
+               bool emission_varies, bool blend, std::uint32_t crypto, bool emits) {
                  Material base;
                  base.emission_varies = emission_varies;
+                 base.graph_may_emit = emits;
                  base.blend = blend;
                  base.crypto = crypto;
                  base.pass_index = index_from(pass_index, "add_graph_material: pass_index");
@@ -357,11 +358,13 @@ void declare_renderer(py::module_& m) {
              },
              py::arg("graph"), py::kw_only(), py::arg("pass_index") = 0, py::arg("light_emission") = py::none(),
              py::arg("emission_varies") = false, py::arg("blend") = false, py::arg("crypto") = 0u,
+             py::arg("emits") = true,
              "A node material from the add-on's graph dict (materials/builder.py); returns the material id. "
              "light_emission: the radiance its surface emits when the graph makes it a constant (the mesh "
              "then lights other surfaces); the graph alone decides what its pixels show. emission_varies: its "
              "emission varies over the surface (the renderer bakes it to light other surfaces). blend: Blend mode, "
-             "drawn by the forward pass (Material::blend).")
+             "drawn by the forward pass (Material::blend). emits: False when the graph emits nothing for any "
+             "ray (Material::graph_may_emit).")
         .def("add_material",
              [](PyRenderer& self, const py::object& base_color, float metallic, float roughness, float specular,
                 float specular_tint, float sheen, float sheen_tint, float clearcoat, float clearcoat_roughness,

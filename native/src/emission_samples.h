@@ -20,7 +20,10 @@
 // shadows, no lighting) per film sample. The sub-samples' offsets continue
 // the film's pixel-filter sequence (film.h sample_point) past its N
 // samples, so all N K offsets are one low-discrepancy set; the sub-samples
-// share their film sample's shutter time and random numbers otherwise.
+// share their film sample's shutter time and random numbers otherwise. With
+// the visibility buffer a sub-sample resolves only the materials that may
+// emit (the raster still draws every surface: they hide emitters), about
+// half of its cost on llvmpipe.
 //
 // A frame takes them only where they can change its image: more than one
 // film sample (a one-sample render is the pixel centre), an emissive mesh in
@@ -32,7 +35,10 @@
 
 #include "shader_library.h"
 
+#include <deferred/scene.h>
+
 #include <array>
+#include <vector>
 
 namespace deferred {
 
@@ -43,14 +49,19 @@ class EmissionSamples {
 public:
     // The frame's count K (1: none) and, for K > 1, its program (Combined,
     // and the Emission pass when `film` has it).
-    void prepare(ShaderLibrary& shaders, const ShaderVariant& base, const FilmModule& film, int count, int width,
-                 int height);
+    void prepare(ShaderLibrary& shaders, const ShaderVariant& base, const FilmModule& film,
+                 const std::vector<Material>& materials, int count, int width, int height);
     int count() const { return count_; }
     // The share of a directly seen emission the film sample's own pixel adds.
     float own_share() const { return 1.0f / float(count_); }
     // Film point (pixel-filter dimensions, in [0,1)^2) of sub-sample k
     // (1..K-1) of film sample `sample` among `samples`.
     std::array<float, 2> point(int sample, int samples, int k) const;
+    // Per material id: whether its surfaces may emit (a constant emission
+    // not 0, a graph that may emit, or either in its stochastic mix chain).
+    // The sub-samples' visibility buffer resolves only these: the others'
+    // pixels keep the cleared G-buffer, whose emission adds nothing.
+    const std::vector<bool>& emitting_materials() const { return emitting_; }
     // Adds the bound G-buffer's directly seen emission, 1/(samples K) of
     // it, to the film sample's Combined (and Emission) targets.
     void add(const GBuffer& gbuffer) const;
@@ -59,6 +70,7 @@ private:
     ShaderLibrary* shaders_ = nullptr;
     const FilmModule* film_ = nullptr;
     ShaderVariant variant_;
+    std::vector<bool> emitting_;
     int count_ = 1;
     unsigned groups_x_ = 0, groups_y_ = 0;
 };

@@ -891,7 +891,8 @@ void Renderer::Impl::prepare_programs(Frame& f) {
     }
     f.passes.prepare(*shaders, base, f.film, world_module, f.geometry.stochastic_alpha(), settings.width,
                      settings.height);
-    f.emission_samples.prepare(*shaders, base, f.film, emission_sample_count(f), settings.width, settings.height);
+    f.emission_samples.prepare(*shaders, base, f.film, scene.materials(), emission_sample_count(f), settings.width,
+                               settings.height);
     f.geometry.set_alpha_mode(false, settings.alpha_threshold);
     if (f.visibility) visibility.set_alpha_mode(false, settings.alpha_threshold);
     // The caster programs of node materials that drive alpha.
@@ -986,7 +987,8 @@ void Renderer::Impl::render_sample(Frame& f, int sample) {
     glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
 
     const FrameScene::Test in_view = f.in_view();
-    auto draw_gbuffer = [&] {
+    // resolve_only: the materials an emission sample's visibility buffer resolves (emission_samples.h).
+    auto draw_gbuffer = [&](const std::vector<bool>* resolve_only = nullptr) {
         gbuffer.bind_for_geometry();
         glEnable(GL_DEPTH_TEST);
         glDepthFunc(GL_GREATER);  // reversed Z
@@ -995,7 +997,7 @@ void Renderer::Impl::render_sample(Frame& f, int sample) {
         glDisable(GL_BLEND);
         if (f.visibility) {
             f.camera_instances_drawn += f.scene.cull(in_view, false);
-            visibility.draw(f.scene, materials, gbuffer, f.geometry.forward());
+            visibility.draw(f.scene, materials, gbuffer, f.geometry.forward(), resolve_only);
         } else {
             f.camera_instances_drawn += f.geometry.draw(f.scene, in_view);
         }
@@ -1028,7 +1030,7 @@ void Renderer::Impl::render_sample(Frame& f, int sample) {
             f.fc.jitter.y = float(sub_jitter[3][1]);
             f.frame_ring->push(&f.fc);
             f.film.begin_sample(true);
-            draw_gbuffer();
+            draw_gbuffer(&f.emission_samples.emitting_materials());
             f.emission_samples.add(gbuffer);
             f.film.splat(*shaders, f.filter.splat_taps(float(vx)), f.filter.splat_taps(float(vy)), true);
         }

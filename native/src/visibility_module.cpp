@@ -137,7 +137,7 @@ GLuint VisibilityBuffer::raster_for(std::uint32_t material) const {
 }
 
 void VisibilityBuffer::draw(const FrameScene& scene, const MaterialModule& materials, const GBuffer& gbuffer,
-                            const std::vector<bool>& skip) const {
+                            const std::vector<bool>& skip, const std::vector<bool>* resolve_only) const {
     auto skipped = [&](std::uint32_t id) { return id < skip.size() && skip[id]; };
     const bool any_skipped = std::find(skip.begin(), skip.end(), true) != skip.end();
     const GLuint key_count = GLuint(scene.slot_count());
@@ -202,6 +202,7 @@ void VisibilityBuffer::draw(const FrameScene& scene, const MaterialModule& mater
             const std::uint32_t key = d.slot_offset + std::uint32_t(std::min<std::size_t>(s, std::max(d.slot_count, 1u) - 1));
             if (skipped(id) || key >= key_count || done[key]) continue;
             done[key] = true;
+            if (resolve_only && !(id < resolve_only->size() && (*resolve_only)[id])) continue;
             const GLuint program = resolve_for(id);
             glUseProgram(program);
             scene.bind_mesh(mesh);

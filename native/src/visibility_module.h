@@ -82,8 +82,11 @@ public:
     // whose material is in `skip` are left out: the forward pass draws
     // them) into the visibility buffer, over the G-buffer's depth, then
     // classifies and resolves them into `gbuffer`, already cleared.
+    // `resolve_only` (not null): only the materials it marks are resolved,
+    // the others keep the cleared G-buffer under their depth (an emission
+    // sample's pass needs only the emitters' emission, emission_samples.h).
     void draw(const FrameScene& scene, const MaterialModule& materials, const GBuffer& gbuffer,
-              const std::vector<bool>& skip) const;
+              const std::vector<bool>& skip, const std::vector<bool>* resolve_only = nullptr) const;
 
 private:
     GLuint resolve_for(std::uint32_t material) const;

@@ -338,6 +338,8 @@ class SceneExporter:
                 kwargs["light_emission"] = graph.light_emission  # its meshes light other surfaces
             if getattr(graph, "emission_varies", False):
                 kwargs["emission_varies"] = True  # baked by the renderer to light other surfaces
+            if not getattr(graph, "emits", True):
+                kwargs["emits"] = False  # the emission samples need not resolve its surfaces
             mat_id = self.renderer.add_graph_material(graph.ir, **kwargs)
         except ValueError as ex:  # refused by the native validation
             self._warn_once(("material-graph", key), f"Material '{material.name}': {ex} "

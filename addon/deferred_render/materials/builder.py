@@ -539,7 +539,8 @@ def _build(material, images, world=False):
     aovs = [] if world else _emit_aov_outputs(g, tree)
     light_emission = None
     emission_varies = False
-    if not world and _graph_emits(g):
+    emits = not world and _graph_emits(g)
+    if emits:
         light_emission = _constant_emission(g, surface)
         # Not a constant: the renderer bakes the graph's emission over the
         # emitting triangles (native emitter_module.h) to light other surfaces.
@@ -562,5 +563,6 @@ def _build(material, images, world=False):
     graph = MaterialGraph(ir, g.notes, list(g.attributes), g.sun_lamps)
     graph.light_emission = light_emission
     graph.emission_varies = emission_varies
+    graph.emits = emits
     graph.world_window = getattr(g, "world_window", False)
     return graph

@@ -86,6 +86,11 @@ struct Material {
     // graph to light other surfaces (emitter_module.h). Off: `emission` holds
     // the constant radiance a graph emits (0: none).
     bool emission_varies = false;
+    // A node material whose graph may emit for camera rays (an Emission node
+    // or a Principled BSDF's emission that is linked or not 0): the emission
+    // samples resolve only such materials' surfaces (emission_samples.h).
+    // False only when the caller knows the graph emits nothing.
+    bool graph_may_emit = true;
     // Blend mode (EEVEE's Blend): drawn after the opaque surfaces by the
     // forward pass (forward_module.h), lit where it is drawn and composited
     // over what is behind with its alpha, back to front per object: exact

@@ -31,6 +31,17 @@
 // Blend-mode layer over the G-buffer (the lighting pass shows what is
 // behind it through the layer's transmittance) and no light groups (the
 // emission would also go to its instance's group).
+//
+// Automatic (RenderSettings::emission_samples 0): kAutoEmissionSamples where
+// an emissive mesh in view has a radiance above kAutoEmissionRadiance, none
+// otherwise. An edge pixel's coverage noise grows with the emitter's
+// radiance over what is behind it; at 320x180, 4 samples, the emitters
+// scene's fairy lights (radiance 60) gave 99.5 % of its squared error and
+// 4 emission samples cut its RMSE 1.80 -> 0.71, while the showcase's
+// glowing torus (radiance 3) gave its edge pixels the same error with them
+// as without (the error there is not coverage noise) for ~10 % more time a
+// sample. 8 is above both panels of that scene (4 and 6: lit-surface
+// brightness) and far below lamps and bulbs seen directly.
 #pragma once
 
 #include "shader_library.h"
@@ -41,6 +52,9 @@
 #include <vector>
 
 namespace deferred {
+
+constexpr int kAutoEmissionSamples = 4;
+constexpr double kAutoEmissionRadiance = 8.0;
 
 class FilmModule;
 class GBuffer;

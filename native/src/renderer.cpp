@@ -116,8 +116,9 @@ void validate_settings(const RenderSettings& settings) {
     if (settings.light_samples < 0 || settings.light_samples > 65536)
         throw InvalidInput("light_samples must be in 0..65536 (0: every light), got " +
                            std::to_string(settings.light_samples));
-    if (settings.emission_samples < 1 || settings.emission_samples > 64)
-        throw InvalidInput("emission_samples must be in 1..64, got " + std::to_string(settings.emission_samples));
+    if (settings.emission_samples < 0 || settings.emission_samples > 64)
+        throw InvalidInput("emission_samples must be in 0..64 (0: automatic), got " +
+                           std::to_string(settings.emission_samples));
     if (!(settings.alpha_threshold >= 0.0f && settings.alpha_threshold <= 1.0f))
         throw InvalidInput("alpha_threshold must be in [0, 1]");
     if (!(settings.shadow_quality > 0.0f && settings.shadow_quality <= 16.0f))
@@ -941,13 +942,17 @@ void Renderer::Impl::place_at_shutter_time(Frame& f, int sample) {
 }
 
 // Emission samples per film sample (emission_samples.h): the setting's
-// where they can change the image, else 1.
+// where they can change the image, else 1; automatic (0): where an
+// emissive mesh in view is bright enough for its edges to be the noise.
 int Renderer::Impl::emission_sample_count(const Frame& f) const {
     const RenderSettings& s = f.settings;
-    if (s.emission_samples <= 1 || s.samples <= 1 || forward.active() || s.light_groups > 0) return 1;
+    if (s.emission_samples == 1 || s.samples <= 1 || forward.active() || s.light_groups > 0) return 1;
+    const bool automatic = s.emission_samples == 0;
     // An emissive mesh in view (with motion blur, any: it may move into view).
     for (const MeshLight& light : emitters.lights())
-        if (s.motion_blur || f.view.contains(light.center, light.radius)) return s.emission_samples;
+        if ((s.motion_blur || f.view.contains(light.center, light.radius)) &&
+            (!automatic || light.max_radiance > kAutoEmissionRadiance))
+            return automatic ? kAutoEmissionSamples : s.emission_samples;
     return 1;
 }
 

@@ -10,8 +10,9 @@ at max_bounces 0 and 256 samples against ours at 64:
     within SHAPE_LIMIT;
   * a strength of 1e9: finite pixels;
   * only what the scene needs: no emitter, no emitter triangles;
-  * Sampling > Emission Samples reaches the renderer (4 by default, taken
-    with an emitter in view; 1 takes none) and keeps the emitter's radiance;
+  * Sampling > Emission Samples reaches the renderer (automatic by default:
+    4 with a bright emitter in view, none with a dim one; 1 takes none, 2
+    takes 2) and keeps the emitter's radiance;
   * a node material with a constant emission lights as a constant one;
   * textured emission (baked over the emitting triangles): a standing panel
     whose Checker (2 x 2 cells of an orange and a blue radiance) lights the
@@ -234,23 +235,32 @@ def main():
     checks.check(bool(np.isfinite(ours).all()), "an emitter of strength 1e9: finite pixels",
                  int((~np.isfinite(ours)).sum()))
 
-    # Sampling > Emission Samples (emission_samples.h): the standing panel (its
-    # Checker emission a node material, which the samples' visibility buffer
-    # resolves) is in view, so a render takes the setting's samples (4 by
-    # default); 1 takes none; the panel's mean radiance is the same estimate
-    # either way (without its graph resolved by the samples: a quarter).
-    scene = build("standing", textured=True)
-    checks.check(scene.deferred_render.emission_samples == 4, "Emission Samples defaults to 4",
+    # Sampling > Emission Samples (emission_samples.h), automatic by default:
+    # the standing panel (its Checker emission a node material, which the
+    # samples' visibility buffer resolves) in view at strength 20 (radiance
+    # above 8) takes 4; set to 1, none; the panel's mean radiance is the same
+    # estimate either way (without its graph resolved by the samples: a
+    # quarter). At strength 5 automatic takes none, and 2 takes 2.
+    scene = build("standing", strength=20.0, textured=True)
+    checks.check(scene.deferred_render.emission_samples == 0, "Emission Samples defaults to 0 (automatic)",
                  scene.deferred_render.emission_samples)
-    more, index = render(scene, U.ENGINE, 16, "emission_samples_4")
+    more, index = render(scene, U.ENGINE, 16, "emission_samples_auto")
     taken = timings().get("emission_samples")
     scene.deferred_render.emission_samples = 1
     plain, _ = render(scene, U.ENGINE, 16, "emission_samples_1")
     inside = U.interior_mask(index, 2) & (index == 3)
     ratio = more[inside].mean() / plain[inside].mean()
     checks.check(taken == 4 and timings().get("emission_samples") == 1 and abs(ratio - 1.0) < 1e-3,
-                 "Emission Samples reaches the renderer: 4 with the panel in view, 1 when set to 1, the same panel",
-                 f"taken {taken}, then {timings().get('emission_samples')}; panel ratio {ratio:.6f}")
+                 "Emission Samples reaches the renderer: automatic takes 4 with a bright panel in view, 1 none, "
+                 "the same panel", f"taken {taken}, then {timings().get('emission_samples')}; panel ratio {ratio:.6f}")
+    scene = build("standing", textured=True)
+    render(scene, U.ENGINE, 4, "emission_samples_dim_auto")
+    dim = timings().get("emission_samples")
+    scene.deferred_render.emission_samples = 2
+    render(scene, U.ENGINE, 4, "emission_samples_dim_2")
+    checks.check(dim == 1 and timings().get("emission_samples") == 2,
+                 "Emission Samples: automatic takes none with a dim panel (radiance 5), 2 takes 2",
+                 f"automatic {dim}, then {timings().get('emission_samples')}")
 
     scene = build(None)
     render(scene, U.ENGINE, 1, "none")

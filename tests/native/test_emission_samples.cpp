@@ -6,6 +6,8 @@
 // the same estimate as Combined; frames that cannot use them do not take them.
 #include "test_helpers.h"
 
+#include "emission_samples.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -19,10 +21,11 @@ constexpr int kSize = 32;
 
 // A dark diffuse floor under a point light, seen from above (orthographic,
 // 3.2 m across: 0.1 m a pixel), with 24 emissive squares 0.06 m wide (about
-// a third of a pixel's area each) a little above it, radiance 40.
+// a third of a pixel's area each) a little above it, of radiance `radiance`
+// (its largest channel).
 // `lit_floor` false: a black floor (base colour and specular 0) and no
 // light, so Combined is the emission alone.
-void build_scene(Renderer& r, bool lit_floor) {
+void build_scene(Renderer& r, bool lit_floor, float radiance = 40.0f) {
     Material floor;
     floor.base_color = lit_floor ? Vec3{0.3f, 0.3f, 0.3f} : Vec3{0.0f, 0.0f, 0.0f};
     floor.specular = lit_floor ? 0.5f : 0.0f;
@@ -32,7 +35,7 @@ void build_scene(Renderer& r, bool lit_floor) {
     emit.base_color = {0.0f, 0.0f, 0.0f};
     emit.specular = 0.0f;
     emit.emission = {1.0f, 0.8f, 0.5f};
-    emit.emission_strength = 40.0f;
+    emit.emission_strength = radiance;
     tools::MeshArrays square = tools::make_plane(0.03f);
     const std::uint32_t mesh = r.add_mesh(square.view());
     const std::uint32_t mat = r.add_material(emit);
@@ -154,9 +157,17 @@ TEST(EmissionSamples, TakenOnlyWhereTheyCanChangeTheImage) {
     away.matrix = tools::translation(3.3, 3.3, 3.0);
     away.ortho_scale = 1.0f;
     EXPECT_EQ(r.render(away, settings(4, 4)).timings.emission_samples, 1);
+    // Automatic (0): these emitters' radiance, 40, is above
+    // kAutoEmissionRadiance: kAutoEmissionSamples.
+    EXPECT_EQ(r.render(cam, settings(4, 0)).timings.emission_samples, kAutoEmissionSamples);
     // Out of range: an error, not a clamp.
-    EXPECT_THROW(r.render(cam, settings(4, 0)), InvalidInput);
+    EXPECT_THROW(r.render(cam, settings(4, -1)), InvalidInput);
     EXPECT_THROW(r.render(cam, settings(4, 65)), InvalidInput);
+    // Automatic with dim emitters (radiance 4): none; asked for, taken.
+    Renderer dim;
+    build_scene(dim, true, 4.0f);
+    EXPECT_EQ(dim.render(cam, settings(4, 0)).timings.emission_samples, 1);
+    EXPECT_EQ(dim.render(cam, settings(4, 3)).timings.emission_samples, 3);
     // Light groups: the emission would also go to its instance's group.
     Renderer g;
     build_scene(g, true);

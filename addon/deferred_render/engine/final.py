@@ -98,7 +98,7 @@ def _light_settings(scene):
     shadow_quality = float(getattr(settings, "shadow_quality", 1.0)) if settings is not None else 1.0
     shadow_rays = settings is not None and getattr(settings, "shadow_method", "MAPS") == "RAYS"
     light_samples = int(getattr(settings, "light_samples", 16)) if settings is not None else 16
-    emission_samples = int(getattr(settings, "emission_samples", 4)) if settings is not None else 4
+    emission_samples = int(getattr(settings, "emission_samples", 0)) if settings is not None else 0
     return {"light_culling": culling, "light_threshold": threshold / (2.0 ** exposure), "light_samples": light_samples,
             "emission_samples": emission_samples,
             "shadow_resolution": shadow_resolution, "shadow_quality": shadow_quality,

@@ -34,10 +34,11 @@ class DeferredRenderSettings(bpy.types.PropertyGroup):
             "Camera samples of directly seen emission per sample: small bright emitters in view "
             "(fairy lights, bulbs) converge as with this many times the samples, for one more "
             "geometry pass each (no lighting). Used where an emissive mesh is in view, without "
-            "Blend-mode materials or light groups. 1: none"
+            "Blend-mode materials or light groups. 0: automatic (4 where an emissive mesh in view "
+            "is brighter than 8, radiance); 1: none"
         ),
-        default=4,
-        min=1,
+        default=0,
+        min=0,
         soft_max=16,
         max=64,
     )

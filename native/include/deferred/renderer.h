@@ -124,13 +124,15 @@ struct RenderSettings {
     // (lighting_comp.glsl LIGHT_SAMPLING).
     int light_samples = 0;
     // Emission samples: camera samples of directly seen emission per film
-    // sample (1..64). K > 1 adds K - 1 G-buffer passes per film sample, at
+    // sample (0..64). K > 1 adds K - 1 G-buffer passes per film sample, at
     // jitters of their own, whose surfaces' emission goes to Combined and
     // the Emit pass (emission_samples.h): a small bright emitter in view
     // (fairy lights, a bulb) converges as with K times the samples, the
     // lighting with the film's. Taken only by frames with more than one
     // sample and an emissive mesh in view, without Blend-mode materials or
     // light groups (FrameTimings::emission_samples says what a frame took).
+    // 0: automatic, kAutoEmissionSamples where an emissive mesh in view is
+    // brighter than kAutoEmissionRadiance, else none.
     int emission_samples = 1;
     // Shadow maps for lights whose cast_shadow is on (one set per sample,
     // from that sample's point on the light: soft shadows converge with

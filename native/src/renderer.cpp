@@ -1023,6 +1023,7 @@ void Renderer::Impl::render_sample(Frame& f, int sample) {
     if (f.emission_samples.count() > 1) {
         const gpu::FrameConstants own = f.fc;
         for (int k = 1; k < f.emission_samples.count(); ++k) {
+            check_cancel();
             const std::array<float, 2> v = f.emission_samples.point(sample, settings.samples, k);
             const double vx = f.filter.offset(v[0]), vy = f.filter.offset(v[1]);
             glm::dmat4 sub_jitter(1.0);

@@ -229,6 +229,8 @@ struct FrameTimings {
     double upload_ms = 0, shadow_ms = 0, geometry_ms = 0, culling_ms = 0, lighting_ms = 0, passes_ms = 0,
            readback_ms = 0;
     double forward_ms = 0;  // the forward pass (Blend-mode materials), all samples
+    // geometry_ms holds the emission samples' passes too (emission_samples.h),
+    // and camera_instances_drawn their instances.
     double total_ms = 0;
     std::uint64_t tile_light_pairs = 0;  // entries in the culled per-tile light lists
     // Pixels the lighting's batches after the first ran over (their light

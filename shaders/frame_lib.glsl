@@ -60,18 +60,45 @@ float caster_depth(vec3 P, vec4 origin, vec3 axis) {
     return int(origin.w) == SHADOW_CASCADES ? dot(v, axis) : length(v);
 }
 
+/* Burley 2020, "Practical Hash-based Owen Scrambling" (JCGT 9(4)): the
+ * Laine-Karras permutation of a bit-reversed integer, and nested uniform
+ * (Owen) scrambling of an integer's bits from the top, by `seed`. */
+uint laine_karras_permutation(uint x, uint seed) {
+    x += seed;
+    x ^= x * 0x6c50b47cu;
+    x ^= x * 0xb82f1e52u;
+    x ^= x * 0xc7afe638u;
+    x ^= x * 0x8d22f6e6u;
+    return x;
+}
+uint nested_uniform_scramble(uint x, uint seed) {
+    return bitfieldReverse(laine_karras_permutation(bitfieldReverse(x), seed));
+}
+
 /* Stochastic transparency: Cycles renders a surface of alpha a (Principled
  * Alpha, a Transparent BSDF mixed in) as covering a fraction a of what is
  * behind it, for camera and shadow rays alike. A fragment is kept when this
- * number is below a. It is uniform per pixel (of the camera or of a shadow
- * map), surface (instance, triangle) and film sample, and independent across
- * surfaces, so a stack of layers converges to the product of their (1 - a).
- * pcg4d (Jarzynski and Olano 2020, "Hash Functions for GPU Rendering"). */
+ * number is below a. It is uniform for each film sample, and independent
+ * across pixels (of the camera or of a shadow map) and surfaces (instance,
+ * triangle), so a stack of layers converges to the product of their
+ * (1 - a). Over one pixel's and surface's samples it is stratified: sample s
+ * takes point s of the van der Corput sequence with its index shuffled and
+ * its value Owen-scrambled, both seeded per pixel and surface (Burley 2020,
+ * sections 3-4: the shuffle keeps two surfaces' sequences from pairing up,
+ * which with a shared sequence would freeze a pixel's see-through fraction
+ * of a stack at a wrong value). The first 2^k samples then hold one point in
+ * each 1/2^k of [0, 1): a surface of alpha a is kept in N a samples out of
+ * N, give or take one, where independent numbers give it +-sqrt(N a (1 - a))
+ * (4 samples at alpha 0.3: the kept fraction's RMS error 0.1 against 0.23).
+ * The seed: pcg4d (Jarzynski and Olano 2020, "Hash Functions for GPU
+ * Rendering") of the pixel and surface. */
 float transparency_random(uvec2 pixel, uint instance, uint triangle) {
-    uvec4 v = uvec4(pixel, instance * 0x9E3779B9u ^ triangle, uint(frame.sample_shift.w));
+    uvec4 v = uvec4(pixel, instance * 0x9E3779B9u ^ triangle, 0x2545F491u);
     v = v * 1664525u + 1013904223u;
     v.x += v.y * v.w; v.y += v.z * v.x; v.z += v.x * v.y; v.w += v.y * v.z;
     v ^= v >> 16u;
     v.x += v.y * v.w; v.y += v.z * v.x; v.z += v.x * v.y; v.w += v.y * v.z;
-    return float(v.x >> 8u) * (1.0 / 16777216.0);
+    uint index = nested_uniform_scramble(uint(frame.sample_shift.w), v.x);
+    uint x = nested_uniform_scramble(bitfieldReverse(index), v.y);
+    return float(x >> 8u) * (1.0 / 16777216.0);
 }

@@ -11,7 +11,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 using namespace deferred;
 using namespace deferred::testing;
@@ -200,4 +202,70 @@ TEST(ForwardPass, FilmTransparentAlphaIsOneMinusTransmittance) {
     const glm::dvec4 p = pixel4(*f.find(Pass::Combined), 24, 24);
     EXPECT_NEAR(p.a, 0.7, 1e-6);
     EXPECT_EQ(pixel4(*f.find(Pass::Combined), 2, 2).a, 0.0);  // outside the panes: transparent
+}
+
+// Stochastic alpha (frame_lib.glsl transparency_random) is stratified over a
+// pixel's samples: a pane of alpha 0.3 over the floor, at the pixel centres
+// and under a black world (nothing else varies between samples), is kept in
+// N a samples out of N give or take one, where independent picks would give
+// a per-pixel RMS error of sqrt(a (1 - a) / N) of the pane-floor contrast
+// (0.229 at 4 samples, 0.115 at 16). Measured 0.10 and 0.026 (the
+// expectations for one point per 1/N of [0, 1): 0.10, 0.025).
+TEST(StochasticAlpha, IsStratifiedOverAPixelsSamples) {
+    const Material green = diffuse(0.25f, 0.75f, 0.375f);
+    Material hashed = green;
+    hashed.alpha = 0.3f;
+    const FrameResult floor_only = render_scene({}, 1, false, true, 0.0f);
+    const FrameResult pane_opaque = render_scene({{green, 1.0}}, 1, false, true, 0.0f);
+    for (int samples : {4, 16}) {
+        const FrameResult stochastic = render_scene({{hashed, 1.0}}, samples, false, true, 0.0f);
+        double sum = 0.0;
+        int n = 0;
+        for (int y = 16; y < 32; ++y)
+            for (int x = 16; x < 32; ++x) {
+                const double P = pixel4(*pane_opaque.find(Pass::Combined), x, y).y;
+                const double F = pixel4(*floor_only.find(Pass::Combined), x, y).y;
+                const double C = pixel4(*stochastic.find(Pass::Combined), x, y).y;
+                const double e = (C - (0.3 * P + 0.7 * F)) / (P - F);
+                sum += e * e;
+                ++n;
+            }
+        const double rms = std::sqrt(sum / n), independent = std::sqrt(0.3 * 0.7 / samples);
+        std::printf("%d samples: per-pixel RMS error %.4f of the contrast, independent picks %.4f\n", samples, rms,
+                    independent);
+        EXPECT_LT(rms, 0.6 * independent);
+    }
+}
+
+// ... and two surfaces' sequences do not pair up: two panes of alpha 0.5
+// converge in every pixel to 0.5 blue + 0.25 red + 0.25 floor (a shared
+// sequence would keep or drop both together in a pixel-dependent share of
+// the samples: errors up to a quarter of the contrast that no sample count
+// removes). 256 samples: measured worst 0.05 of the contrast, RMS 0.02
+// (independent picks: RMS ~0.03).
+TEST(StochasticAlpha, StackedLayersConvergeInEveryPixel) {
+    const Material red = diffuse(0.75f, 0.125f, 0.125f), blue = diffuse(0.125f, 0.125f, 0.75f);
+    Material red_hashed = red, blue_hashed = blue;
+    red_hashed.alpha = blue_hashed.alpha = 0.5f;
+    const FrameResult F = render_scene({}, 1, false, true, 0.0f), R = render_scene({{red, 1.0}}, 1, false, true, 0.0f),
+                      B = render_scene({{blue, 2.0}}, 1, false, true, 0.0f);
+    const FrameResult both = render_scene({{red_hashed, 1.0}, {blue_hashed, 2.0}}, 256, false, true, 0.0f);
+    double worst = 0.0, sum = 0.0;
+    int n = 0;
+    for (int y = 16; y < 32; ++y)
+        for (int x = 16; x < 32; ++x) {
+            const glm::dvec4 f = pixel4(*F.find(Pass::Combined), x, y), r = pixel4(*R.find(Pass::Combined), x, y),
+                             b = pixel4(*B.find(Pass::Combined), x, y);
+            const glm::dvec4 want = 0.5 * b + 0.25 * r + 0.25 * f, got = pixel4(*both.find(Pass::Combined), x, y);
+            for (int c = 0; c < 3; ++c) {
+                const double contrast = std::max({std::abs(b[c] - f[c]), std::abs(r[c] - f[c]), std::abs(b[c] - r[c])});
+                const double e = (got[c] - want[c]) / contrast;
+                worst = std::max(worst, std::abs(e));
+                sum += e * e;
+                ++n;
+            }
+        }
+    std::printf("two layers, 256 samples: worst %.4f, RMS %.4f of the contrast\n", worst, std::sqrt(sum / n));
+    EXPECT_LT(worst, 0.12);
+    EXPECT_LT(std::sqrt(sum / n), 0.05);
 }

@@ -724,6 +724,7 @@ void Renderer::Impl::sync_film(Frame& f) {
     fc.tiles = {f.tiles_x, f.tiles_y, f.culled ? 1u : 0u, f.reach};
     fc.world_occlusion = {float(shadows.world_index()), float(shadows.world_count()), float(world_module.width()),
                           float(world_module.height())};
+    fc.jitter.w = 1.0f;  // a directly seen emission's share (emission_samples.h): whole until render_sample says
     // The frame constants, new each sample: a ring of slots in a persistently
     // mapped buffer (gl_util.h UniformRing), so updating them never waits
     // for the samples still in flight.

@@ -161,6 +161,10 @@ TEST(EmissionSamples, TakenOnlyWhereTheyCanChangeTheImage) {
     away.matrix = tools::translation(3.3, 3.3, 3.0);
     away.ortho_scale = 1.0f;
     EXPECT_EQ(r.render(away, settings(4, 4)).timings.emission_samples, 1);
+    // ... unless motion blur may move one into view over the shutter.
+    RenderSettings blurred = settings(4, 4);
+    blurred.motion_blur = true;
+    EXPECT_EQ(r.render(away, blurred).timings.emission_samples, 4);
     // Automatic (0): these emitters' radiance, 40, is above
     // kAutoEmissionRadiance: kAutoEmissionSamples.
     EXPECT_EQ(r.render(cam, settings(4, 0)).timings.emission_samples, kAutoEmissionSamples);

@@ -2,7 +2,9 @@
 """Where a render's error against the report's Cycles reference sits: the
 whole image's relMSE, the same without the pixels next to very bright
 reference pixels (highlights whose edges the film's jitter samples), the
-reference's own noise in both, and the share of the worst pixels.
+reference's own noise in both, the share of the worst pixels, and the
+report's RMSE, with and without those pixels, and their share of its
+squared error.
 
     /usr/bin/python3 bench/report/error_split.py bench/report/cache/box_room-<hash> \\
         OUT/renders/box_room/ours_rays_0256.exr [more renders] [--hot 5] [--grow 3]
@@ -36,14 +38,18 @@ def main():
     hot = ndimage.binary_dilation(ref.max(-1) > args.hot, iterations=args.grow)
     noise = (((a - b) / 2) ** 2 / (ref ** 2 + 0.01)).mean(-1)
     print(f"{hot.sum()} of {hot.size} pixels next to reference values above {args.hot:g}")
-    print("| render | relMSE | without them | reference noise | without them | worst 20 px share |")
-    print("| --- | ---: | ---: | ---: | ---: | ---: |")
+    print("| render | relMSE | without them | reference noise | without them | worst 20 px share "
+          "| RMSE | without them | squared error next to them |")
+    print("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
     for path in args.renders:
         x, _ = metrics.read_rgb(path)
         e = ((x - ref) ** 2 / (ref ** 2 + 0.01)).mean(-1)
         worst = np.sort(e.ravel())[::-1][:20].sum() / e.sum()
+        # The report's RMSE and the share of its squared error in those pixels.
+        se = ((x - ref) ** 2).mean(-1)
         print(f"| {os.path.basename(path)} | {e.mean():.3g} | {e[~hot].mean():.3g} | {noise.mean():.3g} | "
-              f"{noise[~hot].mean():.3g} | {worst:.2f} |")
+              f"{noise[~hot].mean():.3g} | {worst:.2f} | {np.sqrt(se.mean()):.4g} | {np.sqrt(se[~hot].mean()):.4g} | "
+              f"{se[hot].sum() / se.sum():.3f} |")
 
 
 main()

@@ -20,18 +20,10 @@ namespace {
 
 constexpr int kSize = 32;
 
-// A dark diffuse floor under a point light, seen from above (orthographic,
-// 3.2 m across: 0.1 m a pixel), with 24 emissive squares 0.06 m wide (about
-// a third of a pixel's area each) a little above it, of radiance `radiance`
-// (its largest channel).
-// `lit_floor` false: a black floor (base colour and specular 0) and no
-// light, so Combined is the emission alone.
-void build_scene(Renderer& r, bool lit_floor, float radiance = 40.0f) {
-    Material floor;
-    floor.base_color = lit_floor ? Vec3{0.3f, 0.3f, 0.3f} : Vec3{0.0f, 0.0f, 0.0f};
-    floor.specular = lit_floor ? 0.5f : 0.0f;
-    floor.roughness = 0.5f;
-    deferred::testing::add_plane(r, floor, 4.0f);
+// 24 emissive squares 0.06 m wide (about a third of a pixel's area each at
+// 0.1 m a pixel) at z = 0.05, spread over the view off the pixel grid,
+// casting no shadow; their radiance `radiance` (the largest channel).
+void add_emitters(Renderer& r, float radiance) {
     Material emit;
     emit.base_color = {0.0f, 0.0f, 0.0f};
     emit.specular = 0.0f;
@@ -42,12 +34,24 @@ void build_scene(Renderer& r, bool lit_floor, float radiance = 40.0f) {
     const std::uint32_t mat = r.add_material(emit);
     std::vector<double> matrices;
     for (int k = 0; k < 24; ++k) {
-        // Spread over the view at positions that are not on the pixel grid.
         const double x = -1.4 + 0.117 * k + 0.013 * (k % 5), y = -1.3 + 0.109 * ((k * 7) % 24);
         const Mat4d t = tools::translation(x, y, 0.05);
         matrices.insert(matrices.end(), t.begin(), t.end());
     }
     r.add_instances(mesh, matrices.data(), 24, nullptr, {mat}, false);
+}
+
+// A dark diffuse floor under a point light, seen from above (orthographic,
+// 3.2 m across: 0.1 m a pixel), with the emitters a little above it.
+// `lit_floor` false: a black floor (base colour and specular 0) and no
+// light, so Combined is the emission alone.
+void build_scene(Renderer& r, bool lit_floor, float radiance = 40.0f) {
+    Material floor;
+    floor.base_color = lit_floor ? Vec3{0.3f, 0.3f, 0.3f} : Vec3{0.0f, 0.0f, 0.0f};
+    floor.specular = lit_floor ? 0.5f : 0.0f;
+    floor.roughness = 0.5f;
+    deferred::testing::add_plane(r, floor, 4.0f);
+    add_emitters(r, radiance);
     if (lit_floor) {
         Light l;
         l.type = LightType::Point;
@@ -201,19 +205,7 @@ TEST(EmissionSamples, HoldoutsAndShadowCatchersKeepTheirPaths) {
         const Mat4d I = identity_matrix();
         r.add_instances(r.add_mesh(plane.view()), I.data(), 1, nullptr, {r.add_material(floor)}, true, nullptr,
                         nullptr, nullptr, false, 0, nullptr, nullptr, /*shadow_catcher=*/true);
-        Material emit;
-        emit.base_color = {0.0f, 0.0f, 0.0f};
-        emit.specular = 0.0f;
-        emit.emission = {1.0f, 0.8f, 0.5f};
-        emit.emission_strength = 40.0f;
-        tools::MeshArrays square = tools::make_plane(0.03f);
-        const std::uint32_t mesh = r.add_mesh(square.view()), mat = r.add_material(emit);
-        std::vector<double> matrices;
-        for (int k = 0; k < 24; ++k) {
-            const Mat4d t = tools::translation(-1.4 + 0.117 * k + 0.013 * (k % 5), -1.3 + 0.109 * ((k * 7) % 24), 0.05);
-            matrices.insert(matrices.end(), t.begin(), t.end());
-        }
-        r.add_instances(mesh, matrices.data(), 24, nullptr, {mat}, false);
+        add_emitters(r, 40.0f);
         // The holdout: x in [-1.6, -0.6], above the emitters.
         tools::MeshArrays hole = tools::make_plane(0.5f);
         const Mat4d h = tools::translation(-1.1, 0.0, 0.5);

@@ -89,5 +89,14 @@ inline bool face_culling_enabled() {
     const char* env = std::getenv("DEFERRED_FACE_CULLING");
     return !(env && std::string(env) == "off");
 }
+// DEFERRED_ALPHA_APART=off draws every surface of a scene with partly
+// transparent constant materials, in the shadow maps and the visibility
+// buffer, through those materials' program (SCENE_ALPHA: the alpha test,
+// by corner, both sides) instead of only their slots: the tests' reference
+// for the same images.
+inline bool alpha_apart_enabled() {
+    const char* env = std::getenv("DEFERRED_ALPHA_APART");
+    return !(env && std::string(env) == "off");
+}
 
 }  // namespace deferred

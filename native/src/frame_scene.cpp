@@ -186,21 +186,22 @@ void FrameScene::upload_instances() const {
                          instances_.data());
 }
 
+float FrameScene::coverage(std::uint32_t id) const {
+    float alpha = 0.0f, weight = 1.0f;
+    const gpu::GpuMaterial* m = &gpu_materials_[id];
+    for (int k = 0; k < 16; ++k) {
+        const float p = m->mix.x >= 0.0f ? m->mix.y : 0.0f;
+        alpha += weight * (1.0f - p) * m->mix.w;
+        weight *= p;
+        if (m->mix.x < 0.0f) break;
+        m = &gpu_materials_[std::size_t(m->mix.x)];
+    }
+    return alpha + weight * m->mix.w;
+}
+
 const std::vector<RayScene::Instance>& FrameScene::ray_casters() {
     if (casters_built_) return casters_;
     casters_built_ = true;
-    auto chain_alpha = [&](std::uint32_t id) {
-        float alpha = 0.0f, weight = 1.0f;
-        const gpu::GpuMaterial* m = &gpu_materials_[id];
-        for (int k = 0; k < 16; ++k) {
-            const float p = m->mix.x >= 0.0f ? m->mix.y : 0.0f;
-            alpha += weight * (1.0f - p) * m->mix.w;
-            weight *= p;
-            if (m->mix.x < 0.0f) break;
-            m = &gpu_materials_[std::size_t(m->mix.x)];
-        }
-        return alpha + weight * m->mix.w;
-    };
     caster_of_instance_.assign(instances_.size(), -1);
     std::size_t first_instance = 0;
     for (const InstanceBatch& b : scene_->batches()) {
@@ -210,7 +211,7 @@ const std::vector<RayScene::Instance>& FrameScene::ray_casters() {
         const GpuMesh& mesh = scene_->meshes()[b.mesh_id];
         if (mesh.triangle_count == 0) continue;
         std::vector<float> slot_alpha;
-        for (std::uint32_t id : b.material_slots) slot_alpha.push_back(chain_alpha(id));
+        for (std::uint32_t id : b.material_slots) slot_alpha.push_back(coverage(id));
         const std::shared_ptr<const MeshBvh> bvh = mesh_bvh(mesh);
         for (std::size_t i = 0; i < b.object_indices.size(); ++i) {
             Mat4d m;

@@ -95,6 +95,9 @@ public:
     std::vector<Box> boxes_in_view(const ViewVolume& view) const;
     const std::vector<std::uint32_t>& crypto_hashes() const { return crypto_; }
     const gpu::GpuMaterial& material(std::uint32_t id) const { return gpu_materials_[id]; }
+    // A constant material's coverage: its alpha, a stochastic mix chain's
+    // averaged over the chain (material_alpha_lib.glsl's material_chain_alpha).
+    float coverage(std::uint32_t id) const;
     const Material& scene_material(std::uint32_t id) const { return scene_->materials()[id]; }
     std::size_t material_count() const { return scene_->materials().size(); }
     bool any_moving() const { return !moving_.empty(); }

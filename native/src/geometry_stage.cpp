@@ -22,6 +22,9 @@ void GeometryStage::prepare(ShaderLibrary& shaders, MaterialModule& materials, c
     // compiles: the set is the scene's).
     failed_.assign(scene.material_count(), false);
     alpha_.assign(scene.material_count(), false);
+    partly_transparent_.assign(scene.material_count(), false);
+    for (std::uint32_t id = 0; id < scene.material_count(); ++id)
+        partly_transparent_[id] = scene.scene_material(id).graph < 0 && scene.coverage(id) < 1.0f;
     // Every graph's compile started first, then each waited for: with the
     // driver's compiler threads (ShaderLibrary::prefetch_graphics) a scene's
     // node materials compile in parallel.
@@ -207,38 +210,63 @@ void GeometryStage::prepare_casters(ShaderLibrary& shaders, MaterialModule& mate
 }
 
 std::uint64_t GeometryStage::draw_casters(FrameScene& scene, const FrameScene::Test& casts, bool world_map,
-                                          const DrawStyle& style, const FaceCulling* faces) const {
-    if (!alpha_graphs_) return scene.draw_culled(casts, true, style, faces);
+                                          const DrawStyle& style, const FaceCulling* faces,
+                                          GLuint alpha_program) const {
+    if (!alpha_graphs_ && alpha_program == 0) return scene.draw_culled(casts, true, style, faces);
     GLint caster = 0;
     glGetIntegerv(GL_CURRENT_PROGRAM, &caster);
     const std::map<std::uint32_t, GLuint>& own = world_map ? world_casters_ : light_casters_;
+    // Slots drawn by a program of their own: an alpha graph's caster, or
+    // the partly transparent constant materials' alpha_program.
+    auto apart = [&](std::uint32_t id) { return own.count(id) > 0 || (alpha_program != 0 && is_partly_transparent(id)); };
     // A closed mesh with a cut-out slot shows its inside through the cut:
-    // its back faces stay where any of its slots has a caster program.
+    // its back faces stay where any of its slots is drawn apart.
     const std::uint64_t n = scene.cull(casts, true, faces);
+    bool any_transparent = false;
     for (const FrameScene::Culled& c : scene.visible()) {
         const GpuMesh& mesh = scene.mesh(*c.draw);
         bool cut = false;
-        for (std::size_t s = 0; s < mesh.slot_ranges.size(); ++s) cut = cut || own.count(scene.slot_material(*c.draw, s));
+        for (std::size_t s = 0; s < mesh.slot_ranges.size(); ++s) cut = cut || apart(scene.slot_material(*c.draw, s));
         DrawStyle slot_style = style;
         slot_style.cull_faces = style.cull_faces && !cut;
-        for (std::size_t s = 0; s < mesh.slot_ranges.size(); ++s)
-            if (!own.count(scene.slot_material(*c.draw, s)))
-                scene.draw_range(c, mesh.slot_ranges[s].first, mesh.slot_ranges[s].second, slot_style);
+        for (std::size_t s = 0; s < mesh.slot_ranges.size(); ++s) {
+            const std::uint32_t id = scene.slot_material(*c.draw, s);
+            if (!apart(id)) scene.draw_range(c, mesh.slot_ranges[s].first, mesh.slot_ranges[s].second, slot_style);
+            else if (!own.count(id)) any_transparent = true;
+        }
     }
-    // The map's uniforms (shadow_frag.glsl's 2, 3, 4) onto the caster
-    // programs' (2, 20, 21: material_module.h).
+    // The map's uniforms (shadow_frag.glsl's 2, 3, 4) onto the other
+    // programs' (alpha_program: the same; the graphs' casters 2, 20, 21:
+    // material_module.h).
     float view_projection[16], origin[4], axis[4] = {0, 0, 0, 0}, clip[4 * SHADOW_CLIP_PLANES];
     glGetUniformfv(GLuint(caster), 2, view_projection);
     glGetUniformfv(GLuint(caster), 3, origin);
     glGetUniformfv(GLuint(caster), 4, axis);
     for (int i = 0; i < SHADOW_CLIP_PLANES; ++i) glGetUniformfv(GLuint(caster), LOC_SHADOW_CLIP + i, clip + 4 * i);
-    materials_->bind_constants();
-    for (auto& [id, p] : own) {
-        glProgramUniform4fv(p, LOC_SHADOW_CLIP, SHADOW_CLIP_PLANES, clip);
-        glProgramUniformMatrix4fv(p, 2, 1, GL_FALSE, view_projection);
-        glProgramUniform4fv(p, 20, 1, origin);
-        glProgramUniform3fv(p, 21, 1, axis);
-        draw_material(scene, id, p);
+    if (any_transparent) {
+        glProgramUniform4fv(alpha_program, LOC_SHADOW_CLIP, SHADOW_CLIP_PLANES, clip);
+        glProgramUniformMatrix4fv(alpha_program, 2, 1, GL_FALSE, view_projection);
+        glProgramUniform4fv(alpha_program, 3, 1, origin);
+        glProgramUniform3fv(alpha_program, 4, 1, axis);
+        glUseProgram(alpha_program);
+        for (const FrameScene::Culled& c : scene.visible()) {
+            const GpuMesh& mesh = scene.mesh(*c.draw);
+            for (std::size_t s = 0; s < mesh.slot_ranges.size(); ++s) {
+                const std::uint32_t id = scene.slot_material(*c.draw, s);
+                if (is_partly_transparent(id) && !own.count(id))
+                    scene.draw_range(c, mesh.slot_ranges[s].first, mesh.slot_ranges[s].second);
+            }
+        }
+    }
+    if (!own.empty()) {
+        materials_->bind_constants();
+        for (auto& [id, p] : own) {
+            glProgramUniform4fv(p, LOC_SHADOW_CLIP, SHADOW_CLIP_PLANES, clip);
+            glProgramUniformMatrix4fv(p, 2, 1, GL_FALSE, view_projection);
+            glProgramUniform4fv(p, 20, 1, origin);
+            glProgramUniform3fv(p, 21, 1, axis);
+            draw_material(scene, id, p);
+        }
     }
     glUseProgram(GLuint(caster));
     return n;

@@ -82,9 +82,17 @@ public:
     // The shadow casters that pass `casts`, with the bound program (the
     // shadow module's, drawn as `style` says) or their own (by corner, both
     // sides); `world_map`: the bound program draws a world occlusion map.
-    // Returns how many instances were kept.
+    // `alpha_program` (0: none): the shadow module's program for partly
+    // transparent constant materials (SCENE_ALPHA: each fragment kept with
+    // probability alpha), whose slots it draws by corner, both sides, with
+    // the bound program's uniforms; the bound one then draws only opaque
+    // slots. Returns how many instances were kept.
     std::uint64_t draw_casters(FrameScene& scene, const FrameScene::Test& casts, bool world_map,
-                               const DrawStyle& style = {}, const FaceCulling* faces = nullptr) const;
+                               const DrawStyle& style = {}, const FaceCulling* faces = nullptr,
+                               GLuint alpha_program = 0) const;
+    // A constant material whose coverage (FrameScene::coverage) is below 1.
+    bool is_partly_transparent(std::uint32_t id) const { return id < partly_transparent_.size() && partly_transparent_[id]; }
+    const std::vector<bool>& partly_transparent() const { return partly_transparent_; }  // per material id
 
     bool is_forward(std::uint32_t id) const { return id < forward_.size() && forward_[id]; }
     // Per material id: drawn by the forward pass (left out of the G-buffer).
@@ -96,7 +104,7 @@ private:
     GLuint geometry_ = 0;
     bool scene_alpha_ = false, alpha_graphs_ = false;
     std::vector<std::pair<std::uint32_t, GLuint>> graph_programs_;
-    std::vector<bool> failed_, alpha_, forward_;  // per material id
+    std::vector<bool> failed_, alpha_, forward_, partly_transparent_;  // per material id
     std::map<std::uint32_t, GLuint> aov_programs_;
     std::vector<std::vector<std::pair<std::uint32_t, int>>> aov_writers_;  // per AOV: (material id, slot)
     std::map<std::uint32_t, GLuint> light_casters_, world_casters_;

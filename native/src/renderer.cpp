@@ -854,7 +854,7 @@ void Renderer::Impl::prepare_programs(Frame& f) {
             if (!f.geometry.is_forward(id))
                 graphs.push_back({id, std::uint32_t(scene.materials()[id].graph), f.geometry.is_alpha_graph(id)});
         try {
-            visibility.prepare(*shaders, materials, base, graphs, f.scene_alpha, result.warnings);
+            visibility.prepare(*shaders, materials, base, graphs, f.geometry.partly_transparent(), result.warnings);
             visibility.ensure(settings.width, settings.height, f.scene.slot_count(), gbuffer.depth_texture());
             result.timings.gbuffer_bytes += visibility.bytes();
             result.timings.material_programs = visibility.distinct_graph_programs();
@@ -1084,9 +1084,11 @@ void Renderer::Impl::render_sample(Frame& f, int sample) {
                                            float(std::fmod(0.5 + sample * 0.5698402909980532, 1.0))};
         shadows.render_sample(
             *shaders, {u[2], u[3]}, grid, world_dirs,
-            [&](const ShadowModule::CasterTest& casts, bool world_map, const DrawStyle& style, const FaceCulling* faces) {
+            [&](const ShadowModule::CasterTest& casts, bool world_map, const DrawStyle& style, const FaceCulling* faces,
+                GLuint alpha_program) {
                 const std::uint64_t one_sided = f.scene.one_sided_instances();
-                f.shadow_instances_drawn += f.geometry.draw_casters(f.scene, casts, world_map, style, faces);
+                f.shadow_instances_drawn +=
+                    f.geometry.draw_casters(f.scene, casts, world_map, style, faces, alpha_program);
                 f.shadow_one_sided += f.scene.one_sided_instances() - one_sided;
             },
             f.caster_defines, f.geometry.stochastic_alpha() || f.casters_move);

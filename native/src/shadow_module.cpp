@@ -747,19 +747,30 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
     const glm::dvec2 shift(double(grid[0]) - 0.5, double(grid[1]) - 0.5);
     auto padded = [](double radius, int resolution) { return radius * (1.0 + 2.0 / double(resolution)); };
     if (entries_.empty()) return;
-    ShaderVariant variant;
-    variant.defines = caster_defines;
-    variant.defines.push_back("SHADOW_PASS");
     // Opaque casters are drawn by vertex and, where closed, front faces only
     // (draw_style.h); partly transparent ones (SCENE_ALPHA: each triangle
-    // kept by chance, seen through) need every corner's triangle and both sides.
+    // kept by chance, seen through) need every corner's triangle and both
+    // sides. Where the scene has both, the opaque ones keep the plain
+    // program and the transparent constant materials' slots take
+    // `alpha_program` (GeometryStage::draw_casters): with SCENE_ALPHA every
+    // fragment of every caster ran its discard test, the transparency
+    // sample's floor among them (its maps 2.6x as slow on llvmpipe).
     const bool alpha = std::find(caster_defines.begin(), caster_defines.end(), "SCENE_ALPHA") != caster_defines.end();
+    const bool apart = alpha && alpha_apart_enabled();
+    ShaderVariant variant, alpha_variant;
+    for (const std::string& d : caster_defines)
+        if (!apart || d != "SCENE_ALPHA") variant.defines.push_back(d);
+    variant.defines.push_back("SHADOW_PASS");
+    alpha_variant = variant;
+    alpha_variant.defines.push_back("SCENE_ALPHA");
     DrawStyle style;
-    style.by_vertex = by_vertex_enabled_ && !alpha;
-    style.cull_faces = face_culling_enabled_ && !alpha;
+    style.by_vertex = by_vertex_enabled_ && !(alpha && !apart);
+    style.cull_faces = face_culling_enabled_ && !(alpha && !apart);
     if (style.by_vertex) variant.defines.push_back("INDEXED_DRAW");
+    GLuint alpha_program = 0;
     if (!rays_) {
         const GLuint program = shaders.graphics_program("geometry_vert.glsl", "shadow_frag.glsl", variant);
+        if (apart) alpha_program = shaders.graphics_program("geometry_vert.glsl", "shadow_frag.glsl", alpha_variant);
         glUseProgram(program);
         glBindFramebuffer(GL_FRAMEBUFFER, fbo_.get());
         glEnable(GL_DEPTH_TEST);
@@ -807,7 +818,7 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
         glUniform4f(3, float(origin.x), float(origin.y), float(origin.z), float(kind));
         glUniform3f(4, float(axis.x), float(axis.y), float(axis.z));
         begin_fragment_count();
-        draw_casters(casts, false, style, style.cull_faces ? &faces : nullptr);
+        draw_casters(casts, false, style, style.cull_faces ? &faces : nullptr, alpha_program);
         end_fragment_count();
         ++layers_rendered_;
     };
@@ -965,9 +976,12 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
         // blending of (-depth, depth), no depth test; depth clamping keeps
         // casters beyond the map's depth range (the far side serves the
         // opposite direction), the stored value is the exact depth anyway.
-        ShaderVariant world_variant = variant;
+        ShaderVariant world_variant = variant, world_alpha_variant = alpha_variant;
         world_variant.defines.push_back("WORLD_MAP");
+        world_alpha_variant.defines.push_back("WORLD_MAP");
         const GLuint world_program = shaders.graphics_program("geometry_vert.glsl", "shadow_frag.glsl", world_variant);
+        const GLuint world_alpha_program =
+            apart ? shaders.graphics_program("geometry_vert.glsl", "shadow_frag.glsl", world_alpha_variant) : 0;
         glBindFramebuffer(GL_FRAMEBUFFER, world_fbo_.get());
         glViewport(0, 0, world_allocated_, world_allocated_);
         glDisable(GL_DEPTH_TEST);
@@ -1000,7 +1014,7 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
                                       lookup_reach(texel, slack), 1e300, casts);
             }
             begin_fragment_count();
-            draw_casters(casts, true, style, nullptr);
+            draw_casters(casts, true, style, nullptr, world_alpha_program);
             end_fragment_count();
             ++layers_rendered_;
             texels_rendered_ += std::uint64_t(world_allocated_) * std::uint64_t(world_allocated_);

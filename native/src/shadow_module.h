@@ -136,8 +136,11 @@ public:
     // else a light's map), as `style` says (by vertex where the program is
     // an INDEXED_DRAW one; closed casters' back faces left out, for the
     // map's projection `faces`, where style.cull_faces).
+    // `alpha_program` (0: none): the map's program for the slots of partly
+    // transparent constant materials (SCENE_ALPHA), where the bound one
+    // draws the opaque casters (GeometryStage::draw_casters).
     using DrawCasters = std::function<void(const CasterTest&, bool world_map, const DrawStyle& style,
-                                           const FaceCulling* faces)>;
+                                           const FaceCulling* faces, GLuint alpha_program)>;
     // Renders every kept light's maps (and the world's) for one film sample.
     // `u`: the sample's point on the light shapes; `world_dirs`: its
     // directions of the world, one per world map (xyz unit, towards the

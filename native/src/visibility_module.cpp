@@ -19,7 +19,7 @@ std::string VisibilityBuffer::unsupported(int width, int height) {
 }
 
 void VisibilityBuffer::prepare(ShaderLibrary& shaders, MaterialModule& materials, const ShaderVariant& base,
-                               const std::vector<GraphMaterial>& graphs, bool scene_alpha,
+                               const std::vector<GraphMaterial>& graphs, const std::vector<bool>& partly_transparent,
                                std::vector<std::string>& warnings) {
     ShaderVariant raster;
     raster.defines.push_back("VISIBILITY_PASS");
@@ -28,19 +28,26 @@ void VisibilityBuffer::prepare(ShaderLibrary& shaders, MaterialModule& materials
         if (g.alpha) materials.prefetch(shaders, g.graph, raster);
         materials.prefetch_resolve(shaders, g.graph, base);
     }
-    scene_alpha_ = scene_alpha;
+    partly_transparent_ = partly_transparent;
+    const bool scene_alpha = std::find(partly_transparent.begin(), partly_transparent.end(), true) != partly_transparent.end();
+    alpha_raster_ = alpha_test_ = 0;
+    one_program_style_ = DrawStyle{};
     if (scene_alpha) {
-        // The constant materials' alpha test (pick_material, transparent_here).
+        // The constant materials' alpha test (pick_material, transparent_here),
+        // then the same ids as visibility_frag.glsl.
         ShaderVariant alpha = raster;
         alpha.defines.push_back("SCENE_ALPHA");
-        raster_ = shaders.graphics_program("geometry_vert.glsl", "geometry_frag.glsl", alpha);
-        one_program_style_ = DrawStyle{};
+        alpha_test_ = shaders.graphics_program("geometry_vert.glsl", "geometry_frag.glsl", alpha);
+    }
+    if (scene_alpha && !alpha_apart_enabled()) {
+        raster_ = alpha_test_;
     } else {
         ShaderVariant ids = raster;
         one_program_style_.by_vertex = draw_by_vertex_enabled();
         one_program_style_.first_triangle_location = LOC_FIRST_TRIANGLE;
         if (one_program_style_.by_vertex) ids.defines.push_back("INDEXED_DRAW");
         raster_ = shaders.graphics_program("geometry_vert.glsl", "visibility_frag.glsl", ids);
+        alpha_raster_ = alpha_test_;
     }
     ShaderVariant v;
     v.defines = {"VIS_COUNT"};
@@ -82,7 +89,7 @@ std::size_t VisibilityBuffer::distinct_graph_programs() const {
 
 void VisibilityBuffer::set_alpha_mode(bool data, float threshold) const {
     const float mode = data ? 1.0f : 0.0f;
-    if (scene_alpha_) glProgramUniform2f(raster_, 22, mode, threshold);
+    if (alpha_test_) glProgramUniform2f(alpha_test_, 22, mode, threshold);
     for (auto& [id, program] : graph_rasters_) glProgramUniform2f(program, 22, mode, threshold);
 }
 
@@ -148,17 +155,30 @@ void VisibilityBuffer::draw(const FrameScene& scene, const MaterialModule& mater
     glViewport(0, 0, width_, height_);
     const GLuint none[4] = {0, 0, 0, 0};
     glClearNamedFramebufferuiv(fbo_.get(), GL_COLOR, 0, none);
+    // The shared program for every slot without one of its own, then the
+    // partly transparent constant materials' (their alpha test).
     glUseProgram(raster_);
     for (const FrameScene::Culled& c : scene.visible()) {
         const GpuMesh& mesh = scene.mesh(*c.draw);
-        if (!any_skipped && graph_rasters_.empty()) {
+        if (!any_skipped && graph_rasters_.empty() && alpha_raster_ == 0) {
             scene.draw_range(c, 0, mesh.triangle_count, one_program_style_);
             continue;
         }
         for (std::size_t s = 0; s < mesh.slot_ranges.size(); ++s) {
             const std::uint32_t id = scene.slot_material(*c.draw, s);
-            if (!skipped(id) && raster_for(id) == 0)
+            if (!skipped(id) && raster_for(id) == 0 && !transparent(id))
                 scene.draw_range(c, mesh.slot_ranges[s].first, mesh.slot_ranges[s].second, one_program_style_);
+        }
+    }
+    if (alpha_raster_) {
+        glUseProgram(alpha_raster_);
+        for (const FrameScene::Culled& c : scene.visible()) {
+            const GpuMesh& mesh = scene.mesh(*c.draw);
+            for (std::size_t s = 0; s < mesh.slot_ranges.size(); ++s) {
+                const std::uint32_t id = scene.slot_material(*c.draw, s);
+                if (!skipped(id) && raster_for(id) == 0 && transparent(id))
+                    scene.draw_range(c, mesh.slot_ranges[s].first, mesh.slot_ranges[s].second);
+            }
         }
     }
     // Node materials that drive alpha: each with its own program (the graph

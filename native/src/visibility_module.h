@@ -60,14 +60,16 @@ public:
         std::uint32_t id, graph;
         bool alpha;
     };
-    // The raster programs (SCENE_ALPHA: a constant material is partly
-    // transparent), the classification's, the constant-material resolve and
-    // each node material's (`graphs`; the materials not listed resolve as
-    // constant ones). A node material whose programs do not compile takes
-    // the default surface, warned (as the raster path's); throws Error if
-    // one of the frame's own programs does not compile.
+    // The raster programs (the shared one; SCENE_ALPHA's for the constant
+    // materials `partly_transparent` marks, per material id), the
+    // classification's, the constant-material resolve and each node
+    // material's (`graphs`; the materials not listed resolve as constant
+    // ones). A node material whose programs do not compile takes the
+    // default surface, warned (as the raster path's); throws Error if one of
+    // the frame's own programs does not compile.
     void prepare(ShaderLibrary& shaders, MaterialModule& materials, const ShaderVariant& base,
-                 const std::vector<GraphMaterial>& graphs, bool scene_alpha, std::vector<std::string>& warnings);
+                 const std::vector<GraphMaterial>& graphs, const std::vector<bool>& partly_transparent,
+                 std::vector<std::string>& warnings);
     // Distinct node-material resolve programs (FrameTimings::material_programs).
     std::size_t distinct_graph_programs() const;
     // Stochastic coverage (false) or the Alpha Threshold's (true, the data
@@ -92,11 +94,19 @@ private:
     GLuint resolve_for(std::uint32_t material) const;
     GLuint raster_for(std::uint32_t material) const;  // 0: the shared raster program
 
+    bool transparent(std::uint32_t material) const {
+        return alpha_raster_ != 0 && material < partly_transparent_.size() && partly_transparent_[material];
+    }
+
     GLuint raster_ = 0, count_ = 0, scan_ = 0, scatter_ = 0, resolve_ = 0;
-    bool scene_alpha_ = false;
-    // How the shared raster program draws: by vertex, unless a constant
-    // material is partly transparent (SCENE_ALPHA: its program needs each
-    // corner). Both sides: leaving out closed meshes' back faces changed
+    // The partly transparent constant materials' raster program (SCENE_ALPHA,
+    // by corner: the alpha test needs each corner's triangle), 0 without
+    // them; alpha_test_ the program with the alpha test (its mode uniform).
+    GLuint alpha_raster_ = 0, alpha_test_ = 0;
+    std::vector<bool> partly_transparent_;
+    // How the shared raster program draws: by vertex (with
+    // DEFERRED_ALPHA_APART=off and a partly transparent constant material,
+    // by corner: it is then SCENE_ALPHA's). Both sides: leaving out closed meshes' back faces changed
     // 159 of the showcase's 172 800 colour values at 320x180 (up to 0.097):
     // a sliver facing the camera by a sphere's silhouette turns over when
     // the rasteriser snaps its corners, and culled it lets the floor show

@@ -76,11 +76,22 @@ Mat4d scaled(double sx, double sy, double sz, double x, double y, double z) {
 // a tilted area light (cubes, the area light's clip plane), the spot; the
 // world's occlusion maps (both sides always). Around it all, a closed room
 // facing in that casts no shadow.
-FrameResult casters_frame(const char* by_vertex, const char* face_culling) {
+// `transparent`: the tall mirrored box and the open box partly transparent
+// (alpha 0.4 and a stochastic mix of it with an opaque one), so the maps
+// and the visibility buffer draw them with the alpha test.
+FrameResult casters_frame(const char* by_vertex, const char* face_culling, bool transparent = false) {
     setenv("DEFERRED_DRAW_BY_VERTEX", by_vertex, 1);
     setenv("DEFERRED_FACE_CULLING", face_culling, 1);
     Renderer r;
     const std::uint32_t mat = deferred::testing::add_plane(r, grey(), 6.0f, 4);
+    Material glass = grey();
+    glass.base_color = {0.2f, 0.6f, 0.8f};
+    glass.alpha = 0.4f;
+    const std::uint32_t glass_mat = transparent ? r.add_material(glass) : mat;
+    Material mixed = grey();
+    mixed.mix_with = std::int32_t(glass_mat);
+    mixed.mix_probability = 0.5f;
+    const std::uint32_t mixed_mat = transparent ? r.add_material(mixed) : mat;
     const tools::MeshArrays out = welded_box(0.3f), in = welded_box(0.3f, true), open = tools::make_box(0.3f, 0.3f, 0.3f);
     const std::uint32_t out_mesh = r.add_mesh(out.view()), in_mesh = r.add_mesh(in.view()),
                         open_mesh = r.add_mesh(open.view());
@@ -88,11 +99,11 @@ FrameResult casters_frame(const char* by_vertex, const char* face_culling) {
     // the area light's plane.
     const Mat4d out_at[] = {tools::translation(0.0, 0.0, 0.3), scaled(-1.0, 1.5, 1.0, 1.5, 0.5, 0.3),
                             scaled(-0.5, 0.5, 4.0, -0.6, 0.4, 1.5)};
-    for (const Mat4d& t : out_at) r.add_instances(out_mesh, t.data(), 1, nullptr, {mat});
+    for (int k = 0; k < 3; ++k) r.add_instances(out_mesh, out_at[k].data(), 1, nullptr, {k == 2 ? glass_mat : mat});
     const Mat4d in_at = tools::translation(-1.5, -0.5, 0.3), open_at = tools::translation(0.5, -1.5, 0.6),
                 housing_at = tools::translation(2.0, 2.0, 1.5);
     r.add_instances(in_mesh, in_at.data(), 1, nullptr, {mat});
-    r.add_instances(open_mesh, open_at.data(), 1, nullptr, {mat});
+    r.add_instances(open_mesh, open_at.data(), 1, nullptr, {mixed_mat});
     r.add_instances(out_mesh, housing_at.data(), 1, nullptr, {mat});
     const tools::MeshArrays room = welded_box(15.0f, true);
     const std::uint32_t room_mesh = r.add_mesh(room.view());
@@ -314,6 +325,45 @@ TEST(DrawStyle, ByVertexAndFrontFacesOnlyChangeNoPixel) {
                             Pass::Normal, Pass::IndexOB, Pass::UV},
                            name);
     }
+}
+
+// With partly transparent constant materials in the scene, only their
+// slots take the alpha test's program (SCENE_ALPHA: by corner, both sides);
+// the opaque casters keep the plain one, by vertex and, closed, front faces
+// only, in the maps and in the visibility buffer alike: the same image to
+// the bit as every surface drawn through the alpha test
+// (DEFERRED_ALPHA_APART=off), its alpha noise included.
+TEST(DrawStyle, OnlyPartlyTransparentMaterialsTakeTheAlphaTest) {
+    struct EnvGuard {
+        ~EnvGuard() {
+            unsetenv("DEFERRED_DRAW_BY_VERTEX");
+            unsetenv("DEFERRED_FACE_CULLING");
+            unsetenv("DEFERRED_ALPHA_APART");
+        }
+    } guard;
+    setenv("DEFERRED_ALPHA_APART", "off", 1);
+    const FrameResult together = casters_frame("on", "on", true);
+    setenv("DEFERRED_ALPHA_APART", "on", 1);
+    const FrameResult apart = casters_frame("on", "on", true);
+    const FrameResult opaque = casters_frame("on", "on", false);
+    EXPECT_TRUE(apart.timings.visibility_buffer);
+    EXPECT_EQ(together.timings.shadow_instances_one_sided, 0u);
+    EXPECT_GT(apart.timings.shadow_instances_one_sided, 0u);
+    EXPECT_EQ(apart.timings.shadow_instances_drawn, together.timings.shadow_instances_drawn);
+    std::printf("%llu of %llu instances drawn into the maps without back faces (none drawn so together)\n",
+                static_cast<unsigned long long>(apart.timings.shadow_instances_one_sided),
+                static_cast<unsigned long long>(apart.timings.shadow_instances_drawn));
+    expect_same_passes(apart, together,
+                       {Pass::Combined, Pass::DiffDir, Pass::GlossDir, Pass::Shadow, Pass::AO, Pass::Depth,
+                        Pass::Normal, Pass::IndexOB, Pass::UV},
+                       "opaque casters apart");
+    // The transparency shows: the two boxes' shadows and colours are not the opaque scene's.
+    const PassImage* a = apart.find(Pass::Combined);
+    const PassImage* o = opaque.find(Pass::Combined);
+    ASSERT_TRUE(a && o);
+    std::size_t differ = 0;
+    for (std::size_t i = 0; i < a->pixels.size(); ++i) differ += std::abs(a->pixels[i] - o->pixels[i]) > 1e-3f;
+    EXPECT_GT(differ, a->pixels.size() / 100);
 }
 
 // A sun's cascade draws only the casters whose shadow can fall on a lookup

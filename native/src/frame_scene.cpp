@@ -288,6 +288,17 @@ void FrameScene::bind_attributes(const GpuMesh& mesh) const {
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SSBO_ATTRIBUTES, mesh.attributes ? mesh.attributes.get() : dummy_ssbo_);
 }
 
+std::uint64_t FrameScene::caster_triangles(const Test& keep) const {
+    std::uint64_t n = 0;
+    for (const Draw& d : draws_) {
+        const GpuMesh& mesh = scene_->meshes()[d.mesh];
+        if (!d.cast_shadow || mesh.triangle_count == 0) continue;
+        for (std::uint32_t i = d.first; i < d.first + d.count; ++i)
+            if (keep(bounds_[i].center, bounds_[i].radius)) n += mesh.triangle_count;
+    }
+    return n;
+}
+
 std::uint64_t FrameScene::cull(const Test& keep, bool casters_only, const FaceCulling* faces) {
     remap_.clear();
     visible_.clear();

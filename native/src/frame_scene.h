@@ -138,6 +138,9 @@ public:
     // Triangles [first, first + count) of the kept instances of one batch,
     // with the bound program, drawn as `style` says.
     void draw_range(const Culled& c, std::uint32_t first, std::uint32_t count, const DrawStyle& style = {}) const;
+    // The triangles of the shadow-casting instances whose bounding sphere
+    // passes `keep` (what cull(keep, true) would keep, counted on the CPU).
+    std::uint64_t caster_triangles(const Test& keep) const;
     // cull(), then every kept instance whole.
     std::uint64_t draw_culled(const Test& keep, bool casters_only, const DrawStyle& style = {},
                               const FaceCulling* faces = nullptr);

@@ -1193,7 +1193,8 @@ void Renderer::Impl::fit_shadow_maps(Frame& f) {
         lookups.boxes = f.scene.boxes_in_view(f.view);
     }
     lookups.lift = f.scene.terminator_lift();
-    shadows.fit(receivers, visible_depths, f.camera_moves ? nullptr : &lookups);
+    shadows.fit(receivers, visible_depths, f.camera_moves ? nullptr : &lookups,
+                [&](const ShadowModule::CasterTest& casts) { return f.scene.caster_triangles(casts); });
 }
 
 // After the last sample: the resolves, the stages' times, the readback.

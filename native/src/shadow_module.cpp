@@ -376,6 +376,10 @@ void ShadowModule::begin_frame(const CameraMatrices& camera, int max_resolution,
     // in its square (the tests' reference for what slice_casters leaves out).
     const char* receiver = std::getenv("DEFERRED_SHADOW_RECEIVER_CULLING");
     receiver_culling_enabled_ = !(receiver && std::string(receiver) == "off");
+    // DEFERRED_DENSE_CASCADES=off: a sun's cascades take the receivers'
+    // need alone, however dense the casters (the tests' reference).
+    const char* dense = std::getenv("DEFERRED_DENSE_CASCADES");
+    dense_cascades_enabled_ = !(dense && std::string(dense) == "off");
     by_vertex_enabled_ = draw_by_vertex_enabled();
     face_culling_enabled_ = face_culling_enabled();
     count_fragments_ = count_fragments &&
@@ -598,7 +602,7 @@ ShadowModule::Cascades ShadowModule::cascades() const {
 }
 
 void ShadowModule::fit(const std::vector<Receiver>& receivers, std::pair<double, double> visible_depths,
-                       const LookupVolume* lookups) {
+                       const LookupVolume* lookups, const CasterTriangles& caster_triangles) {
     lookups_known_ = lookups != nullptr && receiver_culling_enabled_;
     if (lookups) lookups_ = *lookups;
     if (entries_.empty()) return;
@@ -673,6 +677,16 @@ void ShadowModule::fit(const std::vector<Receiver>& receivers, std::pair<double,
             const std::size_t k = std::min(need.size() - 1, need.size() * 9 / 10);
             std::nth_element(need.begin(), need.begin() + long(k), need.end());
             r = need[k];
+        }
+        if (e.sun && caster_triangles && dense_cascades_enabled_ && !need.empty()) {
+            // Dense casters: up to one texel per triangle of the fullest
+            // cascade (fit() in shadow_module.h), at most kDenseCascades
+            // times the need.
+            const glm::dvec3 axis = glm::normalize(v3(l.direction));
+            std::uint64_t most = 0;
+            for (int k = 0; k < SHADOW_CASCADE_COUNT; ++k)
+                most = std::max(most, caster_triangles(ortho_casters(axis, cs.center[k], cs.radius[k], true)));
+            r = std::clamp(std::sqrt(double(most)), r, kDenseCascades * r);
         }
         e.resolution = std::clamp(int(std::ceil(std::min(r, 1e6) / 32.0)) * 32, 32, resolution_);
         e.rendered = false;

@@ -6,6 +6,7 @@
 // Which meshes are closed, and which way they face, is mesh_topology.h's.
 #include "mesh_topology.h"
 #include "scene_store.h"
+#include "shadow_module.h"
 #include "test_helpers.h"
 
 #include <gtest/gtest.h>
@@ -494,4 +495,84 @@ TEST(Culling, TheTerminatorOffsetStaysWithinItsBound) {
         EXPECT_GT(worst, 0.0);
         EXPECT_LE(worst, bound);
     }
+}
+
+namespace {
+
+// A carpet of small spheres touching each other and the floor under a 1
+// degree sun, seen from above at a slant (`count` a side: 40 puts ~600 000
+// triangles in the cascades, 3 a few hundred), lit by the sun alone.
+FrameResult carpet_frame(int count, bool rays, const char* dense) {
+    setenv("DEFERRED_DENSE_CASCADES", dense, 1);
+    Renderer r;
+    const std::uint32_t mat = deferred::testing::add_plane(r, grey(), 6.0f, 4);
+    const tools::MeshArrays ball = tools::make_uv_sphere(0.1f, 16, 12);
+    const std::uint32_t ball_mesh = r.add_mesh(ball.view());
+    std::vector<double> at;
+    for (int i = 0; i < count; ++i)
+        for (int j = 0; j < count; ++j) {
+            const Mat4d m = tools::translation(-0.2 * (count - 1) / 2.0 + 0.2 * i, -0.2 * (count - 1) / 2.0 + 0.2 * j, 0.1);
+            at.insert(at.end(), m.begin(), m.end());
+        }
+    r.add_instances(ball_mesh, at.data(), at.size() / 16, nullptr, {mat});
+    Light sun;
+    sun.type = LightType::Sun;
+    const double from[3] = {1.0, 0.6, 6.0}, to[3] = {0.0, 0.0, 0.0};
+    sun.matrix = tools::look_at(from, to);
+    sun.energy = 3.0f;
+    sun.angle = float(1.0 * M_PI / 180.0);
+    r.add_light(sun);
+    deferred::testing::set_world_color(r, 0.0f, 0.0f, 0.0f);
+    Camera cam;
+    const double eye[3] = {0.0, -3.0, 3.0}, target[3] = {0.0, 0.0, 0.0};
+    cam.matrix = tools::look_at(eye, target);
+    cam.lens = 35.0f;
+    RenderSettings s;
+    s.width = 96;
+    s.height = 64;
+    s.samples = 16;
+    s.shadow_resolution = 4096;
+    s.shadow_rays = rays;
+    FrameResult f = r.render(cam, s);
+    unsetenv("DEFERRED_DENSE_CASCADES");
+    return f;
+}
+
+double mean_combined(const FrameResult& f) {
+    const PassImage* c = f.find(Pass::Combined);
+    double sum = 0;
+    for (std::size_t i = 0; i < c->pixels.size(); i += 4) sum += c->pixels[i] + c->pixels[i + 1] + c->pixels[i + 2];
+    return sum / double(c->pixels.size() / 4);
+}
+
+}  // namespace
+
+// Where a sun's casters are dense, its cascades take finer texels than the
+// receivers need (ShadowModule::fit, kDenseCascades): the maps' moving grid
+// blurs each lookup over a texel, which darkens the lit parts of the
+// spheres beside their contacts. Against shadow rays (the exact
+// visibility of the same light points), the carpet is darker with the
+// receivers' need alone and closer with the finer texels; a few spheres
+// keep the need's resolution.
+TEST(SunCascades, DenseCastersTakeFinerTexels) {
+    struct EnvGuard {
+        ~EnvGuard() { unsetenv("DEFERRED_DENSE_CASCADES"); }
+    } guard;
+    const FrameResult exact = carpet_frame(40, true, "on");
+    const FrameResult need = carpet_frame(40, false, "off");
+    const FrameResult dense = carpet_frame(40, false, "on");
+    ASSERT_EQ(need.timings.shadow_resolutions.size(), 1u);
+    ASSERT_EQ(dense.timings.shadow_resolutions.size(), 1u);
+    const int r_need = need.timings.shadow_resolutions[0], r_dense = dense.timings.shadow_resolutions[0];
+    const double m_exact = mean_combined(exact), m_need = mean_combined(need), m_dense = mean_combined(dense);
+    std::printf("carpet: rays %.4f; maps %d texels %.4f (%.4f of it), %d texels %.4f (%.4f)\n", m_exact, r_need, m_need,
+                m_need / m_exact, r_dense, m_dense, m_dense / m_exact);
+    EXPECT_GE(r_dense, int(1.5 * r_need));  // the need is rounded up to 32 texels, its double from the need itself
+    EXPECT_LE(r_dense, int(ShadowModule::kDenseCascades * r_need) + 32);
+    EXPECT_LT(m_need, m_exact);
+    EXPECT_LT(std::abs(m_dense - m_exact), 0.7 * std::abs(m_need - m_exact));
+    // Few casters: the receivers' need.
+    const FrameResult few = carpet_frame(3, false, "on");
+    const FrameResult few_need = carpet_frame(3, false, "off");
+    EXPECT_EQ(few.timings.shadow_resolutions, few_need.timings.shadow_resolutions);
 }

@@ -188,6 +188,7 @@ vec3 principled_specular(PrincipledWeights w, vec3 N, vec3 V, vec3 L) {
     if (cosH <= 0.0) return vec3(0.0);
     float cosH2 = cosH * cosH;
     vec3 nxh = cross(N, H);
+#ifndef CLOSURES_NO_BECKMANN /* no Glossy BSDF with Beckmann's distribution in the scene */
     if (w.glossy_model == 2) {
         float alpha = sqrt(w.alpha2);
         float tanH2 = dot(nxh, nxh) / cosH2;
@@ -198,6 +199,7 @@ vec3 principled_specular(PrincipledWeights w, vec3 N, vec3 V, vec3 L) {
         float G = beckmann_G1(alpha, NdotV) * beckmann_G1(alpha, NdotL);
         return w.cspec0 * (D * G * 0.25 / NdotV);
     }
+#endif
     float D = ggx_D(w.alpha2, cosH2, dot(nxh, nxh));
     float G = ggx_G1(w.alpha2, N, V) * ggx_G1(w.alpha2, N, L);
     if (w.glossy_model != 0) return w.cspec0 * (D * G * 0.25 / NdotV);

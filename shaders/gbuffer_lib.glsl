@@ -68,6 +68,11 @@ SurfaceParams gbuffer_unpack(vec4 base, vec4 params0, vec4 params1, vec2 normal_
     s.base_color = base.rgb;
     s.diffuse_sigma = base.a >= 0.0 && base.a <= 1.0 ? base.a : -1.0;
     s.glossy_model = base.a > 1.5 ? int(base.a + 0.5) - 1 : 0;
+#ifdef CLOSURES_NO_OREN_NAYAR
+    /* No Diffuse BSDF in the scene: every diffuse lobe is Burley's, a
+     * constant the compiler folds (bsdf_lib.glsl's Oren-Nayar code goes). */
+    s.diffuse_sigma = -1.0;
+#endif
     s.metallic = params0.x;
     s.roughness = params0.y;
     s.specular = params0.z;

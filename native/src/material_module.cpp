@@ -129,6 +129,13 @@ bool MaterialModule::uses_params1() const {
     return false;
 }
 
+bool MaterialModule::uses_node(const std::string& func) const {
+    for (const StoredGraph& g : graphs_)
+        for (const GraphNode& n : g.graph.nodes)
+            if (n.func == func) return true;
+    return false;
+}
+
 bool MaterialModule::uses_smooth_normal() const {
     for (const StoredGraph& g : graphs_)
         if (g.graph.closure_normal) return true;

@@ -50,6 +50,8 @@ public:
     const std::vector<std::string>& aovs(std::uint32_t graph) const { return graphs_[graph].graph.aovs; }
     // True if some graph can produce sheen or clearcoat (the G-buffer's params1).
     bool uses_params1() const;
+    // True if some graph calls the node function `func` (node_bsdf_diffuse, ...).
+    bool uses_node(const std::string& func) const;
     // True if some graph gives a closure another normal than the smooth one
     // (the G-buffer's smooth normal).
     bool uses_smooth_normal() const;

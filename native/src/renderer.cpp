@@ -271,6 +271,10 @@ struct Renderer::Impl {
         std::string splat_dropped; // why it is off where it was asked for (a warning)
         bool visibility = false;   // the visibility buffer's targets fit the budget
         std::string visibility_dropped;  // why not, where it was asked for (a warning)
+        // Closure models some surface of the scene can have (a Diffuse
+        // BSDF's Oren-Nayar lobe, a Glossy BSDF's Beckmann one): without
+        // them the programs leave their code out (CLOSURES_NO_*).
+        bool oren_nayar = false, beckmann = false;
     };
     FramePlan plan_frame(const RenderSettings& settings) const;
 
@@ -466,6 +470,16 @@ Renderer::Impl::FramePlan Renderer::Impl::plan_frame(const RenderSettings& setti
     for (const Material& m : scene.materials())
         if (m.graph < 0 && (m.sheen > 1e-5f || m.clearcoat > 1e-5f)) features.params1 = true;
     if (materials.uses_params1()) features.params1 = true;
+    // As FrameScene packs a constant material (base_diffuse.w: a Glossy
+    // BSDF's model, else a Diffuse BSDF's sigma >= 0), and any graph with
+    // the node.
+    for (const Material& m : scene.materials()) {
+        if (m.graph >= 0) continue;
+        if (m.glossy_model == 2) plan.beckmann = true;
+        if (m.glossy_model <= 0 && m.diffuse_roughness >= 0.0f) plan.oren_nayar = true;
+    }
+    if (materials.uses_node("node_bsdf_diffuse")) plan.oren_nayar = true;
+    if (materials.uses_node("node_bsdf_glossy")) plan.beckmann = true;
     // Shadow maps compare against the true normal's plane and move the
     // receiver by its terminator offset (geometry target), as do bent closures.
     features.geometry = materials.uses_smooth_normal() || settings.shadows;
@@ -765,6 +779,15 @@ void Renderer::Impl::prepare_programs(Frame& f) {
     // Which G-buffer targets exist.
     ShaderVariant& base = f.base_variant;
     if (features.params1) base.defines.push_back("GBUF_PARAMS1");
+    // On a CPU rasteriser a branch costs both its sides (masked SIMD): the
+    // closure models no surface has are left out of the lighting's code
+    // (gbuffer_lib.glsl, bsdf_lib.glsl). DEFERRED_CLOSURE_MODELS=all keeps
+    // every model's code (the same image but for float rounding: the
+    // reference for what this saves).
+    const char* models = std::getenv("DEFERRED_CLOSURE_MODELS");
+    const bool every_model = models && std::string(models) == "all";
+    if (!f.plan.oren_nayar && !every_model) base.defines.push_back("CLOSURES_NO_OREN_NAYAR");
+    if (!f.plan.beckmann && !every_model) base.defines.push_back("CLOSURES_NO_BECKMANN");
     if (features.ids) base.defines.push_back("GBUF_IDS");
     if (features.instance_ids) base.defines.push_back("GBUF_INSTANCE_IDS");
     if (features.uv) base.defines.push_back("GBUF_UV");

@@ -459,5 +459,83 @@ TEST(MaterialGraphDiskCache, ASecondRendererLoadsInsteadOfCompiling) {
                 cold.compile_ms, warm.programs_loaded, warm.load_ms);
 }
 
+// The programs leave out the closure models no surface of the scene has
+// (renderer.cpp plan_frame: CLOSURES_NO_OREN_NAYAR, CLOSURES_NO_BECKMANN),
+// and keep each one a surface has, from a constant material or a node
+// graph: a Glossy BSDF's Beckmann lobe shades otherwise than its GGX one, a
+// Diffuse BSDF's Oren-Nayar lobe (sigma 0.9) otherwise than sigma 0, on a
+// sphere under a light. Were a model left out, the two would be the same.
+TEST(ClosureModels, StayWhereASurfaceHasThem) {
+    const tools::MeshArrays sphere = tools::make_uv_sphere(0.8f, 32, 16);
+    auto render_with = [&](const Material& base, const MaterialGraph* graph) {
+        Renderer r;
+        const std::uint32_t mat = graph ? r.add_graph_material(base, *graph) : r.add_material(base);
+        const std::uint32_t mesh = r.add_mesh(sphere.view());
+        r.add_instances(mesh, identity_matrix().data(), 1, nullptr, {mat});
+        Light l;
+        l.type = LightType::Point;
+        l.matrix = tools::translation(1.5, -1.0, 3.0);
+        l.energy = 200.0f;
+        r.add_light(l);
+        set_world_color(r, 0.0f, 0.0f, 0.0f);
+        RenderSettings s = small(32, 32);
+        s.samples = 2;
+        const FrameResult f = r.render(top_down_ortho(5.0, 1.0f), s);
+        return f.find(Pass::Combined)->pixels;
+    };
+    auto largest_difference = [](const std::vector<float>& a, const std::vector<float>& b) {
+        float d = 0.0f;
+        for (std::size_t i = 0; i < a.size(); ++i) d = std::max(d, std::abs(a[i] - b[i]));
+        return d;
+    };
+    Material glossy;
+    glossy.base_color = {0.8f, 0.8f, 0.8f};
+    glossy.roughness = 0.6f;
+    glossy.metallic = 1.0f;
+    glossy.glossy_model = 1;
+    Material beckmann = glossy;
+    beckmann.glossy_model = 2;
+    Material lambert;
+    lambert.base_color = {0.8f, 0.8f, 0.8f};
+    lambert.specular = 0.0f;
+    lambert.diffuse_roughness = 0.0f;
+    Material oren_nayar = lambert;
+    oren_nayar.diffuse_roughness = 0.9f;
+    const float constant_glossy = largest_difference(render_with(glossy, nullptr), render_with(beckmann, nullptr));
+    const float constant_diffuse = largest_difference(render_with(lambert, nullptr), render_with(oren_nayar, nullptr));
+    // The same through node graphs: Glossy BSDF (model, colour, roughness,
+    // normal) and Diffuse BSDF (colour, roughness, normal).
+    auto glossy_graph = [](int model) {
+        MaterialGraph g;
+        g.constants = {0.8f, 0.8f, 0.8f, 0.6f};
+        g.nodes.push_back({"node_bsdf_glossy",
+                           {GraphArg::literal(model), const_arg(SocketType::Color, 0), const_arg(SocketType::Float, 3),
+                            shading_arg("N")},
+                           {SocketType::Closure}});
+        g.surface_node = 0;
+        return g;
+    };
+    auto diffuse_graph = [](float sigma) {
+        MaterialGraph g;
+        g.constants = {0.8f, 0.8f, 0.8f, sigma};
+        g.nodes.push_back({"node_bsdf_diffuse",
+                           {const_arg(SocketType::Color, 0), const_arg(SocketType::Float, 3), shading_arg("N")},
+                           {SocketType::Closure}});
+        g.surface_node = 0;
+        return g;
+    };
+    const MaterialGraph ggx_g = glossy_graph(1), beckmann_g = glossy_graph(2), lambert_g = diffuse_graph(0.0f),
+                        oren_nayar_g = diffuse_graph(0.9f);
+    const float graph_glossy = largest_difference(render_with(Material{}, &ggx_g), render_with(Material{}, &beckmann_g));
+    const float graph_diffuse =
+        largest_difference(render_with(Material{}, &lambert_g), render_with(Material{}, &oren_nayar_g));
+    std::printf("largest differences: constant Beckmann/GGX %.4f, Oren-Nayar/Lambert %.4f; graphs %.4f, %.4f\n",
+                constant_glossy, constant_diffuse, graph_glossy, graph_diffuse);
+    EXPECT_GT(constant_glossy, 0.01f);
+    EXPECT_GT(constant_diffuse, 0.01f);
+    EXPECT_GT(graph_glossy, 0.01f);
+    EXPECT_GT(graph_diffuse, 0.01f);
+}
+
 }  // namespace
 }  // namespace deferred::testing

@@ -124,8 +124,24 @@ std::uint32_t MaterialModule::add_graph(const MaterialGraph& graph) {
 }
 
 bool MaterialModule::uses_params1() const {
-    for (const StoredGraph& g : graphs_)
-        if (g.principled) return true;
+    // A Principled BSDF node gives sheen (its argument 5) or clearcoat (7)
+    // unless both are constants of at most 0 (node_bsdf_principled clamps
+    // them to [0, 1]): the usual node material, whose G-buffer then needs
+    // no params1 and whose lighting folds both lobes away.
+    for (const StoredGraph& g : graphs_) {
+        if (!g.principled) continue;
+        for (const GraphNode& n : g.graph.nodes) {
+            if (n.func != "node_bsdf_principled") continue;
+            auto may_be_positive = [&](std::size_t k) {
+                if (k >= n.args.size()) return true;
+                const GraphArg& a = n.args[k];
+                if (a.kind != GraphArg::Kind::Const || a.type != SocketType::Float) return true;
+                const std::size_t at = std::size_t(g.constants_offset) + std::size_t(a.value);
+                return at >= constants_.size() || !(constants_[at] <= 0.0f);
+            };
+            if (may_be_positive(5) || may_be_positive(7)) return true;
+        }
+    }
     return false;
 }
 

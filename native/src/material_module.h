@@ -48,7 +48,9 @@ public:
     bool alpha(std::uint32_t graph) const { return graphs_[graph].graph.alpha; }
     // The AOV names the graph's AOV Output slots write.
     const std::vector<std::string>& aovs(std::uint32_t graph) const { return graphs_[graph].graph.aovs; }
-    // True if some graph can produce sheen or clearcoat (the G-buffer's params1).
+    // True if some graph can produce sheen or clearcoat (the G-buffer's
+    // params1): a Principled BSDF node whose Sheen or Clearcoat is linked
+    // or a constant above 0.
     bool uses_params1() const;
     // True if some graph calls the node function `func` (node_bsdf_diffuse, ...).
     bool uses_node(const std::string& func) const;

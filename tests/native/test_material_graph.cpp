@@ -459,6 +459,27 @@ TEST(MaterialGraphDiskCache, ASecondRendererLoadsInsteadOfCompiling) {
                 cold.compile_ms, warm.programs_loaded, warm.load_ms);
 }
 
+// A sphere of `base` (through `graph` where given) under a point light and
+// a grey `world`, seen from above at 32x32, 2 samples; `also` (where given)
+// is added as a constant material that nothing uses.
+FrameResult lit_sphere(const Material& base, const MaterialGraph* graph, float world, const Material* also = nullptr) {
+    const tools::MeshArrays sphere = tools::make_uv_sphere(0.8f, 32, 16);
+    Renderer r;
+    const std::uint32_t mat = graph ? r.add_graph_material(base, *graph) : r.add_material(base);
+    if (also) r.add_material(*also);
+    const std::uint32_t mesh = r.add_mesh(sphere.view());
+    r.add_instances(mesh, identity_matrix().data(), 1, nullptr, {mat});
+    Light l;
+    l.type = LightType::Point;
+    l.matrix = tools::translation(1.5, -1.0, 3.0);
+    l.energy = 200.0f;
+    r.add_light(l);
+    set_world_color(r, world, world, world);
+    RenderSettings s = small(32, 32);
+    s.samples = 2;
+    return r.render(top_down_ortho(5.0, 1.0f), s);
+}
+
 // The programs leave out the closure models no surface of the scene has
 // (renderer.cpp plan_frame: CLOSURES_NO_OREN_NAYAR, CLOSURES_NO_BECKMANN),
 // and keep each one a surface has, from a constant material or a node
@@ -466,22 +487,8 @@ TEST(MaterialGraphDiskCache, ASecondRendererLoadsInsteadOfCompiling) {
 // Diffuse BSDF's Oren-Nayar lobe (sigma 0.9) otherwise than sigma 0, on a
 // sphere under a light. Were a model left out, the two would be the same.
 TEST(ClosureModels, StayWhereASurfaceHasThem) {
-    const tools::MeshArrays sphere = tools::make_uv_sphere(0.8f, 32, 16);
-    auto render_with = [&](const Material& base, const MaterialGraph* graph) {
-        Renderer r;
-        const std::uint32_t mat = graph ? r.add_graph_material(base, *graph) : r.add_material(base);
-        const std::uint32_t mesh = r.add_mesh(sphere.view());
-        r.add_instances(mesh, identity_matrix().data(), 1, nullptr, {mat});
-        Light l;
-        l.type = LightType::Point;
-        l.matrix = tools::translation(1.5, -1.0, 3.0);
-        l.energy = 200.0f;
-        r.add_light(l);
-        set_world_color(r, 0.0f, 0.0f, 0.0f);
-        RenderSettings s = small(32, 32);
-        s.samples = 2;
-        const FrameResult f = r.render(top_down_ortho(5.0, 1.0f), s);
-        return f.find(Pass::Combined)->pixels;
+    auto render_with = [](const Material& base, const MaterialGraph* graph) {
+        return lit_sphere(base, graph, 0.0f).find(Pass::Combined)->pixels;
     };
     auto largest_difference = [](const std::vector<float>& a, const std::vector<float>& b) {
         float d = 0.0f;
@@ -542,7 +549,6 @@ TEST(ClosureModels, StayWhereASurfaceHasThem) {
 // uses_params1): the G-buffer is 8 bytes a pixel smaller and the image the
 // same as with the target; a clearcoat of 0.8 takes it, and shows.
 TEST(ClosureModels, PrincipledNodesWithoutSheenOrClearcoatNeedNoParams1) {
-    const tools::MeshArrays sphere = tools::make_uv_sphere(0.8f, 32, 16);
     auto principled = [](float clearcoat) {
         MaterialGraph g;
         // base colour, metallic, specular, specular tint, roughness, sheen,
@@ -557,24 +563,9 @@ TEST(ClosureModels, PrincipledNodesWithoutSheenOrClearcoatNeedNoParams1) {
         g.surface_node = 0;
         return g;
     };
-    auto render_with = [&](const MaterialGraph& graph, const Material* also) {
-        Renderer r;
-        const std::uint32_t mat = r.add_graph_material(Material{}, graph);
-        const std::uint32_t mesh = r.add_mesh(sphere.view());
-        r.add_instances(mesh, identity_matrix().data(), 1, nullptr, {mat});
-        if (also) {
-            // An unseen constant material with clearcoat: params1 for the scene.
-            r.add_material(*also);
-        }
-        Light l;
-        l.type = LightType::Point;
-        l.matrix = tools::translation(1.5, -1.0, 3.0);
-        l.energy = 200.0f;
-        r.add_light(l);
-        set_world_color(r, 0.1f, 0.1f, 0.1f);
-        RenderSettings s = small(32, 32);
-        s.samples = 2;
-        return r.render(top_down_ortho(5.0, 1.0f), s);
+    // `also`: an unseen constant material with clearcoat, params1 for the scene.
+    auto render_with = [](const MaterialGraph& graph, const Material* also) {
+        return lit_sphere(Material{}, &graph, 0.1f, also);
     };
     Material coated;
     coated.clearcoat = 1.0f;

@@ -768,7 +768,7 @@ void ShadowModule::render_sample(ShaderLibrary& shaders, const std::array<float,
     // program and the transparent constant materials' slots take
     // `alpha_program` (GeometryStage::draw_casters): with SCENE_ALPHA every
     // fragment of every caster ran its discard test, the transparency
-    // sample's floor among them (its maps 2.4x as slow on llvmpipe).
+    // sample's floor among them (its maps 2.3x as slow on llvmpipe).
     const bool alpha = std::find(caster_defines.begin(), caster_defines.end(), "SCENE_ALPHA") != caster_defines.end();
     const bool apart = alpha && alpha_apart_enabled();
     ShaderVariant variant, alpha_variant;

@@ -135,11 +135,12 @@ public:
     // anywhere within a texel of its own point, and where the casters are
     // dense (a carpet of rocks) that blur darkens the lit surfaces beside
     // their contacts with other surfaces, by what lies under the contact
-    // (the instancing sample's rocks 0.982 of Cycles' mean with the
-    // receivers' need, 512 texels a side, 0.990 with 992: README, Speed
-    // against error). The fill of one texel per triangle costs little next
-    // to the triangles themselves (on llvmpipe 5 % of that frame); where
-    // the casters are few, nothing changes.
+    // (the instancing sample's rocks 0.984 of Cycles' mean with the
+    // receivers' need, 512 texels a side, 0.990 with this rule's 896: the
+    // report's per-object table, README Speed against error). The fill of
+    // one texel per triangle costs little next to the triangles themselves
+    // (on llvmpipe 3-5 % of that frame); where the casters are few,
+    // nothing changes.
     using CasterTest = std::function<bool(const glm::dvec3&, double)>;
     using CasterTriangles = std::function<std::uint64_t(const CasterTest&)>;
     static constexpr double kDenseCascades = 2.0;

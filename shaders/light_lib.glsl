@@ -612,13 +612,55 @@ bool emitter_triangle_hit(vec3 p0, vec3 e1, vec3 e2, vec3 D, bool clamp_inside, 
 /* What a direction L of the mesh light gives, with weight Le / (its density
  * in solid angle x the number of such samples); the specular lobe's share
  * `spec_mis` (its MIS weight: the BSDF's own directions give the rest). */
-void mesh_light_add(inout LightContribution r, SurfaceParams s, PrincipledWeights w, vec3 N, vec3 V, vec3 L,
-                    vec3 weight, float spec_mis) {
+LightContribution mesh_light_value(SurfaceParams s, PrincipledWeights w, vec3 N, vec3 V, vec3 L, vec3 weight,
+                                   float spec_mis) {
+    LightContribution c;
+    c.diffuse = c.glossy = vec3(0.0);
     /* A density near 0 (an area-sampled point almost on the receiver): no finite estimate. */
-    if (any(isinf(weight)) || any(isnan(weight))) return;
-    r.diffuse += principled_eval_diffuse(s, w, N, V, L) * weight;
-    r.glossy += (principled_specular(w, N, V, L) * spec_mis + vec3(principled_clearcoat(w, N, V, L))) *
-                (weight * smooth_side(s, L));
+    if (any(isinf(weight)) || any(isnan(weight))) return c;
+    c.diffuse = principled_eval_diffuse(s, w, N, V, L) * weight;
+    c.glossy = (principled_specular(w, N, V, L) * spec_mis + vec3(principled_clearcoat(w, N, V, L))) *
+               (weight * smooth_side(s, L));
+    return c;
+}
+
+/* ---- One shadow ray per mesh light (shadow rays) ----
+ * The light's points and the lobe's hits give candidates c_k, each with its
+ * own direction; traced one by one (MESH_LIGHT_RAY_EVERY_POINT) the
+ * shadowed estimate is sum_k c_k V_k, up to MESH_LIGHT_SAMPLES_NEAR +
+ * 2 MESH_LIGHT_BSDF_SAMPLES rays. Instead one candidate j is picked with
+ * probability w_j / W (w = the candidate's summed RGB, W = sum_k w_k) and
+ * only its ray is traced: c_j (W / w_j) V_j has, over the pick, the
+ * expectation sum_k c_k V_k exactly (an unbiased estimator of the traced
+ * sum, as resampled importance sampling's selection by the unshadowed
+ * contribution: Talbot et al. 2005, Bitterli et al. 2020 "ReSTIR", its
+ * one-sample form). Where the light is wholly visible or wholly blocked
+ * from P it equals the traced sum; only in penumbrae does it add noise.
+ * The pick streams over the candidates (weighted reservoir sampling,
+ * Chao 1982) with one number per pixel, light and film sample, rescaled at
+ * every step so it stays uniform; that number is the rotated 1D sequence of
+ * the R3 generator's first alpha (independent of the points' R2 numbers). */
+struct MeshLightReservoir {
+    LightContribution picked;
+    vec3 L;
+    float dist, w_picked, w_sum, u;
+};
+
+void reservoir_add(inout MeshLightReservoir res, LightContribution c, vec3 L, float dist) {
+    float w = dot(abs(c.diffuse) + abs(c.glossy), vec3(1.0));
+    if (!(w > 0.0) || isinf(w)) return;
+    res.w_sum += w;
+    float p = w / res.w_sum;
+    if (res.u < p) {
+        res.u = res.u / p;
+        res.picked = c;
+        res.L = L;
+        res.dist = dist;
+        res.w_picked = w;
+    } else {
+        res.u = (res.u - p) / (1.0 - p);
+    }
+    res.u = min(res.u, 0.99999994);
 }
 
 /* Power heuristic weight (Veach 1997) of a technique with n_a samples of
@@ -673,9 +715,13 @@ LightContribution mesh_light_unoccluded(GpuLight light, SurfaceParams s, Princip
     float radius = light.direction.w;
     int points = dot(to_center, to_center) < 4.0 * radius * radius ? MESH_LIGHT_SAMPLES_NEAR : MESH_LIGHT_SAMPLES;
 #ifdef SHADOW_RAYS
-    /* Shadow rays: each sample's own visibility (a shadowed mesh light has a
+    /* Shadow rays: the sample's own visibility (a shadowed mesh light has a
      * shadow entry, params.w >= 0), so the result is the occluded light. */
     const bool traced = int(light.params.w) >= 0;
+    MeshLightReservoir res;
+    res.picked.diffuse = res.picked.glossy = res.L = vec3(0.0);
+    res.dist = res.w_picked = res.w_sum = 0.0;
+    res.u = float(((h.x ^ h.w) + uint(frame.sample_shift.w) * 0xD1B54A32u) >> 8u) * (1.0 / 16777216.0);
 #endif
     float side = light.axis_y.w;
     /* As for the planar lights: rough lobes (alpha >= 0.25) are wide enough
@@ -725,12 +771,21 @@ LightContribution mesh_light_unoccluded(GpuLight light, SurfaceParams s, Princip
         }
         if (!(pdf > 0.0)) continue;
         float spec_mis = mis ? power_heuristic(n_light, pdf, n_bsdf, principled_specular_pdf(w, N, V, L)) : 1.0;
-        float visible = 1.0;
+        LightContribution c = mesh_light_value(s, w, N, V, L, emitter_radiance(light, t, b) / (pdf * n_light), spec_mis);
 #ifdef SHADOW_RAYS
-        if (traced) visible = shadow_ray(s, P, L, dist);
-        if (visible <= 0.0) continue;
+        if (traced) {
+#ifdef MESH_LIGHT_RAY_EVERY_POINT
+            float visible = shadow_ray(s, P, L, dist);
+            r.diffuse += c.diffuse * visible;
+            r.glossy += c.glossy * visible;
+#else
+            reservoir_add(res, c, L, dist);
 #endif
-        mesh_light_add(r, s, w, N, V, L, emitter_radiance(light, t, b) * (visible / (pdf * n_light)), spec_mis);
+            continue;
+        }
+#endif
+        r.diffuse += c.diffuse;
+        r.glossy += c.glossy;
     }
     if (mis) {
         /* The lobe's directions that can reach the light's bounding sphere,
@@ -759,16 +814,33 @@ LightContribution mesh_light_unoccluded(GpuLight light, SurfaceParams s, Princip
                 vec3 hit;
                 if (spec[j] == vec3(0.0) || !emitter_triangle_hit(p0, e1, e2, Lb[j], false, hit)) continue;
                 float pl = emitter_direction_pdf(p0, e1, e2, t.e2.w, t.e1.w, Lb[j], hit.x);
-                float visible = 1.0;
+                vec3 Le_hit = emitter_radiance(light, t, hit.yz) * power_heuristic(n_bsdf, pb[j], n_light, pl);
 #ifdef SHADOW_RAYS
-                if (traced) visible = shadow_ray(s, P, Lb[j], hit.x);
+                if (traced) {
+#ifdef MESH_LIGHT_RAY_EVERY_POINT
+                    Le[j] += Le_hit * shadow_ray(s, P, Lb[j], hit.x);
+#else
+                    LightContribution c;
+                    c.diffuse = vec3(0.0);
+                    c.glossy = spec[j] * Le_hit / (pb[j] * n_bsdf);
+                    reservoir_add(res, c, Lb[j], hit.x);
 #endif
-                Le[j] += emitter_radiance(light, t, hit.yz) * (power_heuristic(n_bsdf, pb[j], n_light, pl) * visible);
+                    continue;
+                }
+#endif
+                Le[j] += Le_hit;
             }
         }
         for (int j = 0; j < MESH_LIGHT_BSDF_SAMPLES; ++j)
             if (spec[j] != vec3(0.0)) r.glossy += spec[j] * Le[j] / (pb[j] * n_bsdf);
     }
+#if defined(SHADOW_RAYS) && !defined(MESH_LIGHT_RAY_EVERY_POINT)
+    if (traced && res.w_picked > 0.0) {
+        float scale = shadow_ray(s, P, res.L, res.dist) * (res.w_sum / res.w_picked);
+        r.diffuse += res.picked.diffuse * scale;
+        r.glossy += res.picked.glossy * scale;
+    }
+#endif
     return r;
 }
 #endif

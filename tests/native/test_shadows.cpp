@@ -566,6 +566,92 @@ TEST(Shadows, RaysDoNotOccludeAnEmitterByItsOwnSurface) {
     EXPECT_NEAR(shadowed / reference, 1.0, 1e-3);
 }
 
+TEST(Shadows, RaysToAMeshLightTraceOnePickedPointPerSample) {
+    // Shadow rays towards an emissive mesh trace one ray per light, pixel
+    // and sample, to a candidate (one of the light's points or the glossy
+    // lobe's hits) picked by its unshadowed light, weighted W / w_j
+    // (light_lib.glsl, MeshLightReservoir): unbiased for the sum over every
+    // candidate's own ray (DEFERRED_MESH_LIGHT_RAYS=every, the reference).
+    // A panel (32 triangles, 1 m up, coloured) over a glossy floor (alpha^2
+    // 0.008: its lobe's directions are candidates too) with a blocker at
+    // half height covering x < 0: the floor is wholly lit for x > 0.75,
+    // wholly blocked for x < -0.75, a penumbra between. Where every ray is
+    // free or every ray blocked, the pick gives the sum itself (its
+    // candidates' light has one colour: c_j W / w_j = sum_k c_k); in the
+    // penumbra it adds noise, and many samples agree.
+    struct EnvGuard {
+        ~EnvGuard() { unsetenv("DEFERRED_MESH_LIGHT_RAYS"); }
+    } guard;
+    Renderer r;
+    Material floor = grey();
+    floor.roughness = 0.3f;
+    deferred::testing::add_plane(r, floor, 6.0f);
+    Material emit;
+    emit.base_color = {0.0f, 0.0f, 0.0f};
+    emit.specular = 0.0f;
+    emit.emission = {1.0f, 0.6f, 0.3f};
+    emit.emission_strength = 8.0f;
+    deferred::testing::add_plane(r, emit, 0.75f, 4, tools::translation(0, 0, 1.0));
+    deferred::testing::add_plane(r, grey(), 2.0f, 1, tools::translation(-2.0, 0, 0.5));
+    deferred::testing::set_world_color(r, 0, 0, 0);
+    Camera cam;
+    const double eye[3] = {0.0, -3.0, 0.45}, target[3] = {0.0, 0.3, 0.0};
+    cam.matrix = tools::look_at(eye, target);
+    cam.lens = 18.0f;
+    RenderSettings s;
+    s.width = 160;
+    s.height = 96;
+    s.filter_width = 0.01f;
+    s.shadow_rays = true;
+    s.passes = {Pass::Combined, Pass::Position};
+    auto render = [&](const char* mode, int samples) {
+        setenv("DEFERRED_MESH_LIGHT_RAYS", mode, 1);
+        s.samples = samples;
+        FrameResult f = r.render(cam, s);
+        EXPECT_TRUE(f.timings.shadow_rays);
+        return f;
+    };
+    const FrameResult pick4 = render("pick", 4), every4 = render("every", 4);
+    const FrameResult pick64 = render("pick", 64), every64 = render("every", 64);
+    const PassImage& pos = *pick4.find(Pass::Position);
+    double lit_diff = 0.0, lit_max = 0.0, umbra_max = 0.0, pen_diff2 = 0.0, pen_pick = 0.0, pen_every = 0.0;
+    int lit = 0, umbra = 0, penumbra = 0;
+    for (int y = 0; y < s.height; ++y)
+        for (int x = 0; x < s.width; ++x) {
+            const glm::dvec3 P = pixel3(pos, x, y);
+            // The floor (the background's Position is 0).
+            if (P == glm::dvec3(0.0) || std::abs(P.z) > 1e-3 || std::abs(P.y) > 1.5 || std::abs(P.x) > 3.0) continue;
+            const double a = pixel3(*pick4.find(Pass::Combined), x, y).x;
+            const double b = pixel3(*every4.find(Pass::Combined), x, y).x;
+            if (P.x > 0.8) {
+                lit_diff = std::max(lit_diff, std::abs(a - b));
+                lit_max = std::max(lit_max, b);
+                ++lit;
+            } else if (P.x < -0.8) {
+                umbra_max = std::max({umbra_max, std::abs(a), std::abs(b)});
+                ++umbra;
+            } else if (std::abs(P.x) < 0.7) {
+                pen_diff2 += (a - b) * (a - b);
+                pen_pick += pixel3(*pick64.find(Pass::Combined), x, y).x;
+                pen_every += pixel3(*every64.find(Pass::Combined), x, y).x;
+                ++penumbra;
+            }
+        }
+    ASSERT_GT(lit, 500);
+    ASSERT_GT(umbra, 500);
+    ASSERT_GT(penumbra, 500);
+    const double pen_rms = std::sqrt(pen_diff2 / penumbra);
+    std::printf("mesh light, one picked ray: lit %d px, max |pick - every| %.2e of %.3f; umbra %d px, max %.2e; "
+                "penumbra %d px: rms difference %.4f at 4 samples, means at 64 %.5f and %.5f (ratio %.5f)\n",
+                lit, lit_diff, lit_max, umbra, umbra_max, penumbra, pen_rms, pen_pick / penumbra,
+                pen_every / penumbra, pen_pick / pen_every);
+    EXPECT_GT(lit_max, 0.05);
+    EXPECT_LT(lit_diff, 1e-4 * lit_max);
+    EXPECT_LT(umbra_max, 1e-6);
+    EXPECT_GT(pen_rms, 1e-3 * lit_max);  // the pick ran (and is noisier there)
+    EXPECT_NEAR(pen_pick / pen_every, 1.0, 0.01);
+}
+
 namespace {
 
 // A floor with boxes around and under the lights of `config`, 4 samples:

@@ -374,12 +374,20 @@ vec3 forward_light(vec4 emission, vec4 base, vec4 params0, vec4 params1, vec3 N,
     ivec2 pixel = ivec2(FRAG_COORD.xy);
     float ao;
     LightContribution total = world_light(w, s, P, N, V, pixel, ao);
+#ifdef MESH_RAY_POOL
+    mesh_ray_pool_start();
+#endif
     for (uint i = 0u; i < min(frame.counts.x, uint(FORWARD_MAX_LIGHTS)); ++i) {
         float visible;
         LightContribution c = shade_light(lights[i], s, w, P, N, V, visible);
         total.diffuse += c.diffuse * visible;
         total.glossy += c.glossy * visible;
     }
+#ifdef MESH_RAY_POOL
+    LightContribution m = reservoir_trace(mesh_ray_pool, s, P);
+    total.diffuse += m.diffuse;
+    total.glossy += m.glossy;
+#endif
     return emission.rgb + total.diffuse + total.glossy;
 }
 #endif

@@ -644,9 +644,17 @@ struct MeshLightReservoir {
     LightContribution picked;
     vec3 L;
     float dist, w_picked, w_sum, u;
+    uint owner; /* the picked candidate's light (light groups) */
 };
 
-void reservoir_add(inout MeshLightReservoir res, LightContribution c, vec3 L, float dist) {
+void reservoir_start(out MeshLightReservoir res, uint bits) {
+    res.picked.diffuse = res.picked.glossy = res.L = vec3(0.0);
+    res.dist = res.w_picked = res.w_sum = 0.0;
+    res.u = float((bits + uint(frame.sample_shift.w) * 0xD1B54A32u) >> 8u) * (1.0 / 16777216.0);
+    res.owner = 0u;
+}
+
+void reservoir_add(inout MeshLightReservoir res, LightContribution c, vec3 L, float dist, uint owner) {
     float w = dot(abs(c.diffuse) + abs(c.glossy), vec3(1.0));
     if (!(w > 0.0) || isinf(w)) return;
     res.w_sum += w;
@@ -657,11 +665,47 @@ void reservoir_add(inout MeshLightReservoir res, LightContribution c, vec3 L, fl
         res.L = L;
         res.dist = dist;
         res.w_picked = w;
+        res.owner = owner;
     } else {
         res.u = (res.u - p) / (1.0 - p);
     }
     res.u = min(res.u, 0.99999994);
 }
+
+#ifdef SHADOW_RAYS
+/* The picked candidate's light, c_j (W / w_j) V_j. */
+LightContribution reservoir_trace(MeshLightReservoir res, SurfaceParams s, vec3 P) {
+    LightContribution r;
+    r.diffuse = r.glossy = vec3(0.0);
+    if (res.w_picked > 0.0) {
+        float scale = shadow_ray(s, P, res.L, res.dist) * (res.w_sum / res.w_picked);
+        r.diffuse = res.picked.diffuse * scale;
+        r.glossy = res.picked.glossy * scale;
+    }
+    return r;
+}
+#endif
+
+#if defined(SHADOW_RAYS) && defined(MESH_LIGHT_RAY_POOL) && !defined(MESH_LIGHT_RAY_EVERY_POINT)
+/* MESH_LIGHT_RAY_POOL: one ray per pixel and sample for all the mesh lights
+ * together: each light's candidates, times its selection weight, go into
+ * this pixel-wide reservoir (the caller sets mesh_ray_pool_light and
+ * mesh_ray_pool_weight before each light, starts it with
+ * mesh_ray_pool_start and traces it with reservoir_trace after the last).
+ * The same estimator over the union of the lights' candidates. */
+#define MESH_RAY_POOL
+MeshLightReservoir mesh_ray_pool;
+uint mesh_ray_pool_light = 0u;
+float mesh_ray_pool_weight = 1.0;
+void mesh_ray_pool_start() {
+    uvec4 v = uvec4(shading_pixel(), 0x4D455348u, 0x2545F491u);
+    v = v * 1664525u + 1013904223u;
+    v.x += v.y * v.w; v.y += v.z * v.x; v.z += v.x * v.y; v.w += v.y * v.z;
+    v ^= v >> 16u;
+    v.x += v.y * v.w; v.y += v.z * v.x; v.z += v.x * v.y; v.w += v.y * v.z;
+    reservoir_start(mesh_ray_pool, v.x);
+}
+#endif
 
 /* Power heuristic weight (Veach 1997) of a technique with n_a samples of
  * density p_a against one with n_b samples of density p_b, from their ratio
@@ -718,10 +762,17 @@ LightContribution mesh_light_unoccluded(GpuLight light, SurfaceParams s, Princip
     /* Shadow rays: the sample's own visibility (a shadowed mesh light has a
      * shadow entry, params.w >= 0), so the result is the occluded light. */
     const bool traced = int(light.params.w) >= 0;
+#ifdef MESH_RAY_POOL
+#define MESH_RES mesh_ray_pool
+    const float pool_weight = mesh_ray_pool_weight;
+    const uint owner = mesh_ray_pool_light;
+#else
+#define MESH_RES res
+    const float pool_weight = 1.0;
+    const uint owner = 0u;
     MeshLightReservoir res;
-    res.picked.diffuse = res.picked.glossy = res.L = vec3(0.0);
-    res.dist = res.w_picked = res.w_sum = 0.0;
-    res.u = float(((h.x ^ h.w) + uint(frame.sample_shift.w) * 0xD1B54A32u) >> 8u) * (1.0 / 16777216.0);
+    reservoir_start(res, h.x ^ h.w);
+#endif
 #endif
     float side = light.axis_y.w;
     /* As for the planar lights: rough lobes (alpha >= 0.25) are wide enough
@@ -779,7 +830,9 @@ LightContribution mesh_light_unoccluded(GpuLight light, SurfaceParams s, Princip
             r.diffuse += c.diffuse * visible;
             r.glossy += c.glossy * visible;
 #else
-            reservoir_add(res, c, L, dist);
+            c.diffuse *= pool_weight;
+            c.glossy *= pool_weight;
+            reservoir_add(MESH_RES, c, L, dist, owner);
 #endif
             continue;
         }
@@ -822,8 +875,8 @@ LightContribution mesh_light_unoccluded(GpuLight light, SurfaceParams s, Princip
 #else
                     LightContribution c;
                     c.diffuse = vec3(0.0);
-                    c.glossy = spec[j] * Le_hit / (pb[j] * n_bsdf);
-                    reservoir_add(res, c, Lb[j], hit.x);
+                    c.glossy = spec[j] * Le_hit * (pool_weight / (pb[j] * n_bsdf));
+                    reservoir_add(MESH_RES, c, Lb[j], hit.x, owner);
 #endif
                     continue;
                 }
@@ -834,13 +887,14 @@ LightContribution mesh_light_unoccluded(GpuLight light, SurfaceParams s, Princip
         for (int j = 0; j < MESH_LIGHT_BSDF_SAMPLES; ++j)
             if (spec[j] != vec3(0.0)) r.glossy += spec[j] * Le[j] / (pb[j] * n_bsdf);
     }
-#if defined(SHADOW_RAYS) && !defined(MESH_LIGHT_RAY_EVERY_POINT)
-    if (traced && res.w_picked > 0.0) {
-        float scale = shadow_ray(s, P, res.L, res.dist) * (res.w_sum / res.w_picked);
-        r.diffuse += res.picked.diffuse * scale;
-        r.glossy += res.picked.glossy * scale;
+#if defined(SHADOW_RAYS) && !defined(MESH_LIGHT_RAY_EVERY_POINT) && !defined(MESH_RAY_POOL)
+    if (traced) {
+        LightContribution t = reservoir_trace(res, s, P);
+        r.diffuse += t.diffuse;
+        r.glossy += t.glossy;
     }
 #endif
+#undef MESH_RES
     return r;
 }
 #endif

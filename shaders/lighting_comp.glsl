@@ -204,6 +204,10 @@ void add_light(int kind, uint i, float weight, SurfaceParams s, PrincipledWeight
                inout vec3 catcher_unshadowed) {
     const vec3 luminance = vec3(0.2126729, 0.7151522, 0.0721750);
     float visible;
+#ifdef MESH_RAY_POOL
+    mesh_ray_pool_light = i;
+    mesh_ray_pool_weight = weight;
+#endif
     LightContribution c = shade_light_kind(kind, lights[i], s, w, P, N, V, visible);
     c.diffuse *= weight;
     c.glossy *= weight;
@@ -325,6 +329,9 @@ void main() {
 #endif
     float lum_shadowed = 0.0, lum_unshadowed = 0.0;
     vec3 catcher_unshadowed = vec3(0.0);
+#ifdef MESH_RAY_POOL
+    mesh_ray_pool_start();
+#endif
 #ifdef SHADOW_CATCHER
     const bool catcher = emission.a > 1.5;
     if (catcher && first_batch) catcher_unshadowed = last_world_unoccluded.diffuse + last_world_unoccluded.glossy;
@@ -420,6 +427,27 @@ void main() {
     for (; j < iterations; ++j)
         add_light(LIGHT_ANY_KIND, SEQUENCE_LIGHT(j), SEQUENCE_WEIGHT(j), s, w, P, N, V, total, lum_shadowed,
                   lum_unshadowed, catcher_unshadowed);
+#endif
+#ifdef MESH_RAY_POOL
+    {
+        /* The mesh lights' one ray (light_lib.glsl): their traced light, to
+         * the picked candidate's light group; as every mesh light's, its
+         * unshadowed light for the Shadow pass is the shadowed. */
+        const LightContribution m = reservoir_trace(mesh_ray_pool, s, P);
+        total.diffuse += m.diffuse;
+        total.glossy += m.glossy;
+#ifdef LIGHT_GROUPS
+        add_to_group(light_groups[mesh_ray_pool.owner], m.diffuse + m.glossy);
+#endif
+#ifdef OUT_SHADOW
+        const float lum_m = dot(m.diffuse + m.glossy, vec3(0.2126729, 0.7151522, 0.0721750));
+        lum_shadowed += lum_m;
+        lum_unshadowed += lum_m;
+#endif
+#ifdef SHADOW_CATCHER
+        catcher_unshadowed += m.diffuse + m.glossy;
+#endif
+    }
 #endif
 
     if (!first_batch) emission = vec4(0.0);

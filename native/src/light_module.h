@@ -43,6 +43,7 @@ public:
     void update_mesh_points(const EmitterModule& emitters, const std::array<float, 2>& u,
                             class ShadowModule* shadows);
     void add_defines(ShaderVariant& variant) const;
+    bool has_mesh_lights() const { return has_type_[LIGHT_MESH]; }
     void bind() const;
     std::uint32_t count() const { return count_; }
     // Each packed light's light group (0 none), for the light-group passes;

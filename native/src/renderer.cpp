@@ -788,13 +788,17 @@ void Renderer::Impl::prepare_programs(Frame& f) {
     const bool every_model = models && std::string(models) == "all";
     if (!f.plan.oren_nayar && !every_model) base.defines.push_back("CLOSURES_NO_OREN_NAYAR");
     if (!f.plan.beckmann && !every_model) base.defines.push_back("CLOSURES_NO_BECKMANN");
-    // Shadow rays towards an emissive mesh: one ray per light, pixel and
-    // sample, to a candidate picked by its unshadowed light (light_lib.glsl);
-    // DEFERRED_MESH_LIGHT_RAYS=every traces each point's own ray (the
-    // reference the pick is measured against).
-    const char* mesh_rays = std::getenv("DEFERRED_MESH_LIGHT_RAYS");
-    if (f.shadow_rays && mesh_rays && std::string(mesh_rays) == "every")
-        base.defines.push_back("MESH_LIGHT_RAY_EVERY_POINT");
+    // Shadow rays towards emissive meshes: one ray per pixel and sample for
+    // all of them, to a candidate picked by its unshadowed light
+    // (light_lib.glsl, MESH_LIGHT_RAY_POOL). DEFERRED_MESH_LIGHT_RAYS=light:
+    // one per mesh light; =every: each candidate's own ray (the reference
+    // the picks are measured against).
+    const char* mesh_rays_env = std::getenv("DEFERRED_MESH_LIGHT_RAYS");
+    const std::string mesh_rays = mesh_rays_env ? mesh_rays_env : "pixel";
+    if (f.shadow_rays && lights.has_mesh_lights()) {
+        if (mesh_rays == "every") base.defines.push_back("MESH_LIGHT_RAY_EVERY_POINT");
+        else if (mesh_rays != "light") base.defines.push_back("MESH_LIGHT_RAY_POOL");
+    }
     if (features.ids) base.defines.push_back("GBUF_IDS");
     if (features.instance_ids) base.defines.push_back("GBUF_INSTANCE_IDS");
     if (features.uv) base.defines.push_back("GBUF_UV");

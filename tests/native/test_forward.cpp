@@ -38,9 +38,11 @@ struct Pane {
 // own); the camera covers 6 m, so the panes cover the middle of the frame.
 // `rays`: shadow rays instead of maps, and an opaque caster out of the
 // camera's view (half size 1 at (4.5, 1.5, 8.5)) whose shadow falls on the
-// right of the panes (x 1..2, y -0.75..1.25 at z = 1).
+// right of the panes (x 1..2, y -0.75..1.25 at z = 1). `emitter`: a blue
+// emissive panel out of view too (half size 0.5 at (-4, -1, 2.5), facing
+// both ways), a mesh light.
 FrameResult render_scene(const std::vector<Pane>& panes, int samples, bool film_transparent = false,
-                         bool with_floor = true, float world = 0.25f, bool rays = false) {
+                         bool with_floor = true, float world = 0.25f, bool rays = false, bool emitter = false) {
     Renderer r;
     set_world_color(r, world, world, world);
     Light sun;
@@ -57,6 +59,13 @@ FrameResult render_scene(const std::vector<Pane>& panes, int samples, bool film_
     for (const Pane& p : order)
         add_plane(r, p.material, 2.0f, 1, tools::translation(0, 0, p.height), /*cast_shadow=*/false);
     if (rays) add_plane(r, diffuse(0.5f, 0.5f, 0.5f), 1.0f, 1, tools::translation(4.5, 1.5, 8.5));
+    if (emitter) {
+        Material blue = diffuse(0.0f, 0.0f, 0.0f);
+        blue.specular = 0.0f;
+        blue.emission = {0.2f, 0.4f, 1.0f};
+        blue.emission_strength = 20.0f;
+        add_plane(r, blue, 0.5f, 2, tools::translation(-4.0, -1.0, 2.5));
+    }
     RenderSettings s;
     s.shadow_rays = rays;
     s.width = s.height = kSize;
@@ -118,11 +127,14 @@ TEST(ForwardPass, ShadowRaysLightTheLayerAsTheLightingPassDoes) {
     // With shadow rays the forward pass traces them itself (a fragment
     // shader calling the traversal through its subroutine, selected after
     // each glUseProgram): 0.4 pane + 0.6 floor as in the first test, and the
-    // caster's shadow on the pane's right, where the sun's light is gone.
+    // caster's shadow on the pane's right, where the sun's light is gone. An
+    // emissive panel lights both too: the forward pass picks the mesh
+    // lights' one ray as the lighting pass does (MESH_LIGHT_RAY_POOL).
     const Material green = diffuse(0.25f, 0.75f, 0.375f);
-    FrameResult floor_only = render_scene({}, 1, false, true, 0.25f, true);
-    FrameResult pane_opaque = render_scene({{green, 1.0}}, 1, false, true, 0.25f, true);
-    FrameResult forward = render_scene({{blend_of(green, 0.4f), 1.0}}, 1, false, true, 0.25f, true);
+    FrameResult floor_only = render_scene({}, 1, false, true, 0.25f, true, true);
+    FrameResult pane_opaque = render_scene({{green, 1.0}}, 1, false, true, 0.25f, true, true);
+    FrameResult forward = render_scene({{blend_of(green, 0.4f), 1.0}}, 1, false, true, 0.25f, true, true);
+    FrameResult no_emitter = render_scene({{blend_of(green, 0.4f), 1.0}}, 1, false, true, 0.25f, true, false);
     ASSERT_TRUE(forward.timings.shadow_rays);
     const PassImage& F = *floor_only.find(Pass::Combined);
     const PassImage& P = *pane_opaque.find(Pass::Combined);
@@ -135,6 +147,9 @@ TEST(ForwardPass, ShadowRaysLightTheLayerAsTheLightingPassDoes) {
                 "%.4f\n", worst, shadowed.y, lit.y);
     EXPECT_LT(worst, 1e-4);
     EXPECT_LT(shadowed.y, 0.5 * lit.y);  // the caster shadows the pane
+    const glm::dvec4 unlit = pixel4(*no_emitter.find(Pass::Combined), 12, 26);
+    std::printf("blue of the pane with and without the emissive panel: %.4f, %.4f\n", lit.z, unlit.z);
+    EXPECT_GT(lit.z, unlit.z + 0.02);  // the emitter lights the layer
 }
 
 TEST(ForwardPass, EqualsStochasticTransparencyConverged) {

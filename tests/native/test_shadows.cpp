@@ -567,11 +567,12 @@ TEST(Shadows, RaysDoNotOccludeAnEmitterByItsOwnSurface) {
 }
 
 TEST(Shadows, RaysToAMeshLightTraceOnePickedPointPerSample) {
-    // Shadow rays towards an emissive mesh trace one ray per light, pixel
-    // and sample, to a candidate (one of the light's points or the glossy
-    // lobe's hits) picked by its unshadowed light, weighted W / w_j
-    // (light_lib.glsl, MeshLightReservoir): unbiased for the sum over every
-    // candidate's own ray (DEFERRED_MESH_LIGHT_RAYS=every, the reference).
+    // Shadow rays towards an emissive mesh trace one ray per pixel and
+    // sample (DEFERRED_MESH_LIGHT_RAYS=light: per light), to a candidate
+    // (one of the light's points or the glossy lobe's hits) picked by its
+    // unshadowed light, weighted W / w_j (light_lib.glsl,
+    // MeshLightReservoir): unbiased for the sum over every candidate's own
+    // ray (DEFERRED_MESH_LIGHT_RAYS=every, the reference).
     // A panel (32 triangles, 1 m up, coloured) over a glossy floor (alpha^2
     // 0.008: its lobe's directions are candidates too) with a blocker at
     // half height covering x < 0: the floor is wholly lit for x > 0.75,
@@ -611,10 +612,14 @@ TEST(Shadows, RaysToAMeshLightTraceOnePickedPointPerSample) {
         EXPECT_TRUE(f.timings.shadow_rays);
         return f;
     };
-    const FrameResult pick4 = render("pick", 4), every4 = render("every", 4);
-    const FrameResult pick64 = render("pick", 64), every64 = render("every", 64);
+    const FrameResult pick4 = render("light", 4), every4 = render("every", 4);
+    const FrameResult pick64 = render("light", 64), every64 = render("every", 64);
+    // The default, one ray per pixel for all mesh lights: with one light the
+    // same estimator (its own numbers).
+    const FrameResult pool64 = render("pixel", 64);
     const PassImage& pos = *pick4.find(Pass::Position);
-    double lit_diff = 0.0, lit_max = 0.0, umbra_max = 0.0, pen_diff2 = 0.0, pen_pick = 0.0, pen_every = 0.0;
+    double lit_diff = 0.0, lit_max = 0.0, umbra_max = 0.0, pen_diff2 = 0.0, pen_pick = 0.0, pen_every = 0.0,
+           pen_pool = 0.0;
     int lit = 0, umbra = 0, penumbra = 0;
     for (int y = 0; y < s.height; ++y)
         for (int x = 0; x < s.width; ++x) {
@@ -634,6 +639,7 @@ TEST(Shadows, RaysToAMeshLightTraceOnePickedPointPerSample) {
                 pen_diff2 += (a - b) * (a - b);
                 pen_pick += pixel3(*pick64.find(Pass::Combined), x, y).x;
                 pen_every += pixel3(*every64.find(Pass::Combined), x, y).x;
+                pen_pool += pixel3(*pool64.find(Pass::Combined), x, y).x;
                 ++penumbra;
             }
         }
@@ -642,14 +648,88 @@ TEST(Shadows, RaysToAMeshLightTraceOnePickedPointPerSample) {
     ASSERT_GT(penumbra, 500);
     const double pen_rms = std::sqrt(pen_diff2 / penumbra);
     std::printf("mesh light, one picked ray: lit %d px, max |pick - every| %.2e of %.3f; umbra %d px, max %.2e; "
-                "penumbra %d px: rms difference %.4f at 4 samples, means at 64 %.5f and %.5f (ratio %.5f)\n",
+                "penumbra %d px: rms difference %.4f at 4 samples, means at 64 %.5f and %.5f (ratio %.5f; one ray a "
+                "pixel %.5f)\n",
                 lit, lit_diff, lit_max, umbra, umbra_max, penumbra, pen_rms, pen_pick / penumbra,
-                pen_every / penumbra, pen_pick / pen_every);
+                pen_every / penumbra, pen_pick / pen_every, pen_pool / pen_every);
     EXPECT_GT(lit_max, 0.05);
     EXPECT_LT(lit_diff, 1e-4 * lit_max);
     EXPECT_LT(umbra_max, 1e-6);
     EXPECT_GT(pen_rms, 1e-3 * lit_max);  // the pick ran (and is noisier there)
     EXPECT_NEAR(pen_pick / pen_every, 1.0, 0.01);
+    EXPECT_NEAR(pen_pool / pen_every, 1.0, 0.01);
+}
+
+TEST(Shadows, RaysToMeshLightsPoolTheirCandidatesAndKeepEachLightsGroup) {
+    // One ray per pixel and sample for all the mesh lights (the default):
+    // the pick runs over the union of their candidates, so a pixel that one
+    // light reaches and a blocker hides from the other gets either all of
+    // it or nothing, and the picked light's group gets it. Two panels (one
+    // colour, light groups 1 and 2) at x = -1.2 and x = +1.2, 1 m up, a
+    // blocker over -0.3 < x < 0.3 at half height: against every candidate's
+    // own ray, each group's mean and the whole image's agree at 64 samples,
+    // and per pixel the groups add up to Combined.
+    struct EnvGuard {
+        ~EnvGuard() { unsetenv("DEFERRED_MESH_LIGHT_RAYS"); }
+    } guard;
+    Renderer r;
+    deferred::testing::add_plane(r, grey(), 6.0f);
+    Material emit;
+    emit.base_color = {0.0f, 0.0f, 0.0f};
+    emit.specular = 0.0f;
+    emit.emission = {1.0f, 0.8f, 0.6f};
+    emit.emission_strength = 6.0f;
+    tools::MeshArrays panel = tools::make_plane(0.5f, 2);
+    const std::uint32_t pm = r.add_mesh(panel.view()), em = r.add_material(emit);
+    for (int k = 0; k < 2; ++k) {
+        Mat4d t = tools::translation(k == 0 ? -1.2 : 1.2, 0.0, 1.0);
+        r.add_instances(pm, t.data(), 1, nullptr, {em}, true, nullptr, nullptr, nullptr, false, std::uint32_t(k + 1));
+    }
+    tools::MeshArrays blocker = tools::make_box(0.3f, 1.5f, 0.02f);
+    const std::uint32_t bm = r.add_mesh(blocker.view()), gm = r.add_material(grey());
+    Mat4d bt = tools::translation(0.0, 0.0, 0.5);
+    r.add_instances(bm, bt.data(), 1, nullptr, {gm});
+    deferred::testing::set_world_color(r, 0, 0, 0);
+    RenderSettings s;
+    s.width = 128;
+    s.height = 64;
+    s.filter_width = 0.01f;
+    s.shadow_rays = true;
+    s.light_groups = 2;
+    const Camera cam = deferred::testing::top_down_ortho(0.2, 4.0f);  // under the panels and the blocker
+    auto render = [&](const char* mode, int samples) {
+        setenv("DEFERRED_MESH_LIGHT_RAYS", mode, 1);
+        s.samples = samples;
+        FrameResult f = r.render(cam, s);
+        EXPECT_EQ(f.light_groups.size(), 2u);
+        return f;
+    };
+    const FrameResult pool = render("pixel", 64), every = render("every", 64), pool4 = render("pixel", 4);
+    auto mean = [](const std::vector<float>& px) {
+        double sum = 0.0;
+        for (std::size_t i = 0; i < px.size(); i += 4) sum += px[i] + px[i + 1] + px[i + 2];
+        return sum / double(px.size() / 4);
+    };
+    const double g1 = mean(pool.light_groups[0]) / mean(every.light_groups[0]);
+    const double g2 = mean(pool.light_groups[1]) / mean(every.light_groups[1]);
+    const double all = mean(pool.find(Pass::Combined)->pixels) / mean(every.find(Pass::Combined)->pixels);
+    double split = 0.0, peak = 0.0;
+    const PassImage& c4 = *pool4.find(Pass::Combined);
+    for (std::size_t i = 0; i < std::size_t(c4.width * c4.height) * 4; i += 4)
+        for (int c = 0; c < 3; ++c) {
+            split = std::max(split, std::abs(double(pool4.light_groups[0][i + c]) + pool4.light_groups[1][i + c] -
+                                             c4.pixels[i + c]));
+            peak = std::max(peak, double(c4.pixels[i + c]));
+        }
+    std::printf("two mesh lights, one ray a pixel, 64 samples against every candidate's ray: group 1 %.5f, group 2 "
+                "%.5f, Combined %.5f; at 4 samples max |group 1 + group 2 - Combined| %.2e of %.3f\n",
+                g1, g2, all, split, peak);
+    EXPECT_GT(mean(every.light_groups[0]), 0.05);
+    EXPECT_GT(mean(every.light_groups[1]), 0.05);
+    EXPECT_NEAR(g1, 1.0, 0.01);
+    EXPECT_NEAR(g2, 1.0, 0.01);
+    EXPECT_NEAR(all, 1.0, 0.01);
+    EXPECT_LT(split, 1e-5 * peak);
 }
 
 namespace {

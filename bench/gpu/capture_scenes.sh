@@ -7,7 +7,7 @@
 set -euo pipefail
 repo="$(cd "$(dirname "$0")/../.." && pwd)"
 build="${1:-$repo/build}"
-for scene in box_room many_lights showcase instancing transparency; do
+for scene in box_room many_lights showcase instancing transparency emitters; do
   DEFERRED_RENDER_CAPTURE="$repo/bench/gpu/captures/$scene.npz" \
   BLENDER_USER_SCRIPTS="$build/blender_scripts" \
     blender -b --factory-startup --addons deferred_render "$repo/blend_samples/$scene.blend" \

@@ -35,6 +35,9 @@ CASES = [
     ("many_lights", "16 light samples", ["--light-samples", "16"], 2.0, "1 000 lights <= 2 ms per sample"),
     ("showcase", "shadow maps", ["--shadow-maps"], None, ""),
     ("instancing", "shadow maps", ["--shadow-maps"], None, ""),
+    # Three emissive meshes (5 000 fairy-light triangles among them): one
+    # shadow ray a pixel and sample for all of them (light_lib.glsl).
+    ("emitters", "shadow rays", ["--shadow-rays"], None, ""),
     # Node materials (capture_materials.py): the geometry pass with texture-heavy
     # materials against constant ones, the node-materials issue's <= 1.5x.
     ("materials_constant", "constant Principled", [], None, ""),

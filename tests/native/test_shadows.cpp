@@ -21,6 +21,22 @@ Material grey() {
     return m;
 }
 
+// A black emitter of radiance colour x strength (a mesh light).
+Material emitter(float r, float g, float b, float strength) {
+    Material m;
+    m.base_color = {0.0f, 0.0f, 0.0f};
+    m.specular = 0.0f;
+    m.emission = {r, g, b};
+    m.emission_strength = strength;
+    return m;
+}
+
+// DEFERRED_MESH_LIGHT_RAYS set by a test, unset when it ends.
+struct MeshLightRaysEnv {
+    void set(const char* mode) { setenv("DEFERRED_MESH_LIGHT_RAYS", mode, 1); }
+    ~MeshLightRaysEnv() { unsetenv("DEFERRED_MESH_LIGHT_RAYS"); }
+};
+
 // A 10 m floor with a 1 m grey cube resting on it at the origin.
 void add_cube_on_floor(Renderer& r) {
     const std::uint32_t mat = deferred::testing::add_plane(r, grey(), 10.0f, 4);
@@ -541,12 +557,7 @@ TEST(Shadows, RaysDoNotOccludeAnEmitterByItsOwnSurface) {
     auto floor_mean = [](bool cast) {
         Renderer r;
         deferred::testing::add_plane(r, grey(), 6.0f);
-        Material emit;
-        emit.base_color = {0.0f, 0.0f, 0.0f};
-        emit.specular = 0.0f;
-        emit.emission = {1.0f, 1.0f, 1.0f};
-        emit.emission_strength = 5.0f;
-        deferred::testing::add_plane(r, emit, 0.75f, 6, tools::translation(0, 0, 1.0), cast);
+        deferred::testing::add_plane(r, emitter(1.0f, 1.0f, 1.0f, 5.0f), 0.75f, 6, tools::translation(0, 0, 1.0), cast);
         deferred::testing::set_world_color(r, 0, 0, 0);
         RenderSettings s;
         s.width = 96;
@@ -580,19 +591,12 @@ TEST(Shadows, RaysToAMeshLightTraceOnePickedPointPerSample) {
     // free or every ray blocked, the pick gives the sum itself (its
     // candidates' light has one colour: c_j W / w_j = sum_k c_k); in the
     // penumbra it adds noise, and many samples agree.
-    struct EnvGuard {
-        ~EnvGuard() { unsetenv("DEFERRED_MESH_LIGHT_RAYS"); }
-    } guard;
+    MeshLightRaysEnv env;
     Renderer r;
     Material floor = grey();
     floor.roughness = 0.3f;
     deferred::testing::add_plane(r, floor, 6.0f);
-    Material emit;
-    emit.base_color = {0.0f, 0.0f, 0.0f};
-    emit.specular = 0.0f;
-    emit.emission = {1.0f, 0.6f, 0.3f};
-    emit.emission_strength = 8.0f;
-    deferred::testing::add_plane(r, emit, 0.75f, 4, tools::translation(0, 0, 1.0));
+    deferred::testing::add_plane(r, emitter(1.0f, 0.6f, 0.3f, 8.0f), 0.75f, 4, tools::translation(0, 0, 1.0));
     deferred::testing::add_plane(r, grey(), 2.0f, 1, tools::translation(-2.0, 0, 0.5));
     deferred::testing::set_world_color(r, 0, 0, 0);
     Camera cam;
@@ -606,7 +610,7 @@ TEST(Shadows, RaysToAMeshLightTraceOnePickedPointPerSample) {
     s.shadow_rays = true;
     s.passes = {Pass::Combined, Pass::Position};
     auto render = [&](const char* mode, int samples) {
-        setenv("DEFERRED_MESH_LIGHT_RAYS", mode, 1);
+        env.set(mode);
         s.samples = samples;
         FrameResult f = r.render(cam, s);
         EXPECT_TRUE(f.timings.shadow_rays);
@@ -669,18 +673,11 @@ TEST(Shadows, RaysToMeshLightsPoolTheirCandidatesAndKeepEachLightsGroup) {
     // blocker over -0.3 < x < 0.3 at half height: against every candidate's
     // own ray, each group's mean and the whole image's agree at 64 samples,
     // and per pixel the groups add up to Combined.
-    struct EnvGuard {
-        ~EnvGuard() { unsetenv("DEFERRED_MESH_LIGHT_RAYS"); }
-    } guard;
+    MeshLightRaysEnv env;
     Renderer r;
     deferred::testing::add_plane(r, grey(), 6.0f);
-    Material emit;
-    emit.base_color = {0.0f, 0.0f, 0.0f};
-    emit.specular = 0.0f;
-    emit.emission = {1.0f, 0.8f, 0.6f};
-    emit.emission_strength = 6.0f;
     tools::MeshArrays panel = tools::make_plane(0.5f, 2);
-    const std::uint32_t pm = r.add_mesh(panel.view()), em = r.add_material(emit);
+    const std::uint32_t pm = r.add_mesh(panel.view()), em = r.add_material(emitter(1.0f, 0.8f, 0.6f, 6.0f));
     for (int k = 0; k < 2; ++k) {
         Mat4d t = tools::translation(k == 0 ? -1.2 : 1.2, 0.0, 1.0);
         r.add_instances(pm, t.data(), 1, nullptr, {em}, true, nullptr, nullptr, nullptr, false, std::uint32_t(k + 1));
@@ -698,7 +695,7 @@ TEST(Shadows, RaysToMeshLightsPoolTheirCandidatesAndKeepEachLightsGroup) {
     s.light_groups = 2;
     const Camera cam = deferred::testing::top_down_ortho(0.2, 4.0f);  // under the panels and the blocker
     auto render = [&](const char* mode, int samples) {
-        setenv("DEFERRED_MESH_LIGHT_RAYS", mode, 1);
+        env.set(mode);
         s.samples = samples;
         FrameResult f = r.render(cam, s);
         EXPECT_EQ(f.light_groups.size(), 2u);

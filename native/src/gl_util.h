@@ -3,6 +3,7 @@
 
 #include <epoxy/gl.h>
 
+#include <atomic>
 #include <deque>
 #include <string>
 #include <utility>
@@ -19,7 +20,9 @@ template <void (*Delete)(GLuint)>
 class GLHandle {
 public:
     GLHandle() = default;
-    explicit GLHandle(GLuint id) : id_(id) {}
+    explicit GLHandle(GLuint id) : id_(id) {
+        if (id_) live_.fetch_add(1, std::memory_order_relaxed);
+    }
     ~GLHandle() { reset(); }
     GLHandle(GLHandle&& o) noexcept : id_(std::exchange(o.id_, 0)) {}
     GLHandle& operator=(GLHandle&& o) noexcept {
@@ -30,10 +33,20 @@ public:
     GLHandle& operator=(const GLHandle&) = delete;
     GLuint get() const { return id_; }
     explicit operator bool() const { return id_ != 0; }
-    void reset() { if (id_) Delete(id_); id_ = 0; }
+    void reset() {
+        if (id_) {
+            Delete(id_);
+            live_.fetch_sub(1, std::memory_order_relaxed);
+        }
+        id_ = 0;
+    }
+    // Objects of this kind the process holds through handles (the tests:
+    // what a release leaves).
+    static long live() { return live_.load(std::memory_order_relaxed); }
 
 private:
     GLuint id_ = 0;
+    static inline std::atomic<long> live_{0};
 };
 
 void delete_buffer(GLuint id);

@@ -7,6 +7,7 @@
 
 #include "camera.h"
 #include "gl_test_context.h"
+#include "gl_util.h"
 #include "progressive_preview.h"
 
 #include <gtest/gtest.h>
@@ -112,7 +113,14 @@ TEST(KeptMeshes, UnkeyedAndUnusedMeshesAreDropped) {
 // What a final render without Persistent Data leaves for the next one
 // (addon engine/session.py): no mesh, kept or not, no target; the context's
 // programs, so the next render links none, and the same image.
+// The buffers a renderer's context keeps with no scene: the empty storage
+// buffer it binds where a program declares one the frame has none of.
+constexpr long kContextBuffers = 1;
+
 TEST(KeptMeshes, ReleasedSceneMemoryKeepsOnlyTheProgramsAndRendersTheSame) {
+    // GL objects held through the library's handles, before this renderer.
+    const long textures_before = Texture::live(), buffers_before = Buffer::live(),
+               framebuffers_before = Framebuffer::live();
     Renderer r;
     tools::MeshArrays floor = tools::make_plane(10.0f, 1), pane = tools::make_plane(1.0f, 1);
     build_scene(r, r.add_mesh(floor.view(), "floor"), r.add_mesh(pane.view(), "pane"));
@@ -123,7 +131,19 @@ TEST(KeptMeshes, ReleasedSceneMemoryKeepsOnlyTheProgramsAndRendersTheSame) {
     EXPECT_GT(first.timings.programs_compiled + first.timings.programs_loaded, 0u);
     EXPECT_GT(first.timings.shadow_map_bytes, 0u);
 
+    const long textures_held = Texture::live(), buffers_held = Buffer::live();
     r.release_scene_memory();
+    // No texture (targets, maps, images) and no framebuffer is left; of the
+    // buffers, only the context's own.
+    const long textures_left = Texture::live() - textures_before, buffers_left = Buffer::live() - buffers_before,
+               framebuffers_left = Framebuffer::live() - framebuffers_before;
+    std::printf("held by the frame: %ld textures, %ld buffers; left after the release: %ld, %ld, %ld framebuffers\n",
+                textures_held - textures_before, buffers_held - buffers_before, textures_left, buffers_left,
+                framebuffers_left);
+    EXPECT_GT(textures_held - textures_before, 5);
+    EXPECT_EQ(textures_left, 0);
+    EXPECT_EQ(framebuffers_left, 0);
+    EXPECT_LE(buffers_left, kContextBuffers);
     EXPECT_EQ(r.find_mesh("floor"), -1);  // kept meshes go too
     EXPECT_EQ(r.find_mesh("pane"), -1);
     r.clear_scene();
@@ -137,6 +157,8 @@ TEST(KeptMeshes, ReleasedSceneMemoryKeepsOnlyTheProgramsAndRendersTheSame) {
     // Twice in a row, and before any scene: nothing left to release.
     r.release_scene_memory();
     r.release_scene_memory();
+    EXPECT_EQ(Texture::live() - textures_before, 0);
+    EXPECT_LE(Buffer::live() - buffers_before, kContextBuffers);
     build_scene(r);
     const FrameResult third = r.render(top_down_ortho(10.0, 6.0f), s);
     EXPECT_EQ(third.timings.programs_compiled + third.timings.programs_loaded, 0u);

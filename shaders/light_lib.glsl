@@ -624,7 +624,9 @@ LightContribution mesh_light_value(SurfaceParams s, PrincipledWeights w, vec3 N,
     return c;
 }
 
-/* ---- One shadow ray per mesh light (shadow rays) ----
+/* ---- Shadow rays to mesh lights: one picked candidate's ray ----
+ * (One per pixel and sample for all the mesh lights with
+ * MESH_LIGHT_RAY_POOL, the default; one per light without it.)
  * The light's points and the lobe's hits give candidates c_k, each with its
  * own direction; traced one by one (MESH_LIGHT_RAY_EVERY_POINT) the
  * shadowed estimate is sum_k c_k V_k, up to MESH_LIGHT_SAMPLES_NEAR +

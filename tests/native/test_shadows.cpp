@@ -31,6 +31,17 @@ Material emitter(float r, float g, float b, float strength) {
     return m;
 }
 
+// A grey floor (half size 6), a thin box of half size hx x hy at half a
+// metre over the origin (a blocker) and a black world.
+void add_floor_and_blocker(Renderer& r, float hx, float hy) {
+    deferred::testing::add_plane(r, grey(), 6.0f);
+    tools::MeshArrays blocker = tools::make_box(hx, hy, 0.02f);
+    const std::uint32_t bm = r.add_mesh(blocker.view()), gm = r.add_material(grey());
+    Mat4d bt = tools::translation(0.0, 0.0, 0.5);
+    r.add_instances(bm, bt.data(), 1, nullptr, {gm});
+    deferred::testing::set_world_color(r, 0, 0, 0);
+}
+
 // DEFERRED_MESH_LIGHT_RAYS set by a test, unset when it ends.
 struct MeshLightRaysEnv {
     void set(const char* mode) { setenv("DEFERRED_MESH_LIGHT_RAYS", mode, 1); }
@@ -675,18 +686,13 @@ TEST(Shadows, RaysToMeshLightsPoolTheirCandidatesAndKeepEachLightsGroup) {
     // and per pixel the groups add up to Combined.
     MeshLightRaysEnv env;
     Renderer r;
-    deferred::testing::add_plane(r, grey(), 6.0f);
+    add_floor_and_blocker(r, 0.3f, 1.5f);
     tools::MeshArrays panel = tools::make_plane(0.5f, 2);
     const std::uint32_t pm = r.add_mesh(panel.view()), em = r.add_material(emitter(1.0f, 0.8f, 0.6f, 6.0f));
     for (int k = 0; k < 2; ++k) {
         Mat4d t = tools::translation(k == 0 ? -1.2 : 1.2, 0.0, 1.0);
         r.add_instances(pm, t.data(), 1, nullptr, {em}, true, nullptr, nullptr, nullptr, false, std::uint32_t(k + 1));
     }
-    tools::MeshArrays blocker = tools::make_box(0.3f, 1.5f, 0.02f);
-    const std::uint32_t bm = r.add_mesh(blocker.view()), gm = r.add_material(grey());
-    Mat4d bt = tools::translation(0.0, 0.0, 0.5);
-    r.add_instances(bm, bt.data(), 1, nullptr, {gm});
-    deferred::testing::set_world_color(r, 0, 0, 0);
     RenderSettings s;
     s.width = 128;
     s.height = 64;
@@ -727,6 +733,46 @@ TEST(Shadows, RaysToMeshLightsPoolTheirCandidatesAndKeepEachLightsGroup) {
     EXPECT_NEAR(g2, 1.0, 0.01);
     EXPECT_NEAR(all, 1.0, 0.01);
     EXPECT_LT(split, 1e-5 * peak);
+}
+
+TEST(Shadows, RaysToMeshLightsPoolPerLightingBatch) {
+    // More mesh lights than one lighting dispatch takes with rays
+    // (kRayLightBatch): each dispatch pools its own lights' candidates and
+    // traces their one ray. Twelve small panels in a ring 1 m up, a blocker
+    // over the middle at half height: the image's mean at 64 samples
+    // against every candidate's own ray.
+    MeshLightRaysEnv env;
+    Renderer r;
+    add_floor_and_blocker(r, 0.6f, 0.6f);
+    tools::MeshArrays panel = tools::make_plane(0.2f, 1);
+    const std::uint32_t pm = r.add_mesh(panel.view()), em = r.add_material(emitter(1.0f, 0.9f, 0.7f, 20.0f));
+    for (int k = 0; k < 12; ++k) {
+        const double a = 2.0 * M_PI * k / 12.0;
+        Mat4d t = tools::translation(1.5 * std::cos(a), 1.5 * std::sin(a), 1.0);
+        r.add_instances(pm, t.data(), 1, nullptr, {em});
+    }
+    RenderSettings s;
+    s.width = 96;
+    s.height = 96;
+    s.samples = 64;
+    s.filter_width = 0.01f;
+    s.shadow_rays = true;
+    const Camera cam = deferred::testing::top_down_ortho(0.2, 5.0f);  // under the panels and the blocker
+    auto mean = [&](const char* mode) {
+        env.set(mode);
+        const FrameResult f = r.render(cam, s);
+        EXPECT_TRUE(f.timings.shadow_rays);
+        EXPECT_GT(f.timings.lighting_later_pixels, 0u);  // a second dispatch of lights
+        const PassImage& c = *f.find(Pass::Combined);
+        double sum = 0.0;
+        for (int i = 0; i < c.width * c.height; ++i) sum += c.pixels[std::size_t(i) * 4];
+        return sum / double(c.width * c.height);
+    };
+    const double pool = mean("pixel"), every = mean("every");
+    std::printf("twelve mesh lights, one ray a pixel and dispatch: mean %.5f against every candidate's ray %.5f "
+                "(ratio %.5f)\n", pool, every, pool / every);
+    EXPECT_GT(every, 0.05);
+    EXPECT_NEAR(pool / every, 1.0, 0.01);
 }
 
 namespace {

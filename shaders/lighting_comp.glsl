@@ -196,35 +196,43 @@ vec4 behind_forward_layer(ivec2 pixel, vec4 value, bool first_batch) {
 #endif
 }
 
+/* Light i's shadowed light this sample and its unshadowed light (the
+ * Shadow pass's denominator, the catchers' unshadowed light), added to the
+ * pixel's sums. */
+void add_to_sums(uint i, LightContribution shadowed, LightContribution unshadowed, inout LightContribution total,
+                 inout float lum_shadowed, inout float lum_unshadowed, inout vec3 catcher_unshadowed) {
+    const vec3 luminance = vec3(0.2126729, 0.7151522, 0.0721750);
+    total.diffuse += shadowed.diffuse;
+    total.glossy += shadowed.glossy;
+#ifdef LIGHT_GROUPS
+    add_to_group(light_groups[i], shadowed.diffuse + shadowed.glossy);
+#endif
+#ifdef OUT_SHADOW
+    lum_unshadowed += dot(unshadowed.diffuse + unshadowed.glossy, luminance);
+    lum_shadowed += dot(shadowed.diffuse + shadowed.glossy, luminance);
+#endif
+#ifdef SHADOW_CATCHER
+    catcher_unshadowed += unshadowed.diffuse + unshadowed.glossy;
+#endif
+}
+
 /* Light i's contribution this sample, times `weight` (the inverse of its
  * selection probability), added to the pixel's sums; `kind` a literal (only
  * that kind's code) or LIGHT_ANY_KIND. */
 void add_light(int kind, uint i, float weight, SurfaceParams s, PrincipledWeights w, vec3 P, vec3 N, vec3 V,
                inout LightContribution total, inout float lum_shadowed, inout float lum_unshadowed,
                inout vec3 catcher_unshadowed) {
-    const vec3 luminance = vec3(0.2126729, 0.7151522, 0.0721750);
     float visible;
 #ifdef MESH_RAY_POOL
     mesh_ray_pool_light = i;
     mesh_ray_pool_weight = weight;
 #endif
     LightContribution c = shade_light_kind(kind, lights[i], s, w, P, N, V, visible);
-    c.diffuse *= weight;
-    c.glossy *= weight;
+    c.diffuse = c.diffuse * weight * visible;
+    c.glossy = c.glossy * weight * visible;
     last_unshadowed.diffuse *= weight;
     last_unshadowed.glossy *= weight;
-    total.diffuse += c.diffuse * visible;
-    total.glossy += c.glossy * visible;
-#ifdef LIGHT_GROUPS
-    add_to_group(light_groups[i], (c.diffuse + c.glossy) * visible);
-#endif
-#ifdef OUT_SHADOW
-    lum_unshadowed += dot(last_unshadowed.diffuse + last_unshadowed.glossy, luminance);
-    lum_shadowed += dot(c.diffuse + c.glossy, luminance) * visible;
-#endif
-#ifdef SHADOW_CATCHER
-    catcher_unshadowed += last_unshadowed.diffuse + last_unshadowed.glossy;
-#endif
+    add_to_sums(i, c, last_unshadowed, total, lum_shadowed, lum_unshadowed, catcher_unshadowed);
 }
 
 void main() {
@@ -434,19 +442,7 @@ void main() {
          * the picked candidate's light group; as every mesh light's, its
          * unshadowed light for the Shadow pass is the shadowed. */
         const LightContribution m = reservoir_trace(mesh_ray_pool, s, P);
-        total.diffuse += m.diffuse;
-        total.glossy += m.glossy;
-#ifdef LIGHT_GROUPS
-        add_to_group(light_groups[mesh_ray_pool.owner], m.diffuse + m.glossy);
-#endif
-#ifdef OUT_SHADOW
-        const float lum_m = dot(m.diffuse + m.glossy, vec3(0.2126729, 0.7151522, 0.0721750));
-        lum_shadowed += lum_m;
-        lum_unshadowed += lum_m;
-#endif
-#ifdef SHADOW_CATCHER
-        catcher_unshadowed += m.diffuse + m.glossy;
-#endif
+        add_to_sums(mesh_ray_pool.owner, m, m, total, lum_shadowed, lum_unshadowed, catcher_unshadowed);
     }
 #endif
 

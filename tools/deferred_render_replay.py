@@ -8,6 +8,7 @@ prints where the time went.
         [--passes A,B] [--repeat K] [--json] [--out OUT.exr] [--device N]
         [--light-samples N] [--emission-samples K] [--shadow-rays | --shadow-maps]
         [--filter-splat on|off] [--visibility-buffer on|off] [--count-fragments]
+        [--threads]
 
 Each repeat renders the captured frame again on the same renderer (the first
 one compiles or loads the programs; later ones are warm). Printed per
@@ -18,6 +19,12 @@ the Blender render's (tests/blender/test_capture_replay.py). --out writes
 every pass of the last repeat to a multilayer EXR with Blender's channel
 names (ViewLayer.<pass>.<channel>; needs OpenImageIO's Python module), or
 to a .npz of (H, W, C) arrays, rows top first.
+
+--threads adds each repeat's CPU time per thread (Linux /proc, 1/100 s
+ticks): the render thread ("deferred-gl", the first so named), the GL
+driver's other threads (llvmpipe's rasteriser "llvmpipe-N"; its compute
+pool, started from the render thread, keeps its name) and the rest
+(bench/cpu/thread_load.py tabulates it).
 
 The native module comes from this build (@DEFERRED_ADDON_DIR@) or from
 DEFERRED_NATIVE_DIR.
@@ -114,6 +121,49 @@ def write_images(path, images, mod):
     out.close()
 
 
+def thread_cpu_ms():
+    """{tid: (name, CPU ms so far)} for this process's threads (Linux /proc;
+    utime + stime, whose tick is 1/SC_CLK_TCK s). Empty without /proc."""
+    tick_ms = 1000.0 / os.sysconf("SC_CLK_TCK")
+    threads = {}
+    try:
+        tids = os.listdir("/proc/self/task")
+    except OSError:
+        return threads
+    for tid in tids:
+        try:
+            with open(f"/proc/self/task/{tid}/stat") as f:
+                stat = f.read()
+            with open(f"/proc/self/task/{tid}/comm") as f:
+                name = f.read().strip()
+        except OSError:
+            continue  # the thread ended
+        fields = stat[stat.rfind(")") + 2:].split()  # from field 3 (state) on
+        threads[int(tid)] = (name, (int(fields[11]) + int(fields[12])) * tick_ms)  # fields 14, 15
+    return threads
+
+
+def thread_roles(threads):
+    """Each tid's role: "main", "render" (the first "deferred-gl" thread),
+    "compute" (later ones: llvmpipe's compute pool inherits the name),
+    "raster" (llvmpipe-N) or "other"."""
+    main = os.getpid()
+    gl = sorted(t for t, (name, _) in threads.items() if name == "deferred-gl")
+    roles = {}
+    for tid, (name, _) in threads.items():
+        if tid == main:
+            roles[tid] = "main"
+        elif gl and tid == gl[0]:
+            roles[tid] = "render"
+        elif name == "deferred-gl":
+            roles[tid] = "compute"
+        elif name.startswith("llvmpipe-"):
+            roles[tid] = "raster"
+        else:
+            roles[tid] = "other"
+    return roles
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description="Render a scene captured by DEFERRED_RENDER_CAPTURE without Blender.")
     ap.add_argument("capture", help="the .npz a capturing render wrote")
@@ -147,6 +197,8 @@ def main(argv=None):
                     help="count the fragments the shadow maps' draws shade in every repeat (a pipeline-statistics "
                          "query around each map layer: native RenderSettings.count_shadow_fragments; it may cost a "
                          "GPU time)")
+    ap.add_argument("--threads", action="store_true",
+                    help="each repeat's CPU time per thread (Linux /proc): the render thread, the driver's threads")
     args = ap.parse_args(argv)
 
     data, calls, meta = load_capture(args.capture)
@@ -200,9 +252,17 @@ def main(argv=None):
     runs = []
     images = None
     for _ in range(max(1, args.repeat)):
+        before = thread_cpu_ms() if args.threads else {}
         t0 = time.perf_counter()
         images = renderer.render(camera, width, height, **kwargs)
         wall = time.perf_counter() - t0
+        threads = None
+        if args.threads:
+            after = thread_cpu_ms()
+            roles = thread_roles(after)
+            threads = [{"tid": tid, "name": name, "role": roles[tid],
+                        "cpu_ms": cpu - (before[tid][1] if tid in before else 0.0)}
+                       for tid, (name, cpu) in sorted(after.items())]
         timings = dict(renderer.last_timings)
         runs.append({"wall_ms": wall * 1e3, **{k: timings.get(k) for k in STAGES},
                      "visibility_buffer": bool(timings.get("visibility_buffer")),
@@ -213,6 +273,8 @@ def main(argv=None):
                      "shadow_instances": timings.get("shadow_instances_drawn"),
                      "shadow_instances_one_sided": timings.get("shadow_instances_one_sided"),
                      "shadow_resolutions": list(timings.get("shadow_resolutions") or [])})
+        if threads is not None:
+            runs[-1]["threads"] = threads
     warnings = list(renderer.last_warnings)
 
     result = {"capture": os.path.abspath(args.capture), "gl_renderer": info.get("renderer"),
@@ -240,6 +302,13 @@ def main(argv=None):
         for k, r in enumerate(runs):
             cells = [f"{r[s]:.1f}" if isinstance(r[s], (int, float)) else "-" for s in STAGES]
             print(f"| {k + 1} | {r['wall_ms']:.1f} | " + " | ".join(cells) + " |")
+        for k, r in enumerate(runs):
+            if "threads" in r:
+                by_role = {}
+                for t in r["threads"]:
+                    by_role[t["role"]] = by_role.get(t["role"], 0.0) + t["cpu_ms"]
+                print(f"run {k + 1} CPU ms by thread: " +
+                      ", ".join(f"{role} {ms:.0f}" for role, ms in sorted(by_role.items()) if ms > 0))
         if runs and runs[-1].get("shadow_layers"):
             fragments = (f"{(runs[-1]['shadow_fragments'] or 0) / 1e6:.1f} M fragments shaded"
                          if args.count_fragments else "fragments not counted (--count-fragments)")

@@ -1,5 +1,7 @@
 #include "render_thread.h"
 
+#include <pthread.h>
+
 namespace deferred {
 
 RenderThread::RenderThread() : thread_([this] { loop(); }) {}
@@ -22,6 +24,12 @@ void RenderThread::post(std::function<void()> job) {
 }
 
 void RenderThread::loop() {
+    // Named for top -H, perf and bench/cpu/thread_load.py. Threads the GL
+    // driver starts from here inherit the name unless they set their own
+    // (llvmpipe's rasteriser threads are "llvmpipe-N"; its compute pool,
+    // started with the EGL display, keeps this one): the render thread is
+    // the first of them.
+    pthread_setname_np(pthread_self(), "deferred-gl");
     for (;;) {
         std::function<void()> job;
         {

@@ -120,7 +120,7 @@ def main():
 
     # Overrides.
     code, stdout, stderr = replay(path, "--size", "80x44", "--samples", "2", "--passes", "Combined,Normal",
-                                  "--repeat", "2", "--json", "--out", os.path.join(out, "small.npz"))
+                                  "--repeat", "2", "--threads", "--json", "--out", os.path.join(out, "small.npz"))
     checks.check(code == 0, "replay with overrides exits 0", stderr.strip()[-300:])
     if code == 0:
         result = json.loads(stdout)
@@ -131,6 +131,14 @@ def main():
         checks.check(all(isinstance(run[k], (int, float)) for k in ("wall_ms", "geometry_ms", "lighting_ms",
                                                                      "readback_ms", "total_ms")),
                      "each run has its wall time and stage timings", str({k: run[k] for k in list(run)[:4]}))
+        # --threads: each run's CPU time per thread, the render thread
+        # named (native/src/render_thread.cpp) and busy in every render.
+        threads = run.get("threads") or []
+        render = [t for t in threads if t["role"] == "render"]
+        checks.check(len(render) == 1 and render[0]["name"] == "deferred-gl",
+                     "--threads finds the render thread by its name", str([(t["name"], t["role"]) for t in threads]))
+        checks.check(all(t["cpu_ms"] >= 0 for t in threads) and sum(t["cpu_ms"] for t in threads) > 0,
+                     "--threads reports each thread's CPU time in the run", str([t["cpu_ms"] for t in threads]))
         small = np.load(os.path.join(out, "small.npz"))
         checks.check(small["Combined"].shape == (44, 80, 4), "the .npz output", str(small["Combined"].shape))
     code, stdout, stderr = replay(path)

@@ -743,11 +743,18 @@ float emitter_direction_pdf(vec3 p0, vec3 e1, vec3 e2, float p, float area, vec3
  *    two of them counts both, as the light's points do).
  * The numbers are stratified over the film's samples by the R2 sequence
  * (Roberts 2018), rotated per pixel and light (pcg4d). */
+/* The mirror image of the light mesh_light_unoccluded last added (its part
+ * of the glossy light; 0 with shadow rays, which trace it): the maps'
+ * occlusion takes it as it takes a planar light's mirror image, by the
+ * visibility of the sample's shared point (shade_light_kind). */
+vec3 mesh_light_mirror;
+
 LightContribution mesh_light_unoccluded(GpuLight light, SurfaceParams s, PrincipledWeights w, vec3 P, vec3 N,
                                         vec3 V) {
     LightContribution r;
     r.diffuse = vec3(0.0);
     r.glossy = vec3(0.0);
+    mesh_light_mirror = vec3(0.0);
     uint first = uint(light.direction.x), count = uint(light.direction.y);
     if (count == 0u) return r;
     uvec4 h = uvec4(shading_pixel(), first * 0x9E3779B9u + 0x632BE5ABu, 0x85EBCA6Bu);
@@ -778,7 +785,8 @@ LightContribution mesh_light_unoccluded(GpuLight light, SurfaceParams s, Princip
 #endif
     float side = light.axis_y.w;
     /* As for the planar lights: rough lobes (alpha >= 0.25) are wide enough
-     * for the light's points alone; mirrors (alpha^2 <= 1e-7) are not lit. */
+     * for the light's points alone; mirrors (alpha^2 <= 1e-7) see it along
+     * their reflected ray alone (below). */
     const bool mis = count <= uint(MESH_LIGHT_MIS_TRIANGLES) && w.specular != 0.0 && w.alpha2 > 1e-7 &&
                      w.alpha2 < 0.0625;
     const float n_light = float(points), n_bsdf = float(MESH_LIGHT_BSDF_SAMPLES);
@@ -888,6 +896,51 @@ LightContribution mesh_light_unoccluded(GpuLight light, SurfaceParams s, Princip
         }
         for (int j = 0; j < MESH_LIGHT_BSDF_SAMPLES; ++j)
             if (spec[j] != vec3(0.0)) r.glossy += spec[j] * Le[j] / (pb[j] * n_bsdf);
+    }
+    /* A mirror lobe (alpha^2 <= 1e-7) reflects only along R: its light is
+     * the lobe's weight times the radiance where R first meets the light's
+     * triangles from their emitting side, as Cycles' BSDF ray of a delta
+     * lobe adds the emission of the mesh it meets (PATH_RAY_TERMINATE_ON_
+     * NEXT_SURFACE at max_bounces 0; no light sample can reach a delta lobe,
+     * so no MIS). As for the glossy lobe's directions, only lights of at
+     * most MESH_LIGHT_MIS_TRIANGLES triangles are met (a bounded loop;
+     * larger ones are not reflected, warned: EmitterModule). */
+    vec3 mirror = principled_mirror_weight(w, N, V);
+    if (mirror != vec3(0.0) && count <= uint(MESH_LIGHT_MIS_TRIANGLES)) {
+        vec3 R = reflect(-V, N);
+        float along = dot(to_center, R), center2 = dot(to_center, to_center);
+        if (!((along < 0.0 && center2 > radius * radius) || center2 - along * along > radius * radius)) {
+            float nearest = 3.0e38;
+            vec3 Le_hit = vec3(0.0);
+            for (uint i = first; i < first + count; ++i) {
+                GpuEmitterTriangle t = emitters[i];
+                vec3 p0 = t.v0.xyz - P, e1 = t.e1.xyz, e2 = t.e2.xyz;
+                if (side != 0.0 && side * dot(cross(e1, e2), p0) >= 0.0) continue;
+                vec3 hit;
+                if (!emitter_triangle_hit(p0, e1, e2, R, false, hit) || hit.x >= nearest) continue;
+                nearest = hit.x;
+                Le_hit = emitter_radiance(light, t, hit.yz);
+            }
+            vec3 value = mirror * Le_hit;
+            if (nearest < 3.0e38 && value != vec3(0.0)) {
+#ifdef SHADOW_RAYS
+                if (traced) {
+#ifdef MESH_LIGHT_RAY_EVERY_POINT
+                    r.glossy += value * shadow_ray(s, P, R, nearest);
+#else
+                    LightContribution c;
+                    c.diffuse = vec3(0.0);
+                    c.glossy = value * pool_weight;
+                    reservoir_add(MESH_RES, c, R, nearest, owner);
+#endif
+                } else
+#endif
+                {
+                    r.glossy += value;
+                    mesh_light_mirror = value;
+                }
+            }
+        }
     }
 #if defined(SHADOW_RAYS) && !defined(MESH_LIGHT_RAY_EVERY_POINT) && !defined(MESH_RAY_POOL)
     if (traced) {
@@ -1090,7 +1143,7 @@ LightContribution shade_light_kind(int kind, GpuLight light, SurfaceParams s, Pr
                 LightContribution c = mesh_light_point(s, w, P, N, V, light.axis_x.xyz, light.axis_y.xyz,
                                                        light.strength.rgb, light.axis_x.w, light.axis_y.w);
                 r.diffuse -= c.diffuse * blocked;
-                r.glossy -= c.glossy * blocked;
+                r.glossy -= (c.glossy + mesh_light_mirror) * blocked;
             }
         }
 #endif

@@ -335,6 +335,7 @@ struct Renderer::Impl {
     void sync(Frame& f);
     void sync_ray_scene(Frame& f);
     void sync_world_and_emitters(Frame& f);
+    void warn_unreflected_emitters(std::vector<std::string>& warnings) const;
     void sync_film(Frame& f);
     void prepare_programs(Frame& f);
     int emission_sample_count(const Frame& f) const;
@@ -700,6 +701,7 @@ void Renderer::Impl::sync_world_and_emitters(Frame& f) {
         }
     }
     result.timings.emitter_triangles = emitters.finish();
+    warn_unreflected_emitters(result.warnings);
     lights.sync(scene.lights(), f.cam.position, settings.light_threshold, settings.shadows ? &shadows : nullptr,
                 &emitters);
     // Shadow rays' fallback to maps, said once something casts shadows.
@@ -713,6 +715,33 @@ void Renderer::Impl::sync_world_and_emitters(Frame& f) {
         ray_scene.release();
     }
     result.timings.shadow_rays = f.shadow_rays;
+}
+
+// A mirror lobe (alpha^2 <= 1e-7, roughness below ~0.0178) meets a mesh
+// light along its reflected ray only when the light has at most
+// MESH_LIGHT_MIS_TRIANGLES triangles (light_lib.glsl: a bounded loop over
+// them); a larger emitter is missing from mirrors. Said when a constant
+// material of the scene is such a mirror (a node material's roughness is
+// not known here; README, Accuracy -> Emissive meshes).
+void Renderer::Impl::warn_unreflected_emitters(std::vector<std::string>& warnings) const {
+    std::size_t unreflected = 0, most = 0;
+    for (const MeshLight& l : emitters.lights())
+        if (l.count > std::uint32_t(MESH_LIGHT_MIS_TRIANGLES)) {
+            ++unreflected;
+            most = std::max<std::size_t>(most, l.count);
+        }
+    if (unreflected == 0) return;
+    auto sharp = [](float roughness) { return std::pow(double(roughness), 4.0) <= 1e-7; };  // alpha^2, alpha = r^2
+    bool mirror = false;
+    for (const Material& m : scene.materials())
+        if (m.graph < 0 && (((m.specular > 1e-5f || m.metallic > 1e-5f || m.glossy_model != 0) && sharp(m.roughness)) ||
+                            (m.clearcoat > 1e-5f && sharp(m.clearcoat_roughness))))
+            mirror = true;
+    if (!mirror) return;
+    warnings.push_back("Mirror-like surfaces (roughness below 0.018) do not reflect " + std::to_string(unreflected) +
+                       " emissive mesh" + (unreflected == 1 ? "" : "es") + " of more than " +
+                       std::to_string(MESH_LIGHT_MIS_TRIANGLES) + " triangles (up to " + std::to_string(most) +
+                       "): their light still reaches every other surface");
 }
 
 // The frame constants (the per-sample ones are set by render_sample), the

@@ -8,6 +8,10 @@ at max_bounces 0 and 256 samples against ours at 64:
   * a torus (1152 triangles, shadowing itself) and an icosphere of 5120
     triangles (closed: found so, they emit from their outside only): means
     within SHAPE_LIMIT;
+  * a mirror floor (a metal of roughness 0) shows the panel's image along
+    its reflected rays, as Cycles' delta-lobe BSDF rays find the emitter:
+    the floor's mean and the image's within MIRROR_LIMIT with shadow rays,
+    the floor's within MIRROR_MAPS_LIMIT with maps;
   * a strength of 1e9: finite pixels;
   * only what the scene needs: no emitter, no emitter triangles;
   * Sampling > Emission Samples reaches the renderer (automatic by default:
@@ -42,13 +46,22 @@ SHAPE_LIMIT = 0.03    # closed emitters emit from their outside only (their insi
 RELMSE_LIMIT = 2e-3   # panel scene, measured 1.1e-4
 RAYS_LIMIT = 0.01     # panel scene with shadow rays, per object (measured +0.06 % floor, -0.21 % cube)
 TEXTURED_LIMIT = 0.04  # per channel at 256 samples; measured within 2 % (the bake: 128 texels per edge)
+MIRROR_LIMIT = 0.02    # a mirror floor under the panel, shadow rays: measured -0.09 % (floor and image)
+MIRROR_MAPS_LIMIT = 0.05  # the same with maps, whose shared point takes the cube's occlusion: measured +0.87 %
 
 
 def material(name, emit=None, color=(0.8, 0.8, 0.8, 1.0), strength=5.0, textured=False, graph=False,
-             camera_black=False):
+             camera_black=False, mirror=False):
     m = bpy.data.materials.new(name)
     m.use_nodes = True
     nt = m.node_tree
+    if mirror:
+        # A polished metal: a Principled BSDF of roughness 0 (a delta lobe).
+        bsdf = nt.nodes["Principled BSDF"]
+        bsdf.inputs["Base Color"].default_value = color
+        bsdf.inputs["Metallic"].default_value = 1.0
+        bsdf.inputs["Roughness"].default_value = 0.0
+        return m
     if textured:
         # Emission from a 2 x 2 Checker over the panel's texture space: two
         # orange cells and two blue ones, each lighting its side of the floor.
@@ -97,7 +110,7 @@ def material(name, emit=None, color=(0.8, 0.8, 0.8, 1.0), strength=5.0, textured
     return m
 
 
-def build(shape, strength=5.0, textured=False, graph=False, camera_black=False):
+def build(shape, strength=5.0, textured=False, graph=False, camera_black=False, mirror=False):
     for collection in (bpy.data.objects, bpy.data.meshes, bpy.data.materials, bpy.data.cameras):
         for block in list(collection):
             collection.remove(block)
@@ -108,7 +121,8 @@ def build(shape, strength=5.0, textured=False, graph=False, camera_black=False):
     scene.world.use_nodes = True
     scene.world.node_tree.nodes["Background"].inputs["Color"].default_value = (0.0, 0.0, 0.0, 1.0)
     bpy.ops.mesh.primitive_plane_add(size=10)
-    bpy.context.object.data.materials.append(material("floor"))
+    bpy.context.object.data.materials.append(material("floor", color=(0.9, 0.75, 0.5, 1.0), mirror=True)
+                                              if mirror else material("floor"))
     bpy.context.object.pass_index = 1
     bpy.ops.mesh.primitive_cube_add(size=1, location=(0.3, 0.0, 0.5))
     bpy.context.object.data.materials.append(material("cube", color=(0.6, 0.3, 0.2, 1.0)))
@@ -194,6 +208,31 @@ def rays_against_cycles(checks):
                      f"{RAYS_LIMIT:.0%})", f"rays {a / b - 1.0:+.2%}, maps {m / b - 1.0:+.2%}")
 
 
+def mirror_against_cycles(checks):
+    """A mirror floor (metal, roughness 0) shows the panel's image where its
+    reflected rays meet it, as Cycles' BSDF rays of the delta lobe find the
+    emitter: the floor's mean as Cycles', with shadow rays (the cube hides
+    part of the image: its ray along the reflection) and with maps (the
+    shared point's map takes the cube's share); the image itself, the
+    pixels that see the panel in the mirror, within MIRROR_LIMIT with rays."""
+    scene = build("panel", mirror=True)
+    scene.deferred_render.shadow_method = "RAYS"
+    rays, index = render(scene, U.ENGINE, 64, "mirror_rays")
+    scene.deferred_render.shadow_method = "MAPS"
+    maps, _ = render(scene, U.ENGINE, 64, "mirror_maps")
+    cyc, _ = render(scene, "CYCLES", 256, "mirror_cycles")
+    floor = U.interior_mask(index, 2) & (index == 1)
+    image = floor & (cyc.mean(axis=2) > 0.5)  # the panel's image (radiance 5 times the metal's ~0.7)
+    checks.check(int(image.sum()) > 200, "mirror: Cycles' floor shows the panel's image", int(image.sum()))
+    a, m, b = rays[floor].mean(), maps[floor].mean(), cyc[floor].mean()
+    checks.check(abs(a / b - 1.0) < MIRROR_LIMIT and abs(m / b - 1.0) < MIRROR_MAPS_LIMIT,
+                 f"mirror: the floor as Cycles shows it (rays within {MIRROR_LIMIT:.0%}, maps "
+                 f"{MIRROR_MAPS_LIMIT:.0%})", f"rays {a / b - 1.0:+.2%}, maps {m / b - 1.0:+.2%}")
+    ai, bi = rays[image].mean(), cyc[image].mean()
+    checks.check(abs(ai / bi - 1.0) < MIRROR_LIMIT, f"mirror: the panel's image as Cycles' (within {MIRROR_LIMIT:.0%})",
+                 f"{ai:.4f} vs {bi:.4f} ({ai / bi - 1.0:+.2%}) over {int(image.sum())} pixels")
+
+
 def main():
     checks = U.Checks("test_emissive")
     if not U.require_engine(checks):
@@ -203,6 +242,7 @@ def main():
     for shape in ("torus", "icosphere"):
         checks.run(shape, against_cycles, checks, shape, SHAPE_LIMIT)
     checks.run("shadow rays", rays_against_cycles, checks)
+    checks.run("mirror", mirror_against_cycles, checks)
 
     # A node material whose emission is a constant lights as the constant one.
     scene = build("panel")

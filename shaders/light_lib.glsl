@@ -735,14 +735,34 @@ float emitter_direction_pdf(vec3 p0, vec3 e1, vec3 e2, float p, float area, vec3
  *    then a direction uniform in the solid angle it subtends where it is
  *    large against its distance, or a point uniform on it (Turk 1990);
  *  - for a sharp specular lobe and a light of at most
- *    MESH_LIGHT_MIS_TRIANGLES triangles, MESH_LIGHT_BSDF_SAMPLES directions
- *    of the lobe (GGX visible normals) traced against every triangle of the
- *    light; the specular lobe of both kinds of samples is weighted by the
- *    power heuristic, per triangle and direction (the unoccluded integral is
- *    the sum over the triangles of their own integrals: a direction through
- *    two of them counts both, as the light's points do).
+ *    MESH_LIGHT_TRACED_TRIANGLES triangles, MESH_LIGHT_BSDF_SAMPLES
+ *    directions of the lobe (GGX visible normals) traced against every
+ *    triangle of the light (a large light's chunk by chunk, those whose
+ *    bounding sphere the direction meets); the specular lobe of both kinds
+ *    of samples is weighted by the power heuristic, per triangle and
+ *    direction (the unoccluded integral is the sum over the triangles of
+ *    their own integrals: a direction through two of them counts both, as
+ *    the light's points do);
+ *  - for a mirror lobe, its reflected ray (the nearest triangle it meets).
  * The numbers are stratified over the film's samples by the R2 sequence
  * (Roberts 2018), rotated per pixel and light (pcg4d). */
+/* Whether the ray from P along unit D can meet the sphere (xyz centre,
+ * camera-relative, w radius) nearer than `nearest`. */
+bool ray_meets_sphere(vec3 P, vec3 D, vec4 sphere, float nearest) {
+    vec3 to_c = sphere.xyz - P;
+    float along = dot(to_c, D), c2 = dot(to_c, to_c), r2 = sphere.w * sphere.w;
+    float off2 = c2 - along * along;
+    if (off2 > r2 || (along < 0.0 && c2 > r2)) return false;
+    return along - sqrt(max(r2 - off2, 0.0)) < nearest;
+}
+
+/* The triangles of a mesh light a ray can meet, chunk by chunk: a light of
+ * at most MESH_LIGHT_CHUNK triangles is one chunk; a larger one's chunk k
+ * (triangles first + k MESH_LIGHT_CHUNK on) has its bounding sphere at
+ * emitters[first + count + k] (EmitterModule::finish). */
+uint emitter_chunks(uint count) { return count <= uint(MESH_LIGHT_CHUNK) ? 1u : (count + uint(MESH_LIGHT_CHUNK) - 1u) / uint(MESH_LIGHT_CHUNK); }
+vec4 emitter_chunk_sphere(uint first, uint count, uint k) { return emitters[first + count + k].v0; }
+
 /* The mirror image of the light mesh_light_unoccluded last added (its part
  * of the glossy light; 0 with shadow rays, which trace it): the maps'
  * occlusion takes it as it takes a planar light's mirror image, by the
@@ -787,7 +807,7 @@ LightContribution mesh_light_unoccluded(GpuLight light, SurfaceParams s, Princip
     /* As for the planar lights: rough lobes (alpha >= 0.25) are wide enough
      * for the light's points alone; mirrors (alpha^2 <= 1e-7) see it along
      * their reflected ray alone (below). */
-    const bool mis = count <= uint(MESH_LIGHT_MIS_TRIANGLES) && w.specular != 0.0 && w.alpha2 > 1e-7 &&
+    const bool mis = count <= uint(MESH_LIGHT_TRACED_TRIANGLES) && w.specular != 0.0 && w.alpha2 > 1e-7 &&
                      w.alpha2 < 0.0625;
     const float n_light = float(points), n_bsdf = float(MESH_LIGHT_BSDF_SAMPLES);
     for (int k = 0; k < points; ++k) {
@@ -869,29 +889,40 @@ LightContribution mesh_light_unoccluded(GpuLight light, SurfaceParams s, Princip
             Le[j] = vec3(0.0);
             any_ray = any_ray || spec[j] != vec3(0.0);
         }
-        for (uint i = first; any_ray && i < first + count; ++i) {
-            GpuEmitterTriangle t = emitters[i];
-            vec3 p0 = t.v0.xyz - P, e1 = t.e1.xyz, e2 = t.e2.xyz;
-            if (side != 0.0 && side * dot(cross(e1, e2), p0) >= 0.0) continue;
+        const uint chunks = any_ray ? emitter_chunks(count) : 0u;
+        for (uint k = 0u; k < chunks; ++k) {
+            bool meets[MESH_LIGHT_BSDF_SAMPLES];
+            bool any_meets = false;
             for (int j = 0; j < MESH_LIGHT_BSDF_SAMPLES; ++j) {
-                vec3 hit;
-                if (spec[j] == vec3(0.0) || !emitter_triangle_hit(p0, e1, e2, Lb[j], false, hit)) continue;
-                float pl = emitter_direction_pdf(p0, e1, e2, t.e2.w, t.e1.w, Lb[j], hit.x);
-                vec3 Le_hit = emitter_radiance(light, t, hit.yz) * power_heuristic(n_bsdf, pb[j], n_light, pl);
+                meets[j] = spec[j] != vec3(0.0) &&
+                           (chunks == 1u || ray_meets_sphere(P, Lb[j], emitter_chunk_sphere(first, count, k), 3.0e38));
+                any_meets = any_meets || meets[j];
+            }
+            const uint lo = first + k * uint(MESH_LIGHT_CHUNK), hi = min(lo + uint(MESH_LIGHT_CHUNK), first + count);
+            for (uint i = lo; any_meets && i < hi; ++i) {
+                GpuEmitterTriangle t = emitters[i];
+                vec3 p0 = t.v0.xyz - P, e1 = t.e1.xyz, e2 = t.e2.xyz;
+                if (side != 0.0 && side * dot(cross(e1, e2), p0) >= 0.0) continue;
+                for (int j = 0; j < MESH_LIGHT_BSDF_SAMPLES; ++j) {
+                    vec3 hit;
+                    if (!meets[j] || !emitter_triangle_hit(p0, e1, e2, Lb[j], false, hit)) continue;
+                    float pl = emitter_direction_pdf(p0, e1, e2, t.e2.w, t.e1.w, Lb[j], hit.x);
+                    vec3 Le_hit = emitter_radiance(light, t, hit.yz) * power_heuristic(n_bsdf, pb[j], n_light, pl);
 #ifdef SHADOW_RAYS
-                if (traced) {
+                    if (traced) {
 #ifdef MESH_LIGHT_RAY_EVERY_POINT
-                    Le[j] += Le_hit * shadow_ray(s, P, Lb[j], hit.x);
+                        Le[j] += Le_hit * shadow_ray(s, P, Lb[j], hit.x);
 #else
-                    LightContribution c;
-                    c.diffuse = vec3(0.0);
-                    c.glossy = spec[j] * Le_hit * (pool_weight / (pb[j] * n_bsdf));
-                    reservoir_add(MESH_RES, c, Lb[j], hit.x, owner);
+                        LightContribution c;
+                        c.diffuse = vec3(0.0);
+                        c.glossy = spec[j] * Le_hit * (pool_weight / (pb[j] * n_bsdf));
+                        reservoir_add(MESH_RES, c, Lb[j], hit.x, owner);
 #endif
-                    continue;
+                        continue;
+                    }
+#endif
+                    Le[j] += Le_hit;
                 }
-#endif
-                Le[j] += Le_hit;
             }
         }
         for (int j = 0; j < MESH_LIGHT_BSDF_SAMPLES; ++j)
@@ -903,23 +934,27 @@ LightContribution mesh_light_unoccluded(GpuLight light, SurfaceParams s, Princip
      * lobe adds the emission of the mesh it meets (PATH_RAY_TERMINATE_ON_
      * NEXT_SURFACE at max_bounces 0; no light sample can reach a delta lobe,
      * so no MIS). As for the glossy lobe's directions, only lights of at
-     * most MESH_LIGHT_MIS_TRIANGLES triangles are met (a bounded loop;
-     * larger ones are not reflected, warned: EmitterModule). */
+     * most MESH_LIGHT_TRACED_TRIANGLES triangles are met (bounded loops;
+     * larger ones are not reflected, warned: Renderer). */
     vec3 mirror = principled_mirror_weight(w, N, V);
-    if (mirror != vec3(0.0) && count <= uint(MESH_LIGHT_MIS_TRIANGLES)) {
+    if (mirror != vec3(0.0) && count <= uint(MESH_LIGHT_TRACED_TRIANGLES)) {
         vec3 R = reflect(-V, N);
-        float along = dot(to_center, R), center2 = dot(to_center, to_center);
-        if (!((along < 0.0 && center2 > radius * radius) || center2 - along * along > radius * radius)) {
+        if (ray_meets_sphere(P, R, vec4(light.position_type.xyz, radius), 3.0e38)) {
             float nearest = 3.0e38;
             vec3 Le_hit = vec3(0.0);
-            for (uint i = first; i < first + count; ++i) {
-                GpuEmitterTriangle t = emitters[i];
-                vec3 p0 = t.v0.xyz - P, e1 = t.e1.xyz, e2 = t.e2.xyz;
-                if (side != 0.0 && side * dot(cross(e1, e2), p0) >= 0.0) continue;
-                vec3 hit;
-                if (!emitter_triangle_hit(p0, e1, e2, R, false, hit) || hit.x >= nearest) continue;
-                nearest = hit.x;
-                Le_hit = emitter_radiance(light, t, hit.yz);
+            const uint chunks = emitter_chunks(count);
+            for (uint k = 0u; k < chunks; ++k) {
+                if (chunks > 1u && !ray_meets_sphere(P, R, emitter_chunk_sphere(first, count, k), nearest)) continue;
+                const uint lo = first + k * uint(MESH_LIGHT_CHUNK), hi = min(lo + uint(MESH_LIGHT_CHUNK), first + count);
+                for (uint i = lo; i < hi; ++i) {
+                    GpuEmitterTriangle t = emitters[i];
+                    vec3 p0 = t.v0.xyz - P, e1 = t.e1.xyz, e2 = t.e2.xyz;
+                    if (side != 0.0 && side * dot(cross(e1, e2), p0) >= 0.0) continue;
+                    vec3 hit;
+                    if (!emitter_triangle_hit(p0, e1, e2, R, false, hit) || hit.x >= nearest) continue;
+                    nearest = hit.x;
+                    Le_hit = emitter_radiance(light, t, hit.yz);
+                }
             }
             vec3 value = mirror * Le_hit;
             if (nearest < 3.0e38 && value != vec3(0.0)) {

@@ -119,10 +119,17 @@
 #define MESH_LIGHT_SAMPLES 2
 #define MESH_LIGHT_SAMPLES_NEAR 8 /* ... within twice its bounding radius */
 /* Directions of a sharp specular lobe per pixel and film sample traced against
- * the triangles of a mesh light with at most MESH_LIGHT_MIS_TRIANGLES of them
- * (multiple importance with its points, light_lib.glsl). */
+ * the triangles of a mesh light with at most MESH_LIGHT_TRACED_TRIANGLES of
+ * them (multiple importance with its points), and a mirror's reflected ray
+ * (light_lib.glsl). A light of more than MESH_LIGHT_CHUNK triangles is met
+ * chunk by chunk: each run of MESH_LIGHT_CHUNK triangles has a bounding
+ * sphere (EmitterModule), at most MESH_LIGHT_TRACED_TRIANGLES /
+ * MESH_LIGHT_CHUNK chunk tests and MESH_LIGHT_CHUNK triangles per chunk met
+ * (llvmpipe's 65535 loop iterations an invocation: LightingStage sizes its
+ * batches with this). */
 #define MESH_LIGHT_BSDF_SAMPLES 2
-#define MESH_LIGHT_MIS_TRIANGLES 64
+#define MESH_LIGHT_CHUNK 64
+#define MESH_LIGHT_TRACED_TRIANGLES 4096
 /* Shadow rays (ray_scene.h, ray_lib.glsl): levels of a hierarchy at most
  * (the traversal's stack depth), and node visits per ray at most (llvmpipe
  * ends all loops of an invocation after 65535 iterations: lighting batches

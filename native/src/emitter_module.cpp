@@ -13,6 +13,8 @@
 
 namespace deferred {
 
+static_assert(EmitterModule::kChunk == MESH_LIGHT_CHUNK, "light_lib.glsl reads chunks of MESH_LIGHT_CHUNK triangles");
+
 namespace {
 
 double luminance(const glm::dvec3& c) { return 0.2126729 * c.x + 0.7151522 * c.y + 0.0721750 * c.z; }
@@ -313,6 +315,7 @@ std::size_t EmitterModule::finish() {
     const bool baked = !texels_.empty();
     std::vector<gpu::GpuEmitterTriangle> kept;
     std::vector<MeshLight> lights;
+    std::size_t emitting = 0;
     for (MeshLight light : lights_) {
         const std::uint32_t first = std::uint32_t(kept.size());
         light.area = light.power = light.max_radiance = 0.0;
@@ -375,6 +378,36 @@ std::size_t EmitterModule::finish() {
         light.center = 0.5 * (lo + hi);
         light.radius = 0.5 * glm::length(hi - lo);
         lights.push_back(light);
+        emitting += light.count;
+        // A light of more than kChunk triangles: the bounding sphere of each
+        // run of kChunk of them follows its triangles (v0: centre, radius),
+        // so the lighting can meet its triangles along a ray chunk by chunk
+        // (light_lib.glsl emitter_chunk_sphere). No light's range and no CDF
+        // covers these entries.
+        if (light.count > kChunk) {
+            for (std::uint32_t c = light.first; c < light.first + light.count; c += kChunk) {
+                const std::uint32_t end = std::min(c + kChunk, light.first + light.count);
+                glm::dvec3 clo(1e300), chi(-1e300);
+                auto corners = [&](const gpu::GpuEmitterTriangle& g) {
+                    const glm::dvec3 v0(g.v0.x, g.v0.y, g.v0.z), e1(g.e1.x, g.e1.y, g.e1.z), e2(g.e2.x, g.e2.y, g.e2.z);
+                    return std::array<glm::dvec3, 3>{v0, v0 + e1, v0 + e2};
+                };
+                for (std::uint32_t t = c; t < end; ++t)
+                    for (const glm::dvec3& v : corners(kept[t])) {
+                        clo = glm::min(clo, v);
+                        chi = glm::max(chi, v);
+                    }
+                const glm::dvec3 center = 0.5 * (clo + chi);
+                double radius = 0.0;
+                for (std::uint32_t t = c; t < end; ++t)
+                    for (const glm::dvec3& v : corners(kept[t])) radius = std::max(radius, glm::length(v - center));
+                gpu::GpuEmitterTriangle sphere{};
+                // A little wider than the farthest corner: float rounding of
+                // the corners the lighting reads must not fall outside it.
+                sphere.v0 = {float(center.x), float(center.y), float(center.z), float(radius * (1.0 + 1e-5) + 1e-6)};
+                kept.push_back(sphere);
+            }
+        }
     }
     triangles_ = std::move(kept);
     lights_ = std::move(lights);
@@ -390,7 +423,7 @@ std::size_t EmitterModule::finish() {
         std::copy(texels_.begin(), texels_.end(), data.begin() + 4);
         texel_buffer_ = make_storage_buffer(data.data(), data.size() * sizeof(float), "emission texels");
     }
-    return triangles_.size();
+    return emitting;
 }
 
 glm::dvec3 EmitterModule::radiance_at(const gpu::GpuEmitterTriangle& t, double b1, double b2) const {

@@ -100,6 +100,9 @@ public:
     // Powers, CDFs and upload; drops lights that emit nothing. Returns the
     // emitting triangles.
     std::size_t finish();
+    // Triangles per chunk of a large light (MESH_LIGHT_CHUNK): a light of
+    // more has its chunks' bounding spheres after its triangles.
+    static constexpr std::uint32_t kChunk = 64;
 
     const std::vector<MeshLight>& lights() const { return lights_; }
     // The point of light `k` for a film sample's point u in [0, 1)^2.

@@ -13,6 +13,11 @@
 
 namespace deferred {
 
+std::uint32_t LightingStage::batch_size(const Config& config) {
+    if (config.chunked_mesh_lights) return config.shadow_rays ? kChunkedMeshLightRayBatch : kChunkedMeshLightBatch;
+    return config.shadow_rays ? kRayLightBatch : kLightBatch;
+}
+
 ShaderVariant LightingStage::variant(const ShaderVariant& base, const LightModule& lights, const WorldModule& world,
                                      const Config& config, bool& light_sampling) {
     ShaderVariant v = base;
@@ -23,7 +28,7 @@ ShaderVariant LightingStage::variant(const ShaderVariant& base, const LightModul
     // Selection only where some pixel can have more lights than the budget,
     // within one lighting dispatch (512 lights, 8 with shadow rays): a budget
     // of a dispatch's size or more never selects.
-    const std::uint32_t batch = config.shadow_rays ? kRayLightBatch : kLightBatch;
+    const std::uint32_t batch = batch_size(config);
     const std::uint32_t budget = std::uint32_t(std::max(config.light_samples, 0));
     light_sampling = budget > 0 && lights.count() > budget && budget < batch;
     if (light_sampling) v.defines.push_back("LIGHT_SAMPLING " + std::to_string(budget));
@@ -51,7 +56,7 @@ void LightingStage::prefetch(ShaderLibrary& shaders, const ShaderVariant& base, 
 void LightingStage::prepare(ShaderLibrary& shaders, const ShaderVariant& base, const LightModule& lights,
                             const WorldModule& world, const Config& config, std::vector<std::string>& warnings) {
     const ShaderVariant v = variant(base, lights, world, config, light_sampling_);
-    batch_ = config.shadow_rays ? kRayLightBatch : kLightBatch;
+    batch_ = batch_size(config);
     const std::uint32_t budget = std::uint32_t(std::max(config.light_samples, 0));
     if (budget > 0 && !light_sampling_ && lights.count() > budget)
         warnings.push_back("Light Samples " + std::to_string(budget) + " has no effect: the lighting runs in groups of " +

@@ -32,6 +32,12 @@ constexpr std::uint32_t kLightBatch = 512;
 // ... with shadow rays, whose traversal loops count too (a ray visits tens
 // of nodes, at most RAY_MAX_STEPS; a mesh light traces up to 10 per pixel).
 constexpr std::uint32_t kRayLightBatch = 8;
+// ... with mesh lights of more than MESH_LIGHT_CHUNK triangles: each can take
+// MESH_LIGHT_CHUNK + MESH_LIGHT_TRACED_TRIANGLES iterations (chunk tests and
+// the triangles of the chunks a ray meets) besides its points: 12 stay
+// inside 65535, 4 with shadow rays (whose traversals count too).
+constexpr std::uint32_t kChunkedMeshLightBatch = 12;
+constexpr std::uint32_t kChunkedMeshLightRayBatch = 4;
 
 class LightingStage {
 public:
@@ -54,6 +60,11 @@ public:
         // lights 30-57 % slower with it (a culled list mixes kinds, so a
         // warp's lanes sit in different loops), so GPUs keep the one loop.
         bool kind_loops = false;
+        // Some mesh light has more than MESH_LIGHT_CHUNK triangles: a sharp
+        // lobe's rays walk its chunks (light_lib.glsl), up to ~4 200 loop
+        // iterations a light, so a dispatch takes fewer lights
+        // (kChunkedMeshLightBatch).
+        bool chunked_mesh_lights = false;
     };
     // Compiles the program for `config` over the G-buffer's `base` variant.
     // A light budget no dispatch can use is warned (every light is shaded).
@@ -84,6 +95,8 @@ private:
     // selection is on (a budget below the dispatch's batch and the lights).
     static ShaderVariant variant(const ShaderVariant& base, const LightModule& lights, const WorldModule& world,
                                  const Config& config, bool& light_sampling);
+    // Lights per dispatch for `config` (kLightBatch and the smaller ones).
+    static std::uint32_t batch_size(const Config& config);
     GLuint program_ = 0;
     std::uint32_t batch_ = kLightBatch;
     bool light_sampling_ = false;

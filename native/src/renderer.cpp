@@ -719,14 +719,14 @@ void Renderer::Impl::sync_world_and_emitters(Frame& f) {
 
 // A mirror lobe (alpha^2 <= 1e-7, roughness below ~0.0178) meets a mesh
 // light along its reflected ray only when the light has at most
-// MESH_LIGHT_MIS_TRIANGLES triangles (light_lib.glsl: a bounded loop over
-// them); a larger emitter is missing from mirrors. Said when a constant
-// material of the scene is such a mirror (a node material's roughness is
-// not known here; README, Accuracy -> Emissive meshes).
+// MESH_LIGHT_TRACED_TRIANGLES triangles (light_lib.glsl: bounded loops over
+// its chunks); a larger emitter is missing from mirrors. Said when a
+// constant material of the scene is such a mirror (a node material's
+// roughness is not known here; README, Accuracy -> Emissive meshes).
 void Renderer::Impl::warn_unreflected_emitters(std::vector<std::string>& warnings) const {
     std::size_t unreflected = 0, most = 0;
     for (const MeshLight& l : emitters.lights())
-        if (l.count > std::uint32_t(MESH_LIGHT_MIS_TRIANGLES)) {
+        if (l.count > std::uint32_t(MESH_LIGHT_TRACED_TRIANGLES)) {
             ++unreflected;
             most = std::max<std::size_t>(most, l.count);
         }
@@ -740,7 +740,7 @@ void Renderer::Impl::warn_unreflected_emitters(std::vector<std::string>& warning
     if (!mirror) return;
     warnings.push_back("Mirror-like surfaces (roughness below 0.018) do not reflect " + std::to_string(unreflected) +
                        " emissive mesh" + (unreflected == 1 ? "" : "es") + " of more than " +
-                       std::to_string(MESH_LIGHT_MIS_TRIANGLES) + " triangles (up to " + std::to_string(most) +
+                       std::to_string(MESH_LIGHT_TRACED_TRIANGLES) + " triangles (up to " + std::to_string(most) +
                        "): their light still reaches every other surface");
 }
 
@@ -850,6 +850,8 @@ void Renderer::Impl::prepare_programs(Frame& f) {
     lighting.kind_loops = is_cpu_rasteriser(info.renderer);
     if (const char* env = std::getenv("DEFERRED_LIGHT_KIND_LOOPS")) lighting.kind_loops = std::string(env) == "on";
     if (f.culled) lighting.kind_loops = false;
+    for (const MeshLight& l : emitters.lights())
+        if (l.count > EmitterModule::kChunk) lighting.chunked_mesh_lights = true;
     lighting.light_samples = settings.light_samples;
     lighting.shadow_maps = !shadows.empty();
     lighting.shadow_rays = f.shadow_rays;

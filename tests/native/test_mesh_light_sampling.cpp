@@ -53,18 +53,35 @@ struct Render {
     std::vector<dvec3> P, color;
 };
 
-// The floor (z = 0) seen from an orthographic camera between it and the
-// emitter at height h (looking down: the emitter is behind it).
-Render render_floor(const Material& floor, double h, int samples, int subdivisions = 1, int size = kSize) {
-    Renderer r;
-    deferred::testing::add_plane(r, floor, 4.0f);
+// Each pixel's Position and Combined, rows in order.
+Render read_render(const FrameResult& f, int size) {
+    Render out;
+    for (int y = 0; y < size; ++y)
+        for (int x = 0; x < size; ++x) {
+            out.P.push_back(pixel3(*f.find(Pass::Position), x, y));
+            out.color.push_back(pixel3(*f.find(Pass::Combined), x, y));
+        }
+    return out;
+}
+
+// The emitter: the 2 x 2 quad (`subdivisions` per side) of radiance 1 at
+// height h, facing the floor (and, two-sided, away from it).
+void add_emitter(Renderer& r, double h, int subdivisions, bool cast_shadow) {
     Material emit;
     emit.base_color = {0.0f, 0.0f, 0.0f};
     emit.specular = 0.0f;
     emit.emission = {1.0f, 1.0f, 1.0f};
     emit.emission_strength = 1.0f;
+    deferred::testing::add_plane(r, emit, float(kHalf), subdivisions, tools::translation(0, 0, h), cast_shadow);
+}
+
+// The floor (z = 0) seen from an orthographic camera between it and the
+// emitter at height h (looking down: the emitter is behind it).
+Render render_floor(const Material& floor, double h, int samples, int subdivisions = 1, int size = kSize) {
+    Renderer r;
+    deferred::testing::add_plane(r, floor, 4.0f);
     // No shadow: the unoccluded estimate alone (the occlusion control variate is not tested here).
-    deferred::testing::add_plane(r, emit, float(kHalf), subdivisions, tools::translation(0, 0, h), false);
+    add_emitter(r, h, subdivisions, false);
     deferred::testing::set_world_color(r, 0, 0, 0);
     const Camera cam = deferred::testing::top_down_ortho(0.5 * h, kExtent);
     RenderSettings s;
@@ -74,14 +91,7 @@ Render render_floor(const Material& floor, double h, int samples, int subdivisio
     s.filter_width = 0.01f;  // the pixel centre: the references are evaluated at its Position
     s.shadows = false;
     s.passes.insert(Pass::Position);
-    FrameResult f = r.render(cam, s);
-    Render out;
-    for (int y = 0; y < size; ++y)
-        for (int x = 0; x < size; ++x) {
-            out.P.push_back(pixel3(*f.find(Pass::Position), x, y));
-            out.color.push_back(pixel3(*f.find(Pass::Combined), x, y));
-        }
-    return out;
+    return read_render(r.render(cam, s), size);
 }
 
 // The same emitter as an area light (one-sided towards -Z, radiance
@@ -296,13 +306,7 @@ MirrorRender render_mirror(double h, int subdivisions, bool area_light, bool blo
     if (area_light) {
         r.add_light(panel_as_area_light(h));
     } else {
-        Material emit;
-        emit.base_color = {0.0f, 0.0f, 0.0f};
-        emit.specular = 0.0f;
-        emit.emission = {1.0f, 1.0f, 1.0f};
-        emit.emission_strength = 1.0f;
-        // Casting shadows only where a blocker is there to be seen by them.
-        deferred::testing::add_plane(r, emit, float(kHalf), subdivisions, tools::translation(0, 0, h), blocker);
+        add_emitter(r, h, subdivisions, blocker);  // casting shadows where a blocker is there to see them
     }
     if (blocker) {
         Material grey;
@@ -320,11 +324,7 @@ MirrorRender render_mirror(double h, int subdivisions, bool area_light, bool blo
     s.passes.insert(Pass::Position);
     FrameResult f = r.render(cam, s);
     MirrorRender out;
-    for (int y = 0; y < kSize; ++y)
-        for (int x = 0; x < kSize; ++x) {
-            out.image.P.push_back(pixel3(*f.find(Pass::Position), x, y));
-            out.image.color.push_back(pixel3(*f.find(Pass::Combined), x, y));
-        }
+    out.image = read_render(f, kSize);
     out.warnings = f.warnings;
     return out;
 }
@@ -416,13 +416,7 @@ TEST(MeshLightSampling, LargeEmittersShadeInSmallerLightingBatches) {
     auto render = [&](int subdivisions, bool points, bool emitter) {
         Renderer r;
         deferred::testing::add_plane(r, glossy_floor(), 4.0f);
-        if (emitter) {
-            Material emit;
-            emit.base_color = {0.0f, 0.0f, 0.0f};
-            emit.specular = 0.0f;
-            emit.emission = {1.0f, 1.0f, 1.0f};
-            deferred::testing::add_plane(r, emit, float(kHalf), subdivisions, tools::translation(0, 0, h), false);
-        }
+        if (emitter) add_emitter(r, h, subdivisions, false);
         for (int k = 0; points && k < 13; ++k) {
             Light l;
             l.type = LightType::Point;

@@ -874,7 +874,6 @@ LightContribution mesh_light_unoccluded(GpuLight light, SurfaceParams s, Princip
         /* The lobe's directions that can reach the light's bounding sphere,
          * then every triangle against all of them at once. */
         float alpha = sqrt(w.alpha2);
-        float radius2 = radius * radius, center2 = dot(to_center, to_center);
         vec3 Lb[MESH_LIGHT_BSDF_SAMPLES], spec[MESH_LIGHT_BSDF_SAMPLES], Le[MESH_LIGHT_BSDF_SAMPLES];
         float pb[MESH_LIGHT_BSDF_SAMPLES];
         bool any_ray = false;
@@ -884,8 +883,7 @@ LightContribution mesh_light_unoccluded(GpuLight light, SurfaceParams s, Princip
             Lb[j] = sample_ggx_vndf(N, V, alpha, vec2(bits >> 8u) * (1.0 / 16777216.0));
             pb[j] = principled_specular_pdf(w, N, V, Lb[j]);
             spec[j] = pb[j] > 1e-30 ? principled_specular(w, N, V, Lb[j]) * smooth_side(s, Lb[j]) : vec3(0.0);
-            float along = dot(to_center, Lb[j]);
-            if ((along < 0.0 && center2 > radius2) || center2 - along * along > radius2) spec[j] = vec3(0.0);
+            if (!ray_meets_sphere(P, Lb[j], vec4(light.position_type.xyz, radius), 3.0e38)) spec[j] = vec3(0.0);
             Le[j] = vec3(0.0);
             any_ray = any_ray || spec[j] != vec3(0.0);
         }

@@ -721,8 +721,9 @@ void Renderer::Impl::sync_world_and_emitters(Frame& f) {
 // light along its reflected ray only when the light has at most
 // MESH_LIGHT_TRACED_TRIANGLES triangles (light_lib.glsl: bounded loops over
 // its chunks); a larger emitter is missing from mirrors. Said when a
-// constant material of the scene is such a mirror (a node material's
-// roughness is not known here; README, Accuracy -> Emissive meshes).
+// constant material of the scene is such a mirror, or when the scene has a
+// node material (whose roughness, perhaps from a texture, is not known
+// here; README, Accuracy -> Emissive meshes).
 void Renderer::Impl::warn_unreflected_emitters(std::vector<std::string>& warnings) const {
     std::size_t unreflected = 0, most = 0;
     for (const MeshLight& l : emitters.lights())
@@ -734,8 +735,9 @@ void Renderer::Impl::warn_unreflected_emitters(std::vector<std::string>& warning
     auto sharp = [](float roughness) { return std::pow(double(roughness), 4.0) <= 1e-7; };  // alpha^2, alpha = r^2
     bool mirror = false;
     for (const Material& m : scene.materials())
-        if (m.graph < 0 && (((m.specular > 1e-5f || m.metallic > 1e-5f || m.glossy_model != 0) && sharp(m.roughness)) ||
-                            (m.clearcoat > 1e-5f && sharp(m.clearcoat_roughness))))
+        if (m.graph >= 0 ||
+            ((m.specular > 1e-5f || m.metallic > 1e-5f || m.glossy_model != 0) && sharp(m.roughness)) ||
+            (m.clearcoat > 1e-5f && sharp(m.clearcoat_roughness)))
             mirror = true;
     if (!mirror) return;
     warnings.push_back("Mirror-like surfaces (roughness below 0.018) do not reflect " + std::to_string(unreflected) +

@@ -358,8 +358,13 @@ vec3 finite_or(vec3 v, vec3 fallback) {
 #endif
 
 #ifdef FORWARD_PASS
-/* The surface lit as the lighting pass lights a G-buffer pixel: every light
- * (forward_module.h caps their number), the world, its emission. */
+/* The lights this draw shades, [x, y): a batch of the scene's (as the
+ * lighting pass's dispatches; forward_module.h). The first batch adds the
+ * world's light and the surface's emission too. */
+layout(location = 25) uniform uvec2 forward_lights;
+
+/* The surface lit as the lighting pass lights a G-buffer pixel: the draw's
+ * lights, the world, its emission. */
 vec3 forward_light(vec4 emission, vec4 base, vec4 params0, vec4 params1, vec3 N, vec3 Ns, vec3 Ng) {
     /* The values at the G-buffer's precision, as the lighting pass reads them. */
     SurfaceParams s = gbuffer_unpack(gbuffer_half(base), gbuffer_half(params0), gbuffer_half(params1),
@@ -373,11 +378,18 @@ vec3 forward_light(vec4 emission, vec4 base, vec4 params0, vec4 params1, vec3 N,
     vec3 V = frame_view_vector(P);
     ivec2 pixel = ivec2(FRAG_COORD.xy);
     float ao;
-    LightContribution total = world_light(w, s, P, N, V, pixel, ao);
+    const bool first = forward_lights.x == 0u;
+    LightContribution total;
+    if (first) {
+        total = world_light(w, s, P, N, V, pixel, ao);
+    } else {
+        total.diffuse = vec3(0.0);
+        total.glossy = vec3(0.0);
+    }
 #ifdef MESH_RAY_POOL
     mesh_ray_pool_start();
 #endif
-    for (uint i = 0u; i < min(frame.counts.x, uint(FORWARD_MAX_LIGHTS)); ++i) {
+    for (uint i = forward_lights.x; i < min(frame.counts.x, forward_lights.y); ++i) {
         float visible;
         LightContribution c = shade_light(lights[i], s, w, P, N, V, visible);
         total.diffuse += c.diffuse * visible;
@@ -388,7 +400,7 @@ vec3 forward_light(vec4 emission, vec4 base, vec4 params0, vec4 params1, vec3 N,
     total.diffuse += m.diffuse;
     total.glossy += m.glossy;
 #endif
-    return emission.rgb + total.diffuse + total.glossy;
+    return (first ? emission.rgb : vec3(0.0)) + total.diffuse + total.glossy;
 }
 #endif
 

@@ -185,6 +185,7 @@ void declare_renderer(py::module_& m) {
             d["culling_ms"] = self.last.culling_ms;
             d["lighting_ms"] = self.last.lighting_ms;
             d["forward_ms"] = self.last.forward_ms;
+            d["forward_batches"] = self.last.forward_batches;
             d["tile_light_pairs"] = self.last.tile_light_pairs;
             d["shadowed_lights"] = self.last.shadowed_lights;
             d["shadow_lights_dropped"] = self.last.shadow_lights_dropped;

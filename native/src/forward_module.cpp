@@ -15,9 +15,12 @@ namespace deferred {
 
 std::vector<bool> ForwardModule::prepare(ShaderLibrary& shaders, MaterialModule& materials, const FrameScene& scene,
                                          const GeometryStage& geometry, const ShaderVariant& variant,
+                                         std::uint32_t light_count, std::uint32_t lights_per_draw,
                                          std::vector<std::string>& warnings) {
     materials_ = &materials;
     geometry_ = &geometry;
+    light_count_ = light_count;
+    lights_per_draw_ = std::max(lights_per_draw, 1u);
     programs_.clear();
     std::vector<bool> forward(scene.material_count(), false);
     for (std::uint32_t id = 0; id < scene.material_count(); ++id) {
@@ -52,31 +55,44 @@ std::uint64_t ForwardModule::draw(FrameScene& scene, const ViewVolume& view) {
             sorted_.push_back({view.orthographic ? -v.z : glm::length(v), {c.draw, c.first + j, 1}});
         }
     }
-    std::stable_sort(sorted_.begin(), sorted_.end(), [](const Sorted& a, const Sorted& b) { return a.depth > b.depth; });
+    // Nearest first (the "under" operator); among equal depths in the order
+    // the scene lists them.
+    std::stable_sort(sorted_.begin(), sorted_.end(), [](const Sorted& a, const Sorted& b) { return a.depth < b.depth; });
     begin_sample();
     materials_->bind_constants();
-    GLuint bound = 0;  // the program in use (a glUseProgram resets its subroutine)
-    for (const Sorted& f : sorted_) {
-        const GpuMesh& mesh = scene.mesh(*f.one.draw);
-        for (std::size_t s = 0; s < mesh.slot_ranges.size(); ++s) {
-            const std::uint32_t id = scene.slot_material(*f.one.draw, s);
-            auto program = programs_.find(id);
-            if (program == programs_.end() || mesh.slot_ranges[s].second == 0) continue;
-            if (program->second != bound) {
-                glUseProgram(program->second);
-                use_ray_traversal(program->second, GL_FRAGMENT_SHADER);  // with shadow rays: lights them
-                bound = program->second;
+    const std::uint32_t draws = batches();
+    for (std::uint32_t batch = 0; batch < draws; ++batch) {
+        const std::uint32_t begin = batch * lights_per_draw_;
+        // Light count 0 still draws once: the world and the emission.
+        for (const auto& [id, program] : programs_) glProgramUniform2ui(program, 25, begin, begin + lights_per_draw_);
+        if (batch > 0) begin_later_batch();
+        GLuint bound = 0;  // the program in use (a glUseProgram resets its subroutine)
+        for (const Sorted& f : sorted_) {
+            const GpuMesh& mesh = scene.mesh(*f.one.draw);
+            for (std::size_t s = 0; s < mesh.slot_ranges.size(); ++s) {
+                const std::uint32_t id = scene.slot_material(*f.one.draw, s);
+                auto program = programs_.find(id);
+                if (program == programs_.end() || mesh.slot_ranges[s].second == 0) continue;
+                if (program->second != bound) {
+                    glUseProgram(program->second);
+                    use_ray_traversal(program->second, GL_FRAGMENT_SHADER);  // with shadow rays: lights them
+                    bound = program->second;
+                }
+                const Material& m = scene.scene_material(id);
+                if (m.graph >= 0 && !geometry_->failed(id)) {
+                    materials_->bind_for_draw(std::uint32_t(m.graph), mesh);
+                    scene.bind_attributes(mesh);
+                }
+                scene.draw_range(f.one, mesh.slot_ranges[s].first, mesh.slot_ranges[s].second);
             }
-            const Material& m = scene.scene_material(id);
-            if (m.graph >= 0 && !geometry_->failed(id)) {
-                materials_->bind_for_draw(std::uint32_t(m.graph), mesh);
-                scene.bind_attributes(mesh);
-            }
-            scene.draw_range(f.one, mesh.slot_ranges[s].first, mesh.slot_ranges[s].second);
         }
     }
     end_sample();
     return kept;
+}
+
+std::uint32_t ForwardModule::batches() const {
+    return std::max((light_count_ + lights_per_draw_ - 1) / lights_per_draw_, 1u);
 }
 
 void ForwardModule::ensure(int width, int height) {
@@ -106,10 +122,18 @@ void ForwardModule::begin_sample() const {
     glDisable(GL_DEPTH_TEST);  // tested against the opaque depth in the shader
     glDepthMask(GL_FALSE);
     glDisable(GL_CULL_FACE);   // two-sided, as Cycles
-    // Back to front "over" with premultiplied colour: c = src + (1 - a) c;
-    // the alpha channel keeps the transmittance, T = (1 - a) T.
+    // Front to back "under" with premultiplied colour (src = a L): c = T src
+    // + c; the alpha channel keeps the transmittance, T = (1 - a) T.
     glEnable(GL_BLEND);
-    glBlendFuncSeparate(GL_ONE, GL_ONE_MINUS_SRC_ALPHA, GL_ZERO, GL_ONE_MINUS_SRC_ALPHA);
+    glBlendFuncSeparate(GL_DST_ALPHA, GL_ONE, GL_ZERO, GL_ONE_MINUS_SRC_ALPHA);
+}
+
+void ForwardModule::begin_later_batch() const {
+    // A clear obeys the colour mask: T alone back to 1.
+    glColorMaski(0, GL_FALSE, GL_FALSE, GL_FALSE, GL_TRUE);
+    const float one[4] = {0.0f, 0.0f, 0.0f, 1.0f};
+    glClearNamedFramebufferfv(fbo_.get(), GL_COLOR, 0, one);
+    glColorMaski(0, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
 }
 
 void ForwardModule::end_sample() const {

@@ -86,6 +86,10 @@ public:
     void run(const LightModule& lights, const LightCulling* culling, const FilmModule& film, GLuint instance_groups,
              std::uint32_t world_group, int width, int height, const std::function<void()>& between_batches);
     bool light_sampling() const { return light_sampling_; }
+    // Lights per dispatch for `config` (kLightBatch and the smaller ones):
+    // as many as one invocation's loops can take on llvmpipe. The forward
+    // pass draws its lights in batches of this size too.
+    static std::uint32_t batch_size(const Config& config);
     // Pixels the batches after the first ran over, summed over this
     // frame's samples (reads the GPU's count: after the frame).
     std::uint64_t later_pixels() const;
@@ -95,8 +99,6 @@ private:
     // selection is on (a budget below the dispatch's batch and the lights).
     static ShaderVariant variant(const ShaderVariant& base, const LightModule& lights, const WorldModule& world,
                                  const Config& config, bool& light_sampling);
-    // Lights per dispatch for `config` (kLightBatch and the smaller ones).
-    static std::uint32_t batch_size(const Config& config);
     GLuint program_ = 0;
     std::uint32_t batch_ = kLightBatch;
     bool light_sampling_ = false;

@@ -891,12 +891,9 @@ void Renderer::Impl::prepare_programs(Frame& f) {
     if (shadows.world_index() >= 0) forward_variant.defines.push_back("HAS_WORLD_OCCLUSION");
     world_module.add_defines(forward_variant);
     forward_variant.defines.push_back("FORWARD_PASS");
-    forward_variant.defines.push_back("FORWARD_MAX_LIGHTS " + std::to_string(kLightBatch));
-    f.geometry.exclude(forward.prepare(*shaders, materials, f.scene, f.geometry, forward_variant, result.warnings));
+    f.geometry.exclude(forward.prepare(*shaders, materials, f.scene, f.geometry, forward_variant, lights.count(),
+                                       LightingStage::batch_size(lighting), result.warnings));
     if (forward.active()) {
-        if (lights.count() > kLightBatch)
-            result.warnings.push_back("Blend-mode materials are lit by the first " + std::to_string(kLightBatch) +
-                                      " of the scene's " + std::to_string(lights.count()) + " lights");
         // What the forward pass does not write (forward_module.h): said, not silent.
         std::vector<std::string> skipped;
         for (Pass p : settings.passes.list())
@@ -1289,6 +1286,7 @@ FrameResult Renderer::Impl::finish(Frame& f) {
     t.geometry_ms = f.geometry_ms;
     t.lighting_ms = f.lighting_ms;
     t.forward_ms = f.forward_ms;
+    t.forward_batches = forward.active() ? forward.batches() : 0u;
     t.culling_ms = f.culling_ms;
     t.shadow_ms = f.shadow_ms;
     t.shadow_map_bytes = shadows.empty() ? 0 : shadows.map_bytes();

@@ -195,7 +195,7 @@ TEST(ForwardPass, PaneBehindAnOpaqueSurfaceIsHiddenExactly) {
     EXPECT_EQ(worst, 0.0);
 }
 
-TEST(ForwardPass, LayersAreCompositedBackToFront) {
+TEST(ForwardPass, LayersAreCompositedInDepthOrder) {
     // Two panes of alpha 0.5 (red at z = 1, blue at z = 2), added nearest
     // first: 0.5 blue + 0.25 red + 0.25 floor.
     const Material red = diffuse(0.75f, 0.125f, 0.125f), blue = diffuse(0.125f, 0.125f, 0.75f);
@@ -283,4 +283,77 @@ TEST(StochasticAlpha, StackedLayersConvergeInEveryPixel) {
     std::printf("two layers, 256 samples: worst %.4f, RMS %.4f of the contrast\n", worst, std::sqrt(sum / n));
     EXPECT_LT(worst, 0.12);
     EXPECT_LT(std::sqrt(sum / n), 0.05);
+}
+
+// A cloud of `count` tiny triangles (1 cm) scattered over x, y in [-6, 6],
+// z in [2, 6], in one mesh: shadow rays crossing it visit many boxes.
+tools::MeshArrays triangle_cloud(int count) {
+    tools::MeshArrays m;
+    std::uint32_t state = 12345u;
+    auto random = [&]() {
+        state = state * 1664525u + 1013904223u;
+        return float(state >> 8) / float(1 << 24);
+    };
+    for (int t = 0; t < count; ++t) {
+        const float c[3] = {-6.0f + 12.0f * random(), -6.0f + 12.0f * random(), 2.0f + 4.0f * random()};
+        for (int k = 0; k < 3; ++k) {
+            for (int axis = 0; axis < 3; ++axis) m.positions.push_back(c[axis] + 0.01f * random());
+            m.indices.push_back(std::uint32_t(3 * t + k));
+        }
+    }
+    return m;
+}
+
+// The forward pass shades its lights in the lighting pass's batches
+// (forward_module.h): llvmpipe ends all loops of an invocation after 65 535
+// iterations, and one fragment looping over 160 point lights whose shadow
+// rays cross a cloud of 40 000 triangles kept about a third of their light
+// (the pane at 0.40 of the opaque pane's 1.38 with 256 lights), silently.
+// A Blend pane of alpha 1 is the opaque pane lit by the forward pass: with
+// 160 lights and rays it takes 20 draws of 8 lights and equals the lighting
+// pass's image; with 600 lights and maps (no rays) 2 draws of 512, where
+// before only the first 512 lit it.
+TEST(ForwardPass, ManyLightsAreDrawnInTheLightingsBatches) {
+    auto render = [&](bool blend, int lights, bool rays) {
+        Renderer r;
+        set_world_color(r, 0.0f, 0.0f, 0.0f);
+        add_plane(r, diffuse(0.75f, 0.375f, 0.25f), 10.0f);
+        Material green = diffuse(0.25f, 0.75f, 0.375f);
+        add_plane(r, blend ? blend_of(green, 1.0f) : green, 2.0f, 1, tools::translation(0, 0, 1.0), false);
+        if (rays) {
+            const tools::MeshArrays cloud = triangle_cloud(40000);
+            const Mat4d I = identity_matrix();
+            r.add_instances(r.add_mesh(cloud.view()), I.data(), 1, nullptr, {r.add_material(diffuse(0.5f, 0.5f, 0.5f))});
+        }
+        for (int k = 0; k < lights; ++k) {
+            Light l;
+            l.type = LightType::Point;
+            l.cast_shadow = rays;
+            l.matrix = tools::translation(-5.0 + 10.0 * ((k % 25) / 24.0), -5.0 + 10.0 * ((k / 25 % 25) / 24.0),
+                                          8.0 + 0.5 * (k / 625));
+            l.energy = 20.0f;
+            r.add_light(l);
+        }
+        RenderSettings s;
+        s.shadow_rays = rays;
+        s.shadows = rays;
+        s.width = s.height = kSize;
+        s.samples = 1;
+        s.filter_width = 0.01f;
+        s.light_culling = false;
+        return r.render(top_down_ortho(10.0, 6.0f), s);
+    };
+    for (auto [lights, rays, draws] : {std::tuple{160, true, 20u}, std::tuple{600, false, 2u}}) {
+        const FrameResult opaque = render(false, lights, rays), forward = render(true, lights, rays);
+        const PassImage& O = *opaque.find(Pass::Combined);
+        const double worst = worst_inside(*forward.find(Pass::Combined), [&](int x, int y) { return pixel4(O, x, y); });
+        std::printf("%d lights%s: %u forward draws, worst relative difference to the opaque pane %.2e (green %.4f)\n",
+                    lights, rays ? " with shadow rays" : "", forward.timings.forward_batches, worst,
+                    pixel4(O, 24, 24).y);
+        EXPECT_EQ(forward.timings.forward_batches, draws);
+        EXPECT_EQ(opaque.timings.forward_batches, 0u);
+        EXPECT_GT(pixel4(O, 24, 24).y, 0.5);
+        EXPECT_LT(worst, 1e-5);
+        for (const std::string& w : forward.warnings) EXPECT_EQ(w.find("are lit by the first"), std::string::npos) << w;
+    }
 }

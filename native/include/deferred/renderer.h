@@ -229,6 +229,9 @@ struct FrameTimings {
     double upload_ms = 0, shadow_ms = 0, geometry_ms = 0, culling_ms = 0, lighting_ms = 0, passes_ms = 0,
            readback_ms = 0;
     double forward_ms = 0;  // the forward pass (Blend-mode materials), all samples
+    // Draws of the Blend-mode surfaces per sample, one per batch of lights
+    // (as the lighting's dispatches); 0 without a forward pass.
+    std::uint32_t forward_batches = 0;
     // geometry_ms holds the emission samples' passes too (emission_samples.h),
     // and camera_instances_drawn their instances.
     double total_ms = 0;

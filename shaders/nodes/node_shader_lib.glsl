@@ -13,14 +13,51 @@ vec3 closure_normal(vec3 n) {
     return ensure_valid_reflection(g_sd.Ng, g_sd.I, m);
 }
 
+/* Transmission folded into the Principled parameter set as Cycles shows a
+ * closed glass object at Max Bounces 0 (the add-on's export/material.py
+ * fold_transmission is the same formula, with its derivation). Cycles 3.4
+ * svm_node_closure_bsdf: T' = T (1 - m); diffuse and sheen take
+ * wd = (1 - m)(1 - T), the specular lobe ws = 1 - T', the glass closure T':
+ * a reflection of weight fresnel_dielectric_cos(N.I, ior) and a refraction,
+ * which meets the object's far side (nothing at Max Bounces 0). So
+ * base' = base (wd + m ws), metallic' = m ws / (wd + m ws), sheen' =
+ * sheen wd / (1 - metallic'), and one specular lobe of normal-incidence
+ * reflectance D = 0.08 specular (1 - m) ws + T' F0(ior) (wholly metallic,
+ * of colour base (wd + m ws) + D, where specular' would pass 12). */
+void principled_fold_transmission(float transmission, float ior, inout vec3 base_color, inout float metallic,
+                                  inout float specular, inout float sheen) {
+    float t = clamp01(transmission);
+    if (!(t > 0.0)) return;
+    float m = metallic;
+    float glass = t * (1.0 - m), wd = (1.0 - m) * (1.0 - t), ws = 1.0 - glass;
+    float k = wd + m * ws;
+    float eta = max(ior, 1e-5);
+    float r = (eta - 1.0) / (eta + 1.0);
+    float dielectric = 0.08 * specular * (1.0 - m) * ws + glass * r * r; /* r^2: fresnel_dielectric_cos(1, ior) */
+    float folded = k > 0.0 ? m * ws / k : m;
+    base_color *= k;
+    if (dielectric <= 12.0 * 0.08 * (1.0 - folded)) {
+        metallic = folded;
+        specular = dielectric / (0.08 * (1.0 - folded));
+        sheen *= wd / (1.0 - folded);
+    } else {
+        /* specular' past the G-buffer's 12: wholly metallic, colour
+         * base (wd + m ws) + D (fold_transmission). */
+        metallic = 1.0;
+        base_color += vec3(dielectric);
+        sheen = 0.0;
+    }
+}
+
 /* Principled BSDF (3.4 inputs). The ranges are those of the G-buffer and of
  * Cycles' own clamps: metallic/transmission weights saturate, GGX alpha is
- * clamped to [0, 1], base colour is not negative. Subsurface, transmission
- * and anisotropy are not modelled (the add-on warns when they are used). */
+ * clamped to [0, 1], base colour is not negative. Transmission is folded in
+ * (principled_fold_transmission); subsurface and anisotropy are not
+ * modelled (the add-on warns when they are used). */
 void node_bsdf_principled(vec3 base_color, float metallic, float specular, float specular_tint,
                           float roughness, float sheen, float sheen_tint, float clearcoat,
-                          float clearcoat_roughness, vec3 emission, float emission_strength,
-                          float alpha, vec3 normal, out Closure c) {
+                          float clearcoat_roughness, float transmission, float ior, vec3 emission,
+                          float emission_strength, float alpha, vec3 normal, out Closure c) {
     c = closure_none();
     c.base_color = max(base_color, vec3(0.0));
     c.metallic = clamp01(metallic);
@@ -28,6 +65,8 @@ void node_bsdf_principled(vec3 base_color, float metallic, float specular, float
     c.specular_tint = clamp01(specular_tint);
     c.roughness = clamp01(roughness);
     c.sheen = clamp01(sheen);
+    principled_fold_transmission(transmission, ior, c.base_color, c.metallic, c.specular, c.sheen);
+    c.specular = clamp(c.specular, 0.0, 12.0);
     c.sheen_tint = clamp01(sheen_tint);
     c.clearcoat = clamp01(clearcoat);
     c.clearcoat_roughness = clamp01(clearcoat_roughness);
@@ -35,6 +74,16 @@ void node_bsdf_principled(vec3 base_color, float metallic, float specular, float
     c.alpha = clamp01(alpha);
     c.N = closure_normal(normal);
     c.reflects = 1.0;
+}
+
+/* The node without Transmission and IOR, as graphs exported before they were
+ * read (scene captures, bench/gpu/captures) call it. */
+void node_bsdf_principled(vec3 base_color, float metallic, float specular, float specular_tint,
+                          float roughness, float sheen, float sheen_tint, float clearcoat,
+                          float clearcoat_roughness, vec3 emission, float emission_strength,
+                          float alpha, vec3 normal, out Closure c) {
+    node_bsdf_principled(base_color, metallic, specular, specular_tint, roughness, sheen, sheen_tint, clearcoat,
+                         clearcoat_roughness, 0.0, 1.45, emission, emission_strength, alpha, normal, c);
 }
 
 /* Diffuse BSDF: the Principled diffuse lobe at roughness 1 stands in for
@@ -61,6 +110,26 @@ void node_bsdf_glossy(int model, vec3 color, float roughness, vec3 normal, out C
     c.glossy_model = float(model);
     c.metallic = 1.0;
     c.specular = 0.5;
+    c.roughness = clamp01(roughness);
+    c.N = closure_normal(normal);
+    c.reflects = 1.0;
+}
+
+/* Glass BSDF as Cycles shows a closed glass object at Max Bounces 0: its
+ * reflection (svm_node_glass_setup: weight colour x
+ * fresnel_dielectric_cos(N.I, ior), a GGX lobe without Fresnel; Sharp a
+ * mirror), its refraction meeting the object's far side (nothing). Here a
+ * metallic Principled lobe of normal-incidence colour colour x F0(ior) and
+ * the Fresnel curve of that ior (L.H's Fresnel where Cycles takes N.I's;
+ * towards grazing it goes to white, Cycles' to the colour). */
+void node_bsdf_glass(vec3 color, float roughness, float ior, vec3 normal, out Closure c) {
+    c = closure_none();
+    float eta = max(ior, 1e-5);
+    float r = (eta - 1.0) / (eta + 1.0);
+    float f0 = r * r; /* fresnel_dielectric_cos(1, ior) */
+    c.base_color = max(color, vec3(0.0)) * f0;
+    c.metallic = 1.0;
+    c.specular = clamp(f0 / 0.08, 0.0, 12.0);
     c.roughness = clamp01(roughness);
     c.N = closure_normal(normal);
     c.reflects = 1.0;

@@ -47,6 +47,7 @@ set(DEFERRED_BLENDER_TESTS
     motion_blur
     shadow_catcher
     glossy_highlights
+    glass
     capture_replay
     tangents
     visibility_buffer

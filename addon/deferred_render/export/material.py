@@ -11,6 +11,8 @@ per material. The node tree is reduced to that set:
 - Glossy BSDF   -> its own lobe (``glossy_model``: GGX or Beckmann, weight =
   colour, no Fresnel), metallic 1 so there is no diffuse lobe; Sharp is a
   mirror.
+- Glass BSDF    -> its reflection as Cycles shows a closed glass object at
+  Max Bounces 0 (_glass: a metallic lobe of colour x F0(IOR)); no refraction.
 - Emission      -> black, non-reflective surface with that emission.
 - Add Shader    -> exact when at most one side reflects: that side's BSDF
   plus the emission of both.
@@ -24,7 +26,9 @@ per material. The node tree is reduced to that set:
   picks one side.
 - Reroute nodes are followed.
 
-Anything else (textures, groups, Transmission, Subsurface, normal maps...)
+Transmission is folded into the set as Cycles shows a closed glass object at
+Max Bounces 0 (fold_transmission: its reflection, no refraction), named in
+the warning. Anything else (textures, groups, Subsurface, normal maps...)
 is listed in *one* warning per material. If the surface shader itself
 cannot be reduced, the material's viewport display settings are used
 (Material > Viewport Display: colour, metallic, roughness), which is also what
@@ -56,12 +60,15 @@ PRINCIPLED_INPUTS = (
 # linked input or a value away from neutral is reported as not understood.
 PRINCIPLED_UNSUPPORTED = (
     (("Subsurface", "Subsurface Weight"), 0.0),
-    (("Transmission", "Transmission Weight"), 0.0),
     (("Anisotropic",), 0.0),
     (("Normal",), None),            # only a link matters
     (("Clearcoat Normal", "Coat Normal"), None),
     (("Tangent",), None),
 )
+
+# Transmission (folded into the parameter set, fold_transmission) and the IOR it uses.
+PRINCIPLED_TRANSMISSION = ("Transmission", "Transmission Weight")
+PRINCIPLED_IOR = ("IOR",)
 
 # The renderer's defaults (= native add_material defaults = Blender's default surface).
 DEFAULT_PARAMS = {
@@ -177,7 +184,75 @@ def _principled(node, notes):
         elif neutral is not None and abs(_scalar(socket.default_value) - neutral) > 1e-6:
             notes.append(f"'{socket.name}' = {_scalar(socket.default_value):.3g} (not rendered)")
     # 'MULTI_GGX' has no closed form: shaded as GGX (see shared/REFERENCE.md).
+    socket = _find_input(node, PRINCIPLED_TRANSMISSION)
+    transmission = 0.0 if socket is None else _finite(
+        _scalar(_input_value(socket, notes, f"'{socket.name}'")), 0.0)
+    if transmission > 1e-6:
+        ior_socket = _find_input(node, PRINCIPLED_IOR)
+        ior = 1.45 if ior_socket is None else _finite(
+            _scalar(_input_value(ior_socket, notes, f"'{ior_socket.name}'")), 1.45)
+        params = fold_transmission(_full(params), transmission, ior)
+        params.pop("pass_index", None)
+        notes.append(TRANSMISSION_NOTE.format(name=socket.name, value=transmission))
     return params
+
+
+# What the fold leaves out, said in the material's warning.
+TRANSMISSION_NOTE = ("'{name}' = {value:.3g}: rendered as Cycles at Max Bounces 0 shows a closed glass "
+                     "object (its Fresnel reflection, less diffuse); light refracted through the surface "
+                     "is not rendered")
+
+
+def dielectric_f0(ior):
+    """Cycles' fresnel_dielectric_cos(1, ior): the reflectance at normal
+    incidence, the same for ior and 1 / ior."""
+    ior = max(float(ior), 1e-5)
+    return ((ior - 1.0) / (ior + 1.0)) ** 2
+
+
+def fold_transmission(params, transmission, ior):
+    """A Principled parameter set with Transmission folded into the
+    parameters the renderer has (shaders/nodes/node_shader_lib.glsl
+    principled_fold_transmission is the same formula).
+
+    Cycles 3.4 (svm_node_closure_bsdf, CLOSURE_BSDF_PRINCIPLED_ID): with
+    m = metallic, T = transmission, T' = T (1 - m), the diffuse and sheen
+    lobes take wd = (1 - m)(1 - T), the specular lobe ws = 1 - T', and a
+    glass closure of weight T' adds a reflection of weight
+    fresnel_dielectric_cos(N.I, ior) (white at Specular Tint 0) and a
+    refraction. At Max Bounces 0 the refraction of a closed object meets
+    its own far side, so it shows nothing; the reflection is a GGX lobe of
+    the same roughness. Here: base' = base (wd + m ws) and metallic' = m ws /
+    (wd + m ws) give the diffuse base wd and the metallic colour base m ws
+    exactly; sheen' = sheen wd / (1 - metallic'); the dielectric reflectance
+    at normal incidence D = 0.08 specular (1 - m) ws + T' F0(ior) becomes
+    0.08 specular' (1 - metallic'), one Principled specular lobe (its
+    Fresnel curve from that F0; Cycles' glass reflection takes N.I's
+    Fresnel where this takes L.H's). Where specular' would pass the
+    G-buffer's 12 (metallic' near 1: Metallic above 0 at Transmission near
+    1) the lobe turns wholly metallic, of colour base (wd + m ws) + D (the
+    small diffuse part goes into it)."""
+    m = _clamp01(params["metallic"])
+    t = _clamp01(transmission)
+    if t <= 0.0:
+        return params
+    glass = t * (1.0 - m)
+    wd = (1.0 - m) * (1.0 - t)
+    ws = 1.0 - glass
+    k = wd + m * ws
+    dielectric = 0.08 * float(params["specular"]) * (1.0 - m) * ws + glass * dielectric_f0(ior)
+    out = dict(params)
+    metallic = m * ws / k if k > 0.0 else m
+    out["base_color"] = tuple(c * k for c in params["base_color"])
+    if dielectric <= 12.0 * 0.08 * (1.0 - metallic):
+        out["metallic"] = metallic
+        out["specular"] = dielectric / (0.08 * (1.0 - metallic))
+        out["sheen"] = float(params["sheen"]) * wd / (1.0 - metallic)
+    else:
+        out["metallic"] = 1.0
+        out["base_color"] = tuple(c + dielectric for c in out["base_color"])
+        out["sheen"] = 0.0
+    return out
 
 
 def _diffuse(node, notes):
@@ -208,6 +283,28 @@ def _glossy(node, notes):
         "roughness": roughness,
         # A Glossy BSDF's own lobe: weight = colour, no Fresnel; GGX or Beckmann.
         "glossy_model": 2 if distribution == "BECKMANN" else 1,
+    }
+
+
+def _glass(node, notes):
+    """Glass BSDF as Cycles shows a closed glass object at Max Bounces 0
+    (node_bsdf_glass in shaders/nodes/node_shader_lib.glsl: the same
+    parameters): its reflection, colour x fresnel_dielectric_cos(N.I, ior),
+    as a metallic lobe of normal-incidence colour colour x F0(ior)."""
+    distribution = getattr(node, "distribution", "GGX")
+    if distribution not in {"GGX", "SHARP"}:
+        notes.append(f"'{node.name}': {distribution.replace('_', ' ').title()} distribution shaded as GGX")
+    notes.append(f"'{node.name}': Glass BSDF rendered as Cycles at Max Bounces 0 shows a closed glass object "
+                 "(its Fresnel reflection); light refracted through the surface is not rendered")
+    roughness = (0.0 if distribution == "SHARP" else
+                 _finite(_scalar(_input_value(node.inputs["Roughness"], notes, "Glass 'Roughness'")), 0.0))
+    f0 = dielectric_f0(_finite(_scalar(_input_value(node.inputs["IOR"], notes, "Glass 'IOR'")), 1.45))
+    color = _color(_input_value(node.inputs["Color"], notes, "Glass 'Color'"), (1.0, 1.0, 1.0))
+    return {
+        "base_color": tuple(max(c, 0.0) * f0 for c in color),
+        "metallic": 1.0,
+        "specular": f0 / 0.08,
+        "roughness": _clamp01(roughness),
     }
 
 
@@ -346,6 +443,8 @@ def _reduce(node, notes, depth=0):
         return _full(_glossy(node, notes))
     if kind == "ShaderNodeEmission":
         return _full(_emission(node, notes))
+    if kind == "ShaderNodeBsdfGlass":
+        return _full(_glass(node, notes))
     if kind in {"ShaderNodeMixShader", "ShaderNodeAddShader"}:
         shader_inputs = [s for s in node.inputs if s.type == "SHADER"]
         sides = []

@@ -1,7 +1,8 @@
 """Shader nodes -> closures (shaders/nodes/node_shader_lib.glsl).
 
 What the G-buffer cannot hold is named in the material's warning: Principled
-subsurface, transmission, anisotropy and a clearcoat normal; a tinted
+subsurface, anisotropy and a clearcoat normal; transmission, folded in as
+Cycles shows a closed glass object at Max Bounces 0 (no refraction); a tinted
 Transparent BSDF (rendered as its grey); Add Shader of
 two reflecting BSDFs (drawn one at a time at twice the weight, exact for the
 diffuse and metallic parts only). Shader nodes without a spec fall back to a
@@ -41,12 +42,19 @@ def _value(b, identifier):
 
 @register("ShaderNodeBsdfPrincipled")
 def principled(b):
-    for identifier, neutral in (("Subsurface", 0.0), ("Transmission", 0.0), ("Anisotropic", 0.0)):
+    for identifier, neutral in (("Subsurface", 0.0), ("Anisotropic", 0.0)):
         v = _value(b, identifier)
         if v is None:
             b._graph.note(f"'{b.node.name}': '{identifier}' is linked (not rendered)")
         elif abs(v - neutral) > 1e-6:
             b._graph.note(f"'{b.node.name}': '{identifier}' = {v:.3g} (not rendered)")
+    # Transmission is folded into the parameter set (principled_fold_transmission).
+    transmission = _value(b, "Transmission")
+    if transmission is None or transmission > 1e-6:
+        value = "linked" if transmission is None else f"{transmission:.3g}"
+        b._graph.note(f"'{b.node.name}': 'Transmission' {value}: rendered as Cycles at Max Bounces 0 shows a "
+                      "closed glass object (its Fresnel reflection, less diffuse); light refracted through the "
+                      "surface is not rendered")
     if b.is_linked("Clearcoat Normal"):
         b._graph.note(f"'{b.node.name}': 'Clearcoat Normal' (the base normal is used)")
     alpha = _value(b, "Alpha")
@@ -56,7 +64,7 @@ def principled(b):
            [b.input("Base Color", "color"), b.input("Metallic", "float"), b.input("Specular", "float"),
             b.input("Specular Tint", "float"), b.input("Roughness", "float"), b.input("Sheen", "float"),
             b.input("Sheen Tint", "float"), b.input("Clearcoat", "float"), b.input("Clearcoat Roughness", "float"),
-            b.input("Emission", "color"), b.input("Emission Strength", "float"), b.input("Alpha", "float"),
+            b.input("Transmission", "float"), b.input("IOR", "float"), b.input("Emission", "color"), b.input("Emission Strength", "float"), b.input("Alpha", "float"),
             _closure_normal(b)],
            [("BSDF", "closure")])
 
@@ -89,6 +97,21 @@ def glossy(b):
     model = GLOSSY_MODEL_BECKMANN if distribution == "BECKMANN" else GLOSSY_MODEL_GGX
     b.call("node_bsdf_glossy",
            [b.int(model), b.input("Color", "color"), roughness, _closure_normal(b)],
+           [("BSDF", "closure")])
+
+
+@register("ShaderNodeBsdfGlass")
+def glass(b):
+    distribution = getattr(b.node, "distribution", "GGX")
+    if distribution == "SHARP":
+        roughness = b.const(0.0, "float")  # Cycles: sharp glass, Roughness unused
+    else:
+        roughness = b.input("Roughness", "float")
+        if distribution != "GGX":
+            b._graph.note(f"'{b.node.name}': {distribution.replace('_', ' ').title()} distribution shaded as GGX")
+    b._graph.note(f"'{b.node.name}': Glass BSDF rendered as Cycles at Max Bounces 0 shows a closed glass object "
+                  "(its Fresnel reflection); light refracted through the surface is not rendered")
+    b.call("node_bsdf_glass", [b.input("Color", "color"), roughness, b.input("IOR", "float"), _closure_normal(b)],
            [("BSDF", "closure")])
 
 

@@ -13,6 +13,7 @@ per material. The node tree is reduced to that set:
   mirror.
 - Glass BSDF    -> its reflection as Cycles shows a closed glass object at
   Max Bounces 0 (_glass: a metallic lobe of colour x F0(IOR)); no refraction.
+- Refraction BSDF -> black, as Cycles shows a closed object at Max Bounces 0.
 - Emission      -> black, non-reflective surface with that emission.
 - Add Shader    -> exact when at most one side reflects: that side's BSDF
   plus the emission of both.
@@ -445,6 +446,11 @@ def _reduce(node, notes, depth=0):
         return _full(_emission(node, notes))
     if kind == "ShaderNodeBsdfGlass":
         return _full(_glass(node, notes))
+    if kind == "ShaderNodeBsdfRefraction":
+        # At Max Bounces 0 Cycles shows a closed object of it black (node_shader.py refraction).
+        notes.append(f"'{node.name}': Refraction BSDF rendered as Cycles at Max Bounces 0 shows a closed object "
+                     "(black); light refracted through the surface is not rendered")
+        return _full({"base_color": (0.0, 0.0, 0.0), "specular": 0.0, "metallic": 0.0})
     if kind in {"ShaderNodeMixShader", "ShaderNodeAddShader"}:
         shader_inputs = [s for s in node.inputs if s.type == "SHADER"]
         sides = []

@@ -115,6 +115,15 @@ def glass(b):
            [("BSDF", "closure")])
 
 
+@register("ShaderNodeBsdfRefraction")
+def refraction(b):
+    # Refraction alone: at Max Bounces 0 Cycles shows a closed object of it
+    # black (its ray and its light samples meet the far side).
+    b._graph.note(f"'{b.node.name}': Refraction BSDF rendered as Cycles at Max Bounces 0 shows a closed object "
+                  "(black); light refracted through the surface is not rendered")
+    b.call("node_closure_none", [], [("BSDF", "closure")])
+
+
 @register("ShaderNodeEmission")
 def emission(b):
     b.call("node_emission", [b.input("Color", "color"), b.input("Strength", "float")], [("Emission", "closure")])

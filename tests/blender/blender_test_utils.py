@@ -162,6 +162,44 @@ def bare_setup(scene, world=False):
     return cam, layer
 
 
+def sphere_in_front(scene, world_color):
+    """bare_setup's scene holding a smooth 64-segment unit sphere (pass
+    index 1) at the origin, seen from 6 m along +Y at 96x96 with the IndexOB
+    pass, under a constant world of ``world_color``; returns the sphere."""
+    import math
+    for ob in list(scene.objects):
+        bpy.data.objects.remove(ob)
+    cam, layer = bare_setup(scene, world=False)
+    scene.world = bpy.data.worlds.new("Constant")
+    scene.world.color = world_color
+    cam.location = (0.0, -6.0, 0.0)
+    cam.rotation_euler = (math.pi / 2, 0.0, 0.0)
+    scene.render.resolution_x = scene.render.resolution_y = 96
+    scene.render.resolution_percentage = 100
+    layer.use_pass_object_index = True
+    bpy.ops.mesh.primitive_uv_sphere_add(segments=64, ring_count=32, radius=1.0)
+    sphere = bpy.context.active_object
+    bpy.ops.object.shade_smooth()
+    sphere.pass_index = 1
+    return sphere
+
+
+def aimed_light(scene, kind, location, energy, size):
+    """A light of ``kind`` at ``location`` aimed at the origin: an area
+    light ``size`` across, or a point/spot light of radius ``size``."""
+    data = bpy.data.lights.new(kind, kind)
+    data.energy = energy
+    if kind == 'AREA':
+        data.size = size
+    else:
+        data.shadow_soft_size = size
+    ob = bpy.data.objects.new(kind, data)
+    scene.collection.objects.link(ob)
+    ob.location = location
+    ob.rotation_euler = (-ob.location).to_track_quat('-Z', 'Y').to_euler()
+    return ob
+
+
 def comparison_setup(scene, size=(160, 90), samples=16):
     """A small render to compare the engines on: ``size`` at 100 %, one
     sample count for Cycles and ours, every pass off; returns the view layer."""

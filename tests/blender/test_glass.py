@@ -26,7 +26,6 @@ a Math node, which the constant path does not fold).
         -E DEFERRED_RENDER --python-exit-code 1 --python tests/blender/test_glass.py
 """
 
-import math
 import os
 import sys
 
@@ -52,31 +51,6 @@ CASES = (
     # Black in Cycles (mean 6e-7 of stray samples): checked in absolute terms.
     ("Refraction BSDF, roughness 0.3", "refraction", {"Roughness": 0.3}, None),
 )
-
-
-def build(scene):
-    for ob in list(scene.objects):
-        bpy.data.objects.remove(ob)
-    cam, layer = U.bare_setup(scene, world=False)
-    scene.world = bpy.data.worlds.new("Grey")
-    scene.world.color = (0.2, 0.2, 0.2)
-    cam.location = (0.0, -6.0, 0.0)
-    cam.rotation_euler = (math.pi / 2, 0.0, 0.0)
-    scene.render.resolution_x = scene.render.resolution_y = 96
-    scene.render.resolution_percentage = 100
-    layer.use_pass_object_index = True
-    bpy.ops.mesh.primitive_uv_sphere_add(segments=64, ring_count=32, radius=1.0)
-    sphere = bpy.context.active_object
-    bpy.ops.object.shade_smooth()
-    sphere.pass_index = 1
-    data = bpy.data.lights.new("Area", 'AREA')
-    data.energy = 200.0
-    data.size = 1.0
-    lamp = bpy.data.objects.new("Area", data)
-    scene.collection.objects.link(lamp)
-    lamp.location = (1.5, -3.0, 1.5)
-    lamp.rotation_euler = (-lamp.location).to_track_quat('-Z', 'Y').to_euler()
-    return sphere
 
 
 def material(shader, inputs, graph):
@@ -105,11 +79,7 @@ def material(shader, inputs, graph):
 
 
 def render(scene, engine, samples, name):
-    scene.render.engine = engine
-    scene.cycles.samples = scene.deferred_render.samples = samples
-    channels = U.read_exr(U.render_exr(os.path.join(OUT, name), scene))
-    return (U.exr_pass(channels, "ViewLayer", "Combined", "RGB").astype(np.float64),
-            channels["ViewLayer.IndexOB.X"].astype(np.int64))
+    return U.render_combined(scene, engine, samples, os.path.join(OUT, name), letters="RGB")
 
 
 def main():
@@ -117,7 +87,8 @@ def main():
     if not U.require_engine(checks):
         checks.finish()
     scene = bpy.context.scene
-    sphere = build(scene)
+    sphere = U.sphere_in_front(scene, (0.2, 0.2, 0.2))
+    U.aimed_light(scene, 'AREA', (1.5, -3.0, 1.5), 200.0, 1.0)
     for k, (label, shader, inputs, bound) in enumerate(CASES):
         sphere.data.materials.clear()
         sphere.data.materials.append(material(shader, inputs, graph=False))

@@ -17,7 +17,6 @@ the same sum, and a lower RMSE against Cycles.
         -E DEFERRED_RENDER --python-exit-code 1 --python tests/blender/test_glossy_highlights.py
 """
 
-import math
 import os
 import sys
 
@@ -29,24 +28,6 @@ import blender_test_utils as U  # noqa: E402
 
 OUT = U.out_dir("glossy_highlights")
 CASES = (("AREA", "metal", 0.1), ("POINT", "metal", 0.1), ("AREA", "glossy", 0.05))
-
-
-def build(scene):
-    for ob in list(scene.objects):
-        bpy.data.objects.remove(ob)
-    cam, layer = U.bare_setup(scene, world=False)
-    scene.world = bpy.data.worlds.new("Black")
-    scene.world.color = (0.0, 0.0, 0.0)
-    cam.location = (0.0, -6.0, 0.0)
-    cam.rotation_euler = (math.pi / 2, 0.0, 0.0)
-    scene.render.resolution_x = scene.render.resolution_y = 96
-    scene.render.resolution_percentage = 100
-    layer.use_pass_object_index = True
-    bpy.ops.mesh.primitive_uv_sphere_add(segments=64, ring_count=32, radius=1.0)
-    sphere = bpy.context.active_object
-    bpy.ops.object.shade_smooth()
-    sphere.pass_index = 1
-    return sphere
 
 
 def material(kind, roughness):
@@ -65,26 +46,8 @@ def material(kind, roughness):
     return mat
 
 
-def light(scene, kind):
-    data = bpy.data.lights.new(kind, kind)
-    data.energy = 200.0
-    if kind == "AREA":
-        data.size = 1.0
-    else:
-        data.shadow_soft_size = 0.5
-    ob = bpy.data.objects.new(kind, data)
-    scene.collection.objects.link(ob)
-    ob.location = (1.5, -3.0, 1.5)
-    ob.rotation_euler = (-ob.location).to_track_quat('-Z', 'Y').to_euler()
-    return ob
-
-
 def render(scene, engine, samples, name):
-    scene.render.engine = engine
-    scene.cycles.samples = scene.deferred_render.samples = samples
-    channels = U.read_exr(U.render_exr(os.path.join(OUT, name), scene))
-    return (U.exr_pass(channels, "ViewLayer", "Combined", "RGB").astype(np.float64),
-            channels["ViewLayer.IndexOB.X"].astype(np.int64))
+    return U.render_combined(scene, engine, samples, os.path.join(OUT, name), letters="RGB")
 
 
 def main():
@@ -92,11 +55,11 @@ def main():
     if not U.require_engine(checks):
         checks.finish()
     scene = bpy.context.scene
-    sphere = build(scene)
+    sphere = U.sphere_in_front(scene, (0.0, 0.0, 0.0))
     for light_kind, kind, roughness in CASES:
         sphere.data.materials.clear()
         sphere.data.materials.append(material(kind, roughness))
-        lamp = light(scene, light_kind)
+        lamp = U.aimed_light(scene, light_kind, (1.5, -3.0, 1.5), 200.0, 1.0 if light_kind == 'AREA' else 0.5)
         label = f"{kind} roughness {roughness} under the {light_kind.lower()} light"
         cycles, index = render(scene, "CYCLES", 2048, f"cycles_{light_kind}_{kind}")
         ours, _ = render(scene, "DEFERRED_RENDER", 256, f"ours_{light_kind}_{kind}")

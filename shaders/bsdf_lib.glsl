@@ -84,7 +84,7 @@ struct PrincipledWeights {
 PrincipledWeights principled_weights(SurfaceParams s) {
     PrincipledWeights w;
     float m = clamp(s.metallic, 0.0, 1.0);
-    float wd = 1.0 - m; /* transmission is 0 in this parameter set */
+    float wd = 1.0 - m; /* no transmission here: the add-on folds it into the set (principled_fold_transmission) */
     bool diffuse = abs(s.base_color.r + s.base_color.g + s.base_color.b) / 3.0 > CLOSURE_WEIGHT_CUTOFF &&
                    wd > CLOSURE_WEIGHT_CUTOFF;
     w.diffuse = diffuse ? s.base_color * wd : vec3(0.0);

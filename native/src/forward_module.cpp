@@ -40,7 +40,8 @@ std::vector<bool> ForwardModule::prepare(ShaderLibrary& shaders, MaterialModule&
     return forward;
 }
 
-std::uint64_t ForwardModule::draw(FrameScene& scene, const ViewVolume& view) {
+std::uint64_t ForwardModule::draw(FrameScene& scene, const ViewVolume& view,
+                                  const std::function<void()>& between_batches) {
     const std::uint64_t kept = scene.cull([&](const glm::dvec3& c, double r) { return view.contains(c, r); }, false);
     sorted_.clear();
     for (const FrameScene::Culled& c : scene.visible()) {
@@ -65,7 +66,15 @@ std::uint64_t ForwardModule::draw(FrameScene& scene, const ViewVolume& view) {
         const std::uint32_t begin = batch * lights_per_draw_;
         // Light count 0 still draws once: the world and the emission.
         for (const auto& [id, program] : programs_) glProgramUniform2ui(program, 25, begin, begin + lights_per_draw_);
-        if (batch > 0) begin_later_batch();
+        if (batch > 0) {
+            try {
+                between_batches();
+            } catch (...) {
+                end_sample();  // a cancel leaves the GL state as the frame's other stages expect it
+                throw;
+            }
+            begin_later_batch();
+        }
         GLuint bound = 0;  // the program in use (a glUseProgram resets its subroutine)
         for (const Sorted& f : sorted_) {
             const GpuMesh& mesh = scene.mesh(*f.one.draw);

@@ -28,6 +28,7 @@
 #include "shader_library.h"
 
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <string>
 #include <vector>
@@ -55,8 +56,9 @@ public:
     // One sample's forward pass: the instances `view` keeps that have
     // Blend-mode slots, one draw each, nearest first (by the bounding
     // sphere's centre), into a cleared layer; once per batch of lights.
+    // `between_batches` runs before each batch after the first (a cancel).
     // Returns the instances kept.
-    std::uint64_t draw(FrameScene& scene, const ViewVolume& view);
+    std::uint64_t draw(FrameScene& scene, const ViewVolume& view, const std::function<void()>& between_batches);
     // Draws of the surfaces per sample: one per batch of lights.
     std::uint32_t batches() const;
     // Allocates the layer for the frame size (reallocated only when it changes).

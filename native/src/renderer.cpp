@@ -1176,7 +1176,7 @@ void Renderer::Impl::render_sample(Frame& f, int sample) {
     // Forward pass: Blend-mode surfaces in front of this sample's opaque
     // depth, lit by the same lights and maps, into the forward layer.
     if (forward.active()) {
-        f.camera_instances_drawn += forward.draw(f.scene, f.view);
+        f.camera_instances_drawn += forward.draw(f.scene, f.view, [this] { check_cancel(); });
         glViewport(0, 0, settings.width, settings.height);
         forward.bind_layer();
         check_gl("forward pass");

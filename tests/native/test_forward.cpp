@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <thread>
 
 using namespace deferred;
 using namespace deferred::testing;
@@ -356,4 +357,46 @@ TEST(ForwardPass, ManyLightsAreDrawnInTheLightingsBatches) {
         EXPECT_LT(worst, 1e-5);
         for (const std::string& w : forward.warnings) EXPECT_EQ(w.find("are lit by the first"), std::string::npos) << w;
     }
+}
+
+// A cancel stops a frame whose forward pass draws in batches (a cancel is
+// checked before each later batch, and the pass restores the GL state it
+// changed); the next frame equals the same frame rendered before it.
+TEST(ForwardPass, ACancelledFrameOfManyBatchesLeavesTheNextFrameExact) {
+    Renderer r;
+    set_world_color(r, 0.1f, 0.1f, 0.1f);
+    add_plane(r, diffuse(0.75f, 0.375f, 0.25f), 10.0f);
+    add_plane(r, blend_of(diffuse(0.25f, 0.75f, 0.375f), 0.5f), 2.0f, 1, tools::translation(0, 0, 1.0), false);
+    for (int k = 0; k < 600; ++k) {
+        Light l;
+        l.type = LightType::Point;
+        l.matrix = tools::translation(-5.0 + 0.4 * (k % 25), -5.0 + 0.4 * (k / 25 % 25), 8.0);
+        l.energy = 5.0f;
+        r.add_light(l);
+    }
+    const Camera cam = top_down_ortho(10.0, 6.0f);
+    RenderSettings plain;
+    plain.width = plain.height = 32;
+    plain.samples = 2;
+    plain.shadows = false;
+    plain.light_culling = false;
+    plain.preview_interval_ms = 0;
+    const FrameResult expected = r.render(cam, plain);
+    ASSERT_EQ(expected.timings.forward_batches, 2u);
+    PreviewImage before;
+    ASSERT_TRUE(r.preview(0, before));
+    RenderSettings busy = plain;
+    busy.samples = 65536;  // far more than the cancel lets run
+    std::thread canceller([&] {
+        PreviewImage image;
+        while (!r.preview(before.version, image)) std::this_thread::yield();  // the busy frame has begun
+        r.cancel();
+    });
+    EXPECT_THROW(r.render(cam, busy), Cancelled);
+    canceller.join();
+    const FrameResult after = r.render(cam, plain);
+    const PassImage& a = *after.find(Pass::Combined);
+    const PassImage& e = *expected.find(Pass::Combined);
+    ASSERT_EQ(a.pixels.size(), e.pixels.size());
+    for (std::size_t i = 0; i < a.pixels.size(); ++i) ASSERT_EQ(a.pixels[i], e.pixels[i]) << i;
 }

@@ -36,7 +36,7 @@ void principled_fold_transmission(float transmission, float ior, inout vec3 base
     float dielectric = 0.08 * specular * (1.0 - m) * ws + glass * r * r; /* r^2: fresnel_dielectric_cos(1, ior) */
     float folded = k > 0.0 ? m * ws / k : m;
     base_color *= k;
-    if (dielectric <= 12.0 * 0.08 * (1.0 - folded)) {
+    if (1.0 - folded > 1e-6 && dielectric <= 12.0 * 0.08 * (1.0 - folded)) {
         metallic = folded;
         specular = dielectric / (0.08 * (1.0 - folded));
         sheen *= wd / (1.0 - folded);

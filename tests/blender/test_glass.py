@@ -47,6 +47,9 @@ CASES = (
     ("Principled, Transmission 0.5, roughness 0.3", "principled", {"Transmission": 0.5, "Roughness": 0.3}, 0.01),
     ("Principled, Transmission 1, metallic 0.5", "principled",
      {"Transmission": 1.0, "Metallic": 0.5, "Roughness": 0.3}, 0.01),
+    # Metallic 1: no glass closure at all (T' = 0), a metal.
+    ("Principled, Transmission 1, metallic 1", "principled",
+     {"Transmission": 1.0, "Metallic": 1.0, "Roughness": 0.3}, 0.01),
     ("Glass BSDF, roughness 0.2", "glass", {"Roughness": 0.2}, 0.03),
     # Black in Cycles (mean 6e-7 of stray samples): checked in absolute terms.
     ("Refraction BSDF, roughness 0.3", "refraction", {"Roughness": 0.3}, None),

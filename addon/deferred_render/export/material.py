@@ -245,7 +245,7 @@ def fold_transmission(params, transmission, ior):
     out = dict(params)
     metallic = m * ws / k if k > 0.0 else m
     out["base_color"] = tuple(c * k for c in params["base_color"])
-    if dielectric <= 12.0 * 0.08 * (1.0 - metallic):
+    if 1.0 - metallic > 1e-6 and dielectric <= 12.0 * 0.08 * (1.0 - metallic):
         out["metallic"] = metallic
         out["specular"] = dielectric / (0.08 * (1.0 - metallic))
         out["sheen"] = float(params["sheen"]) * wd / (1.0 - metallic)

@@ -7,6 +7,8 @@
 
 #include <glm/glm.hpp>
 
+#include <thread>
+
 namespace deferred::testing {
 
 // The many-lights tests' view: from (0, -22, 12) at the origin, a 30 mm lens.
@@ -70,6 +72,26 @@ inline void set_world_color(Renderer& r, float red, float green, float blue) {
 inline glm::dvec3 pixel3(const PassImage& img, int x, int y) {
     const float* p = &img.pixels[(std::size_t(y) * img.width + x) * img.channels];
     return {p[0], img.channels > 1 ? p[1] : p[0], img.channels > 2 ? p[2] : p[0]};
+}
+
+// Renders `busy` and cancels it from another thread once the frame has
+// begun (a preview past `before_version` is out); true when the render threw
+// Cancelled.
+inline bool render_cancelled_once_begun(Renderer& r, const Camera& cam, const RenderSettings& busy,
+                                        decltype(PreviewImage{}.version) before_version) {
+    std::thread canceller([&] {
+        PreviewImage image;
+        while (!r.preview(before_version, image)) std::this_thread::yield();
+        r.cancel();
+    });
+    bool cancelled = false;
+    try {
+        r.render(cam, busy);
+    } catch (const Cancelled&) {
+        cancelled = true;
+    }
+    canceller.join();
+    return cancelled;
 }
 
 }  // namespace deferred::testing

@@ -467,6 +467,10 @@ void main() {
     g_mix_u = fract(pixel_hash(uvec2(FRAG_COORD.xy)) + frame.sample_shift.z);
     Closure c;
     material_graph_eval(c);
+    /* A Displacement bumped in (node_displacement_bump) is Cycles' sd->N
+     * from here on: the smooth normal of the lighting's horizon and bump
+     * shadowing terms and of the shadow terminator offset. */
+    if (dot(finite_or(g_sd.N, vec3(0.0)), g_sd.N) > 0.0) N = g_sd.N;
 #if defined(MATERIAL_ALPHA) && !defined(FORWARD_PASS) && !defined(EMISSION_BAKE) && !defined(GBUFFER_RESOLVE)
     /* (The resolve's pixels were kept by the visibility pass's same test.) */
     if (transparent_here(clamp(finite_or(c.alpha, 1.0), 0.0, 1.0))) discard;

@@ -249,9 +249,26 @@ void node_vector_transform(int type, int from_space, int to_space, vec3 v, out v
     result = v;
 }
 
-/* Displacement node (displace.h svm_node_displacement, object space off):
- * (height - midlevel) * scale along the normal. Its only consumer is the
- * Material Output's Displacement, which is not rendered (the add-on says so). */
+/* Displacement node (displace.h svm_node_displacement): (height - midlevel)
+ * * scale along the normal; in object space (space 0) the normal goes to
+ * object space (object_inverse_normal_transform: normalize(M^T N)) and the
+ * offset back (object_dir_transform: M), so the object's scale scales it.
+ * Its consumer is the Material Output's Displacement, which the add-on turns
+ * into a bump of the shading normal (node_displacement_bump) as Cycles'
+ * Displacement Method "Bump Only" does. */
+void node_displacement(int space, float height, float midlevel, float scale, vec3 normal, out vec3 displacement) {
+    float h = (height - midlevel) * scale;
+    if (space == 0) {
+        vec3 n = transpose(g_sd.object_to_world) * normal;
+        float len2 = dot(n, n);
+        n = len2 > 0.0 ? n * inversesqrt(len2) : vec3(0.0);
+        displacement = g_sd.object_to_world * (n * h);
+    } else {
+        displacement = normal * h;
+    }
+}
+/* The node without its space, as graphs exported before it was read (scene
+ * captures) call it. */
 void node_displacement(float height, float midlevel, float scale, vec3 normal, out vec3 displacement) {
     displacement = (height - midlevel) * scale * normalize(normal);
 }

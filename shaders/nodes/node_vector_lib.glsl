@@ -171,6 +171,26 @@ void node_bump(int invert, float strength, float dist, float h_c, float h_x, flo
     result = ensure_valid_reflection(g_sd.Ng, g_sd.I, n);
 }
 
+/* Bump from displacement (Cycles' ShaderGraph::bump_from_displacement, the
+ * Material Output's Displacement at Displacement Method "Bump Only" or
+ * "Displacement and Bump"): the displacement vector's height along the
+ * unbumped normal, dot(D, N), at P, P + dP.dx and P + dP.dy ... */
+void node_displacement_height(vec3 displacement, out float height) {
+    height = dot(displacement, g_sd.N);
+}
+/* ... into a Bump node of strength 1 and distance 1 on the normal, whose
+ * result becomes the shading normal (SetNormal into the output's Normal:
+ * Cycles' sd->N) for everything the surface evaluates after it, and for the
+ * lighting's smooth normal (geometry_frag.glsl). */
+void node_displacement_bump(float h_c, float h_x, float h_y) {
+    vec3 n;
+    node_bump(0, 1.0, 1.0, h_c, h_x, h_y, g_sd.N, n);
+    if (any(isnan(n)) || any(isinf(n)) || dot(n, n) == 0.0) return;
+    g_sd.N = normalize(n);
+    /* Texture Coordinate > Normal reads sd->N in object space. */
+    g_sd.N_object = safe_normalize(transpose(g_sd.object_to_world) * g_sd.N);
+}
+
 /* Normal node (normal.h): the direction set on the node, and its dot product. */
 void node_normal(vec3 direction, vec3 normal, out vec3 out_normal, out float out_dot) {
     out_normal = normalize(direction);

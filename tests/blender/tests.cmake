@@ -48,6 +48,7 @@ set(DEFERRED_BLENDER_TESTS
     shadow_catcher
     glossy_highlights
     glass
+    displacement_bump
     capture_replay
     tangents
     visibility_buffer

@@ -499,6 +499,63 @@ def _emit_aov_outputs(g, tree):
     return names
 
 
+def displacement_method(material):
+    """Cycles' Displacement Method of the material: 'BUMP' (Bump Only, the
+    default), 'DISPLACEMENT' or 'BOTH' (3.4: material.cycles, 4.x: the
+    material itself)."""
+    method = getattr(material, "displacement_method", None)
+    if method is None:
+        method = getattr(getattr(material, "cycles", None), "displacement_method", "BUMP")
+    return method
+
+
+def _emit_displacement(g, material, output):
+    """The Material Output's Displacement as Cycles renders it at Displacement
+    Method "Bump Only" (ShaderGraph::bump_from_displacement): the displacement
+    graph is evaluated at P, P + dP.dx and P + dP.dy (three copies, each its
+    own bump variant here, so that the surface's nodes are emitted apart from
+    them as Cycles copies them), each vector's height along the unbumped
+    normal feeds a Bump of strength 1 and distance 1, and its normal becomes
+    the shading normal of everything after it (node_displacement_bump).
+    Moving the surface (Displacement Only / and Bump) is not rendered."""
+    socket = output.inputs.get("Displacement")
+    if socket is None or not socket.is_linked:
+        return
+    method = displacement_method(material)
+    if method == "DISPLACEMENT":
+        g.note("Displacement (Displacement Method 'Displacement Only': the surface is not moved)")
+        return
+    if method == "BOTH":
+        g.note("Displacement (Displacement Method 'Displacement and Bump': its bump is rendered, "
+               "the surface is not moved)")
+    try:
+        source = graph_walk.resolve_input(socket, ())
+    except graph_walk.GraphError as ex:
+        raise GraphCycle(str(ex))
+    if not isinstance(source, graph_walk.Output):
+        return  # a constant displacement: no bump
+
+    def height(offset_axis):
+        g.variant = g.variant + (("displacement", offset_axis),)
+        if offset_axis is not None:
+            g.append_node("node_bump_offset", [("int", offset_axis)], [])
+        try:
+            vector = g.output_arg(source, "vector")
+            if vector is None:
+                return None
+            index = g.append_node("node_displacement_height", [vector], ["float"])
+            return ("link", "float", index, 0, "float")
+        finally:
+            if offset_axis is not None:
+                g.append_node("node_bump_restore", [], [])
+            g.variant = g.variant[:-1]
+
+    h_c = height(None)
+    if h_c is None:
+        return
+    g.append_node("node_displacement_bump", [h_c, height(0), height(1)], [])
+
+
 def build_world_graph(world, images=None):
     """MaterialGraph of a world's node tree: its surface closure's emission is
     the background radiance along each direction (the world module bakes it,
@@ -523,6 +580,9 @@ def _build(material, images, world=False):
     if output is None:
         g.note(f"no {'World' if world else 'Material'} Output node (rendered black, as Cycles does)")
     else:
+        if not world:
+            # Before the surface: the bump it makes is the surface's normal.
+            _emit_displacement(g, material, output)
         socket = output.inputs.get("Surface")
         try:
             source = graph_walk.resolve_input(socket, ()) if socket is not None else None
@@ -532,10 +592,9 @@ def _build(material, images, world=False):
             arg = g.output_arg(source, "closure")
             if arg is not None:
                 surface = (arg[2], arg[3])
-        for name in ("Volume", "Displacement"):
-            s = output.inputs.get(name)
-            if s is not None and s.is_linked:
-                g.note(f"{name} (not rendered)")
+        s = output.inputs.get("Volume")
+        if s is not None and s.is_linked:
+            g.note("Volume (not rendered)")
     aovs = [] if world else _emit_aov_outputs(g, tree)
     light_emission = None
     emission_varies = False

@@ -139,9 +139,9 @@ def vector_transform(b):
 
 @register("ShaderNodeDisplacement")
 def displacement(b):
-    if b.node.space != "OBJECT":
-        b._graph.note(f"'{b.node.name}': Displacement in {b.node.space.lower()} space is computed in object space")
+    # node_displacement's space: 0 object (the object's scale scales the
+    # offset), 1 world (svm_node_displacement).
     b.call("node_displacement",
-           [b.input("Height", "float"), b.input("Midlevel", "float"), b.input("Scale", "float"),
-            b.input("Normal", "vector", implicit="N")],
+           [b.int(0 if b.node.space == "OBJECT" else 1), b.input("Height", "float"), b.input("Midlevel", "float"),
+            b.input("Scale", "float"), b.input("Normal", "vector", implicit="N")],
            [("Displacement", "vector")])

@@ -39,6 +39,7 @@ a material without nodes renders with.
 import math
 
 from ..materials.builder import material_output
+from ..materials.nodes.shader import NEAR_ZERO_IOR, NEAR_ZERO_IOR_NOTE
 
 # Native parameter -> (kind, Principled input names: Blender 3.x first, then 4.x).
 # Every read of a Principled BSDF input goes through this table.
@@ -192,6 +193,8 @@ def _principled(node, notes):
         ior_socket = _find_input(node, PRINCIPLED_IOR)
         ior = 1.45 if ior_socket is None else _finite(
             _scalar(_input_value(ior_socket, notes, f"'{ior_socket.name}'")), 1.45)
+        if ior < NEAR_ZERO_IOR:
+            notes.append(NEAR_ZERO_IOR_NOTE.format(name=node.name, ior=ior))
         params = fold_transmission(_full(params), transmission, ior)
         params.pop("pass_index", None)
         notes.append(TRANSMISSION_NOTE.format(name=socket.name, value=transmission))

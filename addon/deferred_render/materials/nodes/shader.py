@@ -12,6 +12,17 @@ Diffuse BSDF of their Color input (builder.py, '#unsupported_shader').
 from . import register
 from .. import graph as graph_walk
 
+# An IOR this close to 0 with Transmission: Cycles 3.4 renders the surface
+# black (measured: the materials library's 'Crushed Velvet Eevee', IOR 0,
+# Transmission 0.059, Multiscatter GGX at roughness 1, is black at IOR 0 to
+# 1e-4 under sun, area, point and spot lights and the world, lit at 1e-3:
+# its glass closure is not finite there and Cycles' film drops the sample).
+# This engine renders the IOR's limit (a white mirror lobe of weight
+# Transmission) and says so.
+NEAR_ZERO_IOR = 1e-3
+NEAR_ZERO_IOR_NOTE = ("'{name}': 'IOR' = {ior:.3g} with Transmission: Cycles 3.4 renders this surface black "
+                      "(its glass closure is not finite at an IOR near 0); rendered as the IOR's limit, a mirror")
+
 # Shader nodes without a reflecting lobe (for Add Shader's note).
 _NOT_REFLECTING = {"ShaderNodeEmission", "ShaderNodeBackground", "ShaderNodeBsdfTransparent", "ShaderNodeHoldout"}
 
@@ -55,6 +66,9 @@ def principled(b):
         b._graph.note(f"'{b.node.name}': 'Transmission' {value}: rendered as Cycles at Max Bounces 0 shows a "
                       "closed glass object (its Fresnel reflection, less diffuse); light refracted through the "
                       "surface is not rendered")
+        ior = _value(b, "IOR")
+        if ior is not None and ior < NEAR_ZERO_IOR:
+            b._graph.note(NEAR_ZERO_IOR_NOTE.format(name=b.node.name, ior=ior))
     if b.is_linked("Clearcoat Normal"):
         b._graph.note(f"'{b.node.name}': 'Clearcoat Normal' (the base normal is used)")
     alpha = _value(b, "Alpha")

@@ -15,7 +15,7 @@ a grey Principled surface whose Displacement node takes a Noise texture's
 height; ours at 256 samples, Cycles at 1024, the sphere's interior pixels.
 Checked: the light's sum, and the bump's pattern, ours against Cycles' (the
 bumped image minus the flat one; correlation and relative error), in object
-and in world space; 'Displacement Only' is warned and leaves the surface
+and in world space, and for a step height; 'Displacement Only' is warned and leaves the surface
 flat (Cycles moves it: not rendered here).
 
     blender -b --factory-startup blend_samples/analytic.blend --addons deferred_render \\
@@ -34,9 +34,11 @@ import blender_test_utils as U  # noqa: E402
 OUT = U.out_dir("displacement_bump")
 
 
-def material(space=None, scale=0.08, method="BUMP"):
+def material(space=None, scale=0.08, method="BUMP", step=False):
     """Principled grey, roughness 0.4; with ``space`` a Displacement of a
-    Noise texture (Generated coordinates, scale 6) of that space."""
+    Noise texture (Generated coordinates, scale 6) of that space; ``step``:
+    of the noise's step at 0.5 (a height whose bump depends on the offsets'
+    length, where P and P + dP straddle an edge)."""
     mat = bpy.data.materials.new(f"disp_{len(bpy.data.materials)}")
     mat.use_nodes = True
     nodes, links = mat.node_tree.nodes, mat.node_tree.links
@@ -50,7 +52,14 @@ def material(space=None, scale=0.08, method="BUMP"):
         disp = nodes.new("ShaderNodeDisplacement")
         disp.space = space
         disp.inputs["Scale"].default_value = scale
-        links.new(noise.outputs["Fac"], disp.inputs["Height"])
+        height = noise.outputs["Fac"]
+        if step:
+            gt = nodes.new("ShaderNodeMath")
+            gt.operation = 'GREATER_THAN'
+            gt.inputs[1].default_value = 0.5
+            links.new(height, gt.inputs[0])
+            height = gt.outputs[0]
+        links.new(height, disp.inputs["Height"])
         links.new(disp.outputs["Displacement"], nodes["Material Output"].inputs["Displacement"])
     if hasattr(mat, "displacement_method"):
         mat.displacement_method = method
@@ -78,22 +87,23 @@ def main():
     mask = U.interior_mask(index, radius=1) & (index == 1)
     checks.check(mask.sum() > 1000, "the sphere covers the frame", str(int(mask.sum())))
 
-    for space, scale in (("OBJECT", 0.08), ("WORLD", 0.12)):
-        cycles, _ = render(scene, sphere, material(space, scale), "CYCLES", 1024, f"cycles_{space}")
-        ours, _ = render(scene, sphere, material(space, scale), "DEFERRED_RENDER", 256, f"ours_{space}")
+    for space, scale, step in (("OBJECT", 0.08, False), ("WORLD", 0.12, False), ("OBJECT", 0.01, True)):
+        label = space + (" step" if step else "")
+        cycles, _ = render(scene, sphere, material(space, scale, step=step), "CYCLES", 1024, f"cycles_{label}")
+        ours, _ = render(scene, sphere, material(space, scale, step=step), "DEFERRED_RENDER", 256, f"ours_{label}")
         messages = " ".join(m for _, m in U.last_messages())
-        checks.check("Displacement" not in messages, f"{space}: no warning of the Displacement", messages[:200])
+        checks.check("Displacement" not in messages, f"{label}: no warning of the Displacement", messages[:200])
         ratio = float(ours[mask].sum() / cycles[mask].sum())
-        checks.check(abs(ratio - 1.0) < 0.01, f"{space}: the bumped sphere's light is Cycles'", f"{ratio:.4f}")
+        checks.check(abs(ratio - 1.0) < 0.01, f"{label}: the bumped sphere's light is Cycles'", f"{ratio:.4f}")
         # The bump's own pattern: what it changes against the flat surface.
         d_cycles = (cycles - flat_cycles)[mask].ravel()
         d_ours = (ours - flat_ours)[mask].ravel()
         corr = float(np.corrcoef(d_cycles, d_ours)[0, 1])
         rel = float(np.sqrt(np.mean((d_ours - d_cycles) ** 2) / np.mean(d_cycles ** 2)))
-        print(f"  {space}: bump's change rms {np.sqrt(np.mean(d_cycles ** 2)):.4f} (Cycles), "
+        print(f"  {label}: bump's change rms {np.sqrt(np.mean(d_cycles ** 2)):.4f} (Cycles), "
               f"correlation {corr:.4f}, relative error {rel:.4f}")
-        checks.check(np.sqrt(np.mean(d_cycles ** 2)) > 0.01, f"{space}: the bump changes Cycles' image")
-        checks.check(corr > 0.95 and rel < 0.3, f"{space}: the bump's pattern is Cycles'",
+        checks.check(np.sqrt(np.mean(d_cycles ** 2)) > 0.01, f"{label}: the bump changes Cycles' image")
+        checks.check(corr > 0.95 and rel < 0.3, f"{label}: the bump's pattern is Cycles'",
                      f"correlation {corr:.4f}, relative error {rel:.4f}")
 
     # Displacement Only: Cycles moves the surface; not rendered here, said so.

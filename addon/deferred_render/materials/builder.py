@@ -171,13 +171,7 @@ class NodeBuilder:
         if len(graph.variant) >= MAX_BUMP_DEPTH:
             graph.note(f"{_label(self.node)}: Bump nodes nested deeper than {MAX_BUMP_DEPTH} (flat)")
             return evaluate()
-        graph.append_node("node_bump_offset", [("int", axis)], [])
-        graph.variant = graph.variant + (axis,)
-        try:
-            return evaluate()
-        finally:
-            graph.variant = graph.variant[:-1]
-            graph.append_node("node_bump_restore", [], [])
+        return graph.in_variant(axis, axis, evaluate)
 
     def unsupported(self, reason):
         self._graph.note(f"{_label(self.node)}: {reason} (default output used)")
@@ -270,6 +264,20 @@ class GraphBuilder:
             raise GraphCycle(f"more than {MAX_NODES} nodes")
         self.nodes.append({"func": func, "args": list(args), "outputs": list(output_types)})
         return len(self.nodes) - 1
+
+    def in_variant(self, tag, axis, evaluate):
+        """``evaluate()`` with its nodes emitted apart (bump variant ``tag``),
+        the shading point moved to P + dP.dx / P + dP.dy for axis 0 / 1
+        (node_bump_offset, then node_bump_restore); axis None: not moved."""
+        if axis is not None:
+            self.append_node("node_bump_offset", [("int", axis)], [])
+        self.variant = self.variant + (tag,)
+        try:
+            return evaluate()
+        finally:
+            self.variant = self.variant[:-1]
+            if axis is not None:
+                self.append_node("node_bump_restore", [], [])
 
     def closure_none(self):
         if self._none is None:
@@ -535,25 +543,20 @@ def _emit_displacement(g, material, output):
     if not isinstance(source, graph_walk.Output):
         return  # a constant displacement: no bump
 
-    def height(offset_axis):
-        g.variant = g.variant + (("displacement", offset_axis),)
-        if offset_axis is not None:
-            g.append_node("node_bump_offset", [("int", offset_axis)], [])
-        try:
-            vector = g.output_arg(source, "vector")
-            if vector is None:
-                return None
-            index = g.append_node("node_displacement_height", [vector], ["float"])
-            return ("link", "float", index, 0, "float")
-        finally:
-            if offset_axis is not None:
-                g.append_node("node_bump_restore", [], [])
-            g.variant = g.variant[:-1]
+    def height():
+        vector = g.output_arg(source, "vector")
+        if vector is None:
+            return None
+        index = g.append_node("node_displacement_height", [vector], ["float"])
+        return ("link", "float", index, 0, "float")
 
-    h_c = height(None)
+    def height_at(axis):
+        return g.in_variant(("displacement", axis), axis, height)
+
+    h_c = height_at(None)
     if h_c is None:
         return
-    g.append_node("node_displacement_bump", [h_c, height(0), height(1)], [])
+    g.append_node("node_displacement_bump", [h_c, height_at(0), height_at(1)], [])
 
 
 def build_world_graph(world, images=None):

@@ -193,6 +193,10 @@ def main(argv=None):
     ap.add_argument("--visibility-buffer", choices=["on", "off"],
                     help="the G-buffer from the visibility buffer, in compute (native "
                          "RenderSettings.visibility_buffer), or the raster path, instead of the captured setting")
+    ap.add_argument("--transparent-planes", choices=["exact", "stochastic"],
+                    help="partly transparent planes as exact forward layers where the frame allows (native "
+                         "RenderSettings.exact_transparent_planes, the default), or every partly transparent "
+                         "surface by stochastic coverage")
     ap.add_argument("--count-fragments", action="store_true",
                     help="count the fragments the shadow maps' draws shade in every repeat (a pipeline-statistics "
                          "query around each map layer: native RenderSettings.count_shadow_fragments; it may cost a "
@@ -244,6 +248,8 @@ def main(argv=None):
         kwargs["filter_splat"] = args.filter_splat == "on"
     if args.visibility_buffer:
         kwargs["visibility_buffer"] = args.visibility_buffer == "on"
+    if args.transparent_planes:
+        kwargs["exact_transparent_planes"] = args.transparent_planes == "exact"
     if args.count_fragments:
         kwargs["count_shadow_fragments"] = True
     kwargs["preview_interval_ms"] = -1
@@ -267,6 +273,7 @@ def main(argv=None):
         runs.append({"wall_ms": wall * 1e3, **{k: timings.get(k) for k in STAGES},
                      "visibility_buffer": bool(timings.get("visibility_buffer")),
                      "emission_samples": timings.get("emission_samples", 1),
+                     "exact_layers": timings.get("exact_layers", 0),
                      "shadow_layers": timings.get("shadow_layers_rendered"),
                      "shadow_texels": timings.get("shadow_texels_rendered"),
                      "shadow_fragments": timings.get("shadow_fragments"),
@@ -285,6 +292,7 @@ def main(argv=None):
               "shadow_quality": kwargs.get("shadow_quality"), "shadow_resolution": kwargs.get("shadow_resolution"),
               "fragments_counted": bool(args.count_fragments),
               "visibility_buffer": bool(runs and runs[-1].get("visibility_buffer")),
+              "exact_layers": runs[-1].get("exact_layers", 0) if runs else 0,
               "passes": sorted(images), "context_ms": t_context * 1e3, "scene_ms": t_scene * 1e3,
               "runs": runs, "warnings": warnings, "captured": meta}
     if args.json:
@@ -297,6 +305,8 @@ def main(argv=None):
               + (f", {runs[-1]['emission_samples']} emission samples each" if runs and runs[-1].get("emission_samples", 1) > 1
                  else ""))
         print(f"GL context {t_context * 1e3:.0f} ms, scene upload {t_scene * 1e3:.0f} ms")
+        if runs and runs[-1].get("exact_layers"):
+            print(f"exact layers: {runs[-1]['exact_layers']} partly transparent planes composited by the forward pass")
         print("| run | wall ms | " + " | ".join(s[:-3] for s in STAGES) + " |")
         print("| ---: | ---: | " + " | ".join("---:" for _ in STAGES) + " |")
         for k, r in enumerate(runs):

@@ -186,6 +186,7 @@ void declare_renderer(py::module_& m) {
             d["lighting_ms"] = self.last.lighting_ms;
             d["forward_ms"] = self.last.forward_ms;
             d["forward_batches"] = self.last.forward_batches;
+            d["exact_layers"] = self.last.exact_layers;
             d["tile_light_pairs"] = self.last.tile_light_pairs;
             d["shadowed_lights"] = self.last.shadowed_lights;
             d["shadow_lights_dropped"] = self.last.shadow_lights_dropped;
@@ -521,8 +522,10 @@ void declare_renderer(py::module_& m) {
                 const std::vector<std::string>& cryptomatte, int cryptomatte_levels,
                 const std::vector<std::pair<std::string, std::string>>& aovs, int light_groups,
                 int preview_interval_ms, const std::string& preview_pass, bool motion_blur, bool filter_splat,
-                bool visibility_buffer, bool count_shadow_fragments, int emission_samples) {
+                bool visibility_buffer, bool count_shadow_fragments, int emission_samples,
+                bool exact_transparent_planes) {
                  RenderSettings s;
+                 s.exact_transparent_planes = exact_transparent_planes;
                  s.emission_samples = emission_samples;
                  s.count_shadow_fragments = count_shadow_fragments;
                  s.filter_splat = filter_splat;
@@ -633,7 +636,8 @@ void declare_renderer(py::module_& m) {
              py::arg("aovs") = std::vector<std::pair<std::string, std::string>>{}, py::arg("light_groups") = 0,
              py::arg("preview_interval_ms") = -1, py::arg("preview_pass") = "Combined",
              py::arg("motion_blur") = false, py::arg("filter_splat") = true, py::arg("visibility_buffer") = true,
-             py::arg("count_shadow_fragments") = false, py::arg("emission_samples") = 1)
+             py::arg("count_shadow_fragments") = false, py::arg("emission_samples") = 1,
+             py::arg("exact_transparent_planes") = true)
         .def("preview",
              [](const PyRenderer& self, std::uint64_t since) -> py::object {
                  if (!self.renderer) throw Error("the renderer was closed");

@@ -16,25 +16,27 @@ namespace deferred {
 std::vector<bool> ForwardModule::prepare(ShaderLibrary& shaders, MaterialModule& materials, const FrameScene& scene,
                                          const GeometryStage& geometry, const ShaderVariant& variant,
                                          std::uint32_t light_count, std::uint32_t lights_per_draw,
-                                         std::vector<std::string>& warnings) {
+                                         const ExactLayers& exact, std::vector<std::string>& warnings) {
     materials_ = &materials;
     geometry_ = &geometry;
     light_count_ = light_count;
     lights_per_draw_ = std::max(lights_per_draw, 1u);
     programs_.clear();
+    rank_ = exact.any() ? exact.rank : std::vector<std::uint32_t>{};
     std::vector<bool> forward(scene.material_count(), false);
     for (std::uint32_t id = 0; id < scene.material_count(); ++id) {
         const Material& m = scene.scene_material(id);
-        if (!m.blend) continue;
+        const bool layer = exact.any() && id < exact.materials.size() && exact.materials[id];
+        if (!m.blend && !layer) continue;
         try {
             programs_[id] = m.graph >= 0 && !geometry.failed(id)
                 ? materials.program(shaders, std::uint32_t(m.graph), variant)
                 : shaders.graphics_program("geometry_vert.glsl", "geometry_frag.glsl", variant);
             forward[id] = true;
         } catch (const Error& e) {
-            warnings.push_back("Material " + std::to_string(id) +
-                               ": its Blend-mode (forward) program did not compile; rendered with "
-                               "stochastic transparency instead: " + std::string(e.what()));
+            warnings.push_back("Material " + std::to_string(id) + ": its " +
+                               (m.blend ? "Blend-mode" : "exact layer") + " (forward) program did not compile; "
+                               "rendered with stochastic transparency instead: " + std::string(e.what()));
         }
     }
     return forward;
@@ -52,8 +54,10 @@ std::uint64_t ForwardModule::draw(FrameScene& scene, const ViewVolume& view,
         if (!any) continue;
         for (std::uint32_t j = 0; j < c.count; ++j) {
             // Relative to this sample's eye (it moves under camera motion blur).
-            const glm::dvec3 v = view.to_view * (scene.bounds()[scene.kept(c.first + j)].center - view.eye);
-            sorted_.push_back({view.orthographic ? -v.z : glm::length(v), {c.draw, c.first + j, 1}});
+            const std::uint32_t instance = scene.kept(c.first + j);
+            const glm::dvec3 v = view.to_view * (scene.bounds()[instance].center - view.eye);
+            const double depth = !rank_.empty() ? double(rank_[instance]) : view.orthographic ? -v.z : glm::length(v);
+            sorted_.push_back({depth, {c.draw, c.first + j, 1}});
         }
     }
     // Nearest first (the "under" operator); among equal depths in the order
@@ -157,6 +161,7 @@ void ForwardModule::bind_layer() const { glBindTextureUnit(TEX_FORWARD_LAYER, la
 void ForwardModule::end_frame() {
     programs_.clear();
     sorted_.clear();
+    rank_.clear();
     materials_ = nullptr;
     geometry_ = nullptr;
 }

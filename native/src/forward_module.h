@@ -25,6 +25,7 @@
 
 #include "frame_scene.h"
 #include "gl_util.h"
+#include "layer_order.h"
 #include "shader_library.h"
 
 #include <cstdint>
@@ -46,16 +47,20 @@ public:
     // stays in the stochastic path, warned. Returns, per material id,
     // whether the forward pass draws it.
     // `light_count` lights are drawn `lights_per_draw` at a time.
+    // `exact`: the frame's exact layers (layer_order.h), drawn too, in
+    // their rank's order instead of by distance (a frame has them only
+    // without Blend-mode materials).
     std::vector<bool> prepare(ShaderLibrary& shaders, MaterialModule& materials, const FrameScene& scene,
                               const GeometryStage& geometry, const ShaderVariant& variant,
-                              std::uint32_t light_count, std::uint32_t lights_per_draw,
+                              std::uint32_t light_count, std::uint32_t lights_per_draw, const ExactLayers& exact,
                               std::vector<std::string>& warnings);
     bool active() const { return !programs_.empty(); }
     // Forgets the frame's programs and draws (they point into the frame).
     void end_frame();
     // One sample's forward pass: the instances `view` keeps that have
     // Blend-mode slots, one draw each, nearest first (by the bounding
-    // sphere's centre), into a cleared layer; once per batch of lights.
+    // sphere's centre, or the exact layers' rank), into a cleared layer;
+    // once per batch of lights.
     // `between_batches` runs before each batch after the first (a cancel).
     // Returns the instances kept.
     std::uint64_t draw(FrameScene& scene, const ViewVolume& view, const std::function<void()>& between_batches);
@@ -83,6 +88,7 @@ private:
     const MaterialModule* materials_ = nullptr;
     const GeometryStage* geometry_ = nullptr;
     std::map<std::uint32_t, GLuint> programs_;  // material id -> its forward program
+    std::vector<std::uint32_t> rank_;           // per instance: the exact layers' order (empty: by distance)
     std::vector<Sorted> sorted_;
     std::uint32_t light_count_ = 0, lights_per_draw_ = 1;
     int width_ = 0, height_ = 0;

@@ -242,6 +242,13 @@ bool FrameScene::place_at(double r) {
     return casters_moved;
 }
 
+glm::dmat4 FrameScene::model_matrix(std::uint32_t i) const {
+    const gpu::mat4& m = instances_[i].model;
+    glm::dmat4 out(1.0);
+    for (int c = 0; c < 4; ++c) out[c] = glm::dvec4(m.cols[c].x, m.cols[c].y, m.cols[c].z, m.cols[c].w);
+    return out;
+}
+
 std::vector<Box> FrameScene::boxes_in_view(const ViewVolume& view) const {
     std::vector<Box> boxes;
     for (const Draw& d : draws_) {

@@ -89,6 +89,10 @@ public:
     void release();
 
     std::size_t instance_count() const { return instances_.size(); }
+    // Every batch, in the scene's order.
+    const std::vector<Draw>& draws() const { return draws_; }
+    // Instance i's matrix as the vertex stage has it (camera-relative).
+    glm::dmat4 model_matrix(std::uint32_t i) const;
     const std::vector<Bound>& bounds() const { return bounds_; }
     // The boxes of the instances whose bounding sphere `view` contains: each
     // its mesh's axis-aligned bounds through its matrix (camera-relative).

@@ -1,6 +1,7 @@
 #include "mesh_topology.h"
 
 #include <algorithm>
+#include <cmath>
 #include <numeric>
 #include <vector>
 
@@ -72,6 +73,40 @@ int closed_orientation(const float* positions, std::size_t vertex_count, const s
         sign = s;
     }
     return sign;
+}
+
+bool planar_mesh(const float* positions, std::size_t vertex_count, const std::uint32_t* indices,
+                 std::size_t triangle_count, double normal[3], double& offset) {
+    if (triangle_count == 0 || !positions || !indices) return false;
+    auto vertex = [&](std::uint32_t i) {
+        return glm::dvec3(positions[3 * std::size_t(i)], positions[3 * std::size_t(i) + 1],
+                          positions[3 * std::size_t(i) + 2]);
+    };
+    glm::dvec3 lo(1e300), hi(-1e300), best(0.0), origin(0.0);
+    double best_area2 = 0.0;
+    for (std::size_t t = 0; t < triangle_count; ++t) {
+        const std::uint32_t* tri = indices + 3 * t;
+        if (tri[0] >= vertex_count || tri[1] >= vertex_count || tri[2] >= vertex_count) return false;
+        const glm::dvec3 a = vertex(tri[0]), b = vertex(tri[1]), c = vertex(tri[2]);
+        for (const glm::dvec3& v : {a, b, c}) {
+            lo = glm::min(lo, v);
+            hi = glm::max(hi, v);
+        }
+        const glm::dvec3 n = glm::cross(b - a, c - a);
+        if (glm::dot(n, n) > best_area2) {
+            best_area2 = glm::dot(n, n);
+            best = n;
+            origin = a;
+        }
+    }
+    if (!(best_area2 > 0.0)) return false;
+    const glm::dvec3 n = best / std::sqrt(best_area2);
+    const double d = glm::dot(n, origin), tolerance = 1e-5 * glm::length(hi - lo);
+    for (std::size_t i = 0; i < 3 * triangle_count; ++i)
+        if (!(std::abs(glm::dot(n, vertex(indices[i])) - d) <= tolerance)) return false;
+    for (int k = 0; k < 3; ++k) normal[k] = n[k];
+    offset = d;
+    return true;
 }
 
 }  // namespace deferred

@@ -19,4 +19,13 @@ namespace deferred {
 int closed_orientation(const float* positions, std::size_t vertex_count, const std::uint32_t* indices,
                        std::size_t triangle_count);
 
+// A mesh whose triangles all lie in one plane: dot(normal, p) = offset for
+// every vertex a triangle uses, within 1e-5 of the vertices' extent (float
+// positions carry ~1e-7 of it). A view ray meets such a surface at most
+// once, so its layers can be composited in one draw (layer_order.h).
+// `normal` is unit length, the largest triangle's (right-handed winding).
+// False for a mesh without a triangle of non-zero area.
+bool planar_mesh(const float* positions, std::size_t vertex_count, const std::uint32_t* indices,
+                 std::size_t triangle_count, double normal[3], double& offset);
+
 }  // namespace deferred

@@ -29,6 +29,7 @@
 #include "film.h"
 #include "film_module.h"
 #include "forward_module.h"
+#include "layer_order.h"
 #include "frame_scene.h"
 #include "gbuffer.h"
 #include "geometry_stage.h"
@@ -305,6 +306,7 @@ struct Renderer::Impl {
         bool camera_moves = false;
         bool culled = false;        // tile light lists
         bool scene_alpha = false;   // a constant material partly transparent
+        ExactLayers exact_layers;   // partly transparent planes the forward pass composites (layer_order.h)
         bool visibility = false;    // the G-buffer from the visibility buffer
         ShaderVariant base_variant;  // the G-buffer's targets
         std::vector<std::string> caster_defines;
@@ -339,6 +341,7 @@ struct Renderer::Impl {
     void sync_film(Frame& f);
     void prepare_programs(Frame& f);
     int emission_sample_count(const Frame& f) const;
+    ExactLayers exact_layers(const Frame& f) const;
     void render_sample(Frame& f, int sample);
     void place_at_shutter_time(Frame& f, int sample);
     void fit_shadow_maps(Frame& f);
@@ -865,7 +868,8 @@ void Renderer::Impl::prepare_programs(Frame& f) {
     // The lighting program, the frame's largest, starts compiling first, to
     // overlap the node materials' compiles, where its variant is already
     // known: without Blend-mode materials there is no forward layer.
-    bool any_blend = false;
+    f.exact_layers = exact_layers(f);
+    bool any_blend = f.exact_layers.any();
     for (const Material& m : scene.materials()) any_blend = any_blend || m.blend;
     if (!any_blend) LightingStage::prefetch(*shaders, base, lights, world_module, lighting);
 
@@ -892,7 +896,8 @@ void Renderer::Impl::prepare_programs(Frame& f) {
     world_module.add_defines(forward_variant);
     forward_variant.defines.push_back("FORWARD_PASS");
     f.geometry.exclude(forward.prepare(*shaders, materials, f.scene, f.geometry, forward_variant, lights.count(),
-                                       LightingStage::batch_size(lighting), result.warnings));
+                                       LightingStage::batch_size(lighting), f.exact_layers, result.warnings));
+    result.timings.exact_layers = f.exact_layers.instances;
     if (forward.active()) {
         // What the forward pass does not write (forward_module.h): said, not silent.
         std::vector<std::string> skipped;
@@ -1004,6 +1009,28 @@ void Renderer::Impl::place_at_shutter_time(Frame& f, int sample) {
         ray_scene.upload();
         f.result.timings.ray_build_ms += ray_timer.lap_cpu_ms();
     }
+}
+
+// The partly transparent planes the forward pass composites exactly
+// (RenderSettings::exact_transparent_planes, layer_order.h): only in frames
+// whose every output the forward layer reaches, whose order holds for every
+// sample, and that lose nothing by a forward pass.
+ExactLayers Renderer::Impl::exact_layers(const Frame& f) const {
+    const RenderSettings& s = f.settings;
+    const std::vector<Pass> passes = s.passes.list();
+    const bool combined_only = std::all_of(passes.begin(), passes.end(), [](Pass p) { return p == Pass::Combined; });
+    if (!s.exact_transparent_planes || !combined_only || !s.cryptomatte.empty() || !s.aovs.empty() ||
+        s.light_groups > 0 || s.motion_blur || f.plan.catchers || emission_sample_count(f) > 1)
+        return {};
+    std::vector<bool> transparent(scene.materials().size(), false);
+    for (std::uint32_t id = 0; id < scene.materials().size(); ++id) {
+        const Material& m = scene.materials()[id];
+        if (m.blend) return {};  // the forward pass orders those by object
+        if (m.holdout) continue;
+        transparent[id] = m.graph >= 0 ? materials.alpha(std::uint32_t(m.graph)) : f.scene.coverage(id) < 1.0f;
+    }
+    if (std::find(transparent.begin(), transparent.end(), true) == transparent.end()) return {};
+    return select_exact_layers(f.scene, transparent, f.view);
 }
 
 // Emission samples per film sample (emission_samples.h): the setting's

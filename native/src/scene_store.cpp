@@ -280,7 +280,10 @@ std::uint32_t SceneStore::add_mesh(const MeshData& m, const std::string& key) {
         g.bound_radius = std::sqrt(r2);
     }
     // A deforming mesh's winding is known at rest only.
-    if (!m.motion_positions) g.closed = closed_orientation(m.positions, m.vertex_count, m.indices, m.triangle_count);
+    if (!m.motion_positions) {
+        g.closed = closed_orientation(m.positions, m.vertex_count, m.indices, m.triangle_count);
+        g.planar = planar_mesh(m.positions, m.vertex_count, m.indices, m.triangle_count, g.plane_normal, g.plane_offset);
+    }
     g.terminator_reach = terminator_reach(m);
     // Triangles sorted by material slot (stable), so each slot is one draw
     // range: node materials bind a program per slot. Per-triangle and

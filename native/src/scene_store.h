@@ -50,6 +50,12 @@ struct GpuMesh {
     // closed_orientation() of its triangles (mesh_topology.h): +1/-1 closed
     // and facing out/in, whose back faces a draw may leave out; 0 both sides.
     int closed = 0;
+    // planar_mesh() (mesh_topology.h): every triangle in the plane
+    // dot(plane_normal, p) = plane_offset (object space). False for a
+    // deforming mesh (its rest shape is all that is known).
+    bool planar = false;
+    double plane_normal[3] = {0.0, 0.0, 1.0};
+    double plane_offset = 0.0;
     // The most any point of it is lifted by the shadow terminator offset,
     // before its instance's matrix stretches it (object units;
     // terminator_reach() below). 0 without normals.

@@ -219,6 +219,7 @@ def main():
     print(f"  whole image: mean |ours - Cycles| {diff.mean():.4f}, relMSE "
           f"{float(np.mean((ours - cycles) ** 2 / (cycles ** 2 + 0.01))):.2e}")
     checks.run("Blend mode (forward pass)", blend_mode, checks, scene, cycles)
+    checks.run("exact layers (Combined only)", exact_layers, checks, scene, cycles)
     checks.run("Clip mode", clip_mode, checks, scene)
     checks.run("sharp sun", sharp_sun, checks, scene, index)
     checks.run("film transparent", film_transparent, checks, scene)
@@ -263,6 +264,56 @@ def blend_mode(checks, scene, cycles):
         print(f"  Blend mode, {label}: Cycles {c:.4f}, ours at {BLEND_SAMPLES} samples {o:.4f}, ratio {o / c:.4f}")
         checks.check(abs(o / c - 1.0) < MEAN_LIMIT, f"Blend mode, {label}: mean within {MEAN_LIMIT:.0%} of Cycles",
                      f"ratio {o / c:.4f}")
+
+
+EXACT_SAMPLES = 4
+PANE_BLOCKS = (("alpha 0.4 pane", (0.08, 0.30)), ("checker alpha pane", (0.30, 0.48)), ("two 0.5 panes", (0.72, 0.92)))
+
+
+def exact_layers(checks, scene, cycles):
+    """With Combined the only pass, the panes (planar, partly transparent,
+    ordered by the plane test: native layer_order.h) are composited by the
+    forward pass at every sample instead of stochastically, though their
+    Blend Mode is Opaque: the five planes are taken (the alpha 0 one too),
+    the sphere is not (not planar). At EXACT_SAMPLES samples each pane's
+    block is nearer Cycles' 1024 samples, per pixel, than the same render
+    with Object Index on (which keeps them stochastic), and its mean is
+    within MEAN_LIMIT at BLEND_SAMPLES."""
+    from deferred_render.engine import final
+    layer = scene.view_layers[0]
+    runs = {}
+    try:
+        for name, index_pass, samples in (("exact", False, EXACT_SAMPLES), ("stochastic", True, EXACT_SAMPLES),
+                                          ("exact16", False, BLEND_SAMPLES)):
+            layer.use_pass_object_index = index_pass
+            scene.deferred_render.samples = samples
+            ours, _ = render(scene, "DEFERRED_RENDER") if index_pass else (render_combined(scene), None)
+            runs[name] = (ours, int(final.last_timings.get("exact_layers", 0)))
+    finally:
+        layer.use_pass_object_index = True
+        scene.deferred_render.samples = OURS_SAMPLES
+    checks.check(runs["exact"][1] == 5, "Combined only: the five planes are exact layers", f"{runs['exact'][1]}")
+    checks.check(runs["stochastic"][1] == 0, "with Object Index on: none (stochastic)", f"{runs['stochastic'][1]}")
+    h, w = cycles.shape[:2]
+    rows = slice(int(h * 0.2), int(h * 0.8))
+    for label, cols in PANE_BLOCKS:
+        block = (rows, slice(int(w * cols[0]), int(w * cols[1])))
+        rmse = {k: float(np.sqrt(np.mean((runs[k][0][block] - cycles[block]) ** 2))) for k in ("exact", "stochastic")}
+        c, o = cycles[block].mean(), runs["exact16"][0][block].mean()
+        print(f"  exact layers, {label}: per-pixel RMSE against Cycles at {EXACT_SAMPLES} samples {rmse['exact']:.4f} "
+              f"(stochastic {rmse['stochastic']:.4f}); mean at {BLEND_SAMPLES} samples {o:.4f} (Cycles {c:.4f}, "
+              f"ratio {o / c:.4f})")
+        checks.check(rmse["exact"] < 0.85 * rmse["stochastic"], f"exact layers, {label}: less noise than stochastic",
+                     f"{rmse['exact']:.4f} vs {rmse['stochastic']:.4f}")
+        checks.check(abs(o / c - 1.0) < MEAN_LIMIT, f"exact layers, {label}: mean within {MEAN_LIMIT:.0%} of Cycles",
+                     f"ratio {o / c:.4f}")
+
+
+def render_combined(scene):
+    """Ours with Combined alone (a single-layer EXR)."""
+    scene.render.engine = "DEFERRED_RENDER"
+    channels = U.read_exr(U.render_exr(os.path.join(OUT, "combined_only"), scene))
+    return U.exr_pass(channels, "ViewLayer", "Combined", "RGB").astype(np.float64)
 
 
 def clip_mode(checks, scene):

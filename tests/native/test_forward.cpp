@@ -41,8 +41,11 @@ struct Pane {
 // right of the panes (x 1..2, y -0.75..1.25 at z = 1). `emitter`: a blue
 // emissive panel out of view too (half size 0.5 at (-4, -1, 2.5), facing
 // both ways), a mesh light.
+// `stochastic`: partly transparent panes (not Blend) by stochastic coverage
+// (RenderSettings::exact_transparent_planes off), not as exact layers.
 FrameResult render_scene(const std::vector<Pane>& panes, int samples, bool film_transparent = false,
-                         bool with_floor = true, float world = 0.25f, bool rays = false, bool emitter = false) {
+                         bool with_floor = true, float world = 0.25f, bool rays = false, bool emitter = false,
+                         bool stochastic = false) {
     Renderer r;
     set_world_color(r, world, world, world);
     Light sun;
@@ -72,6 +75,7 @@ FrameResult render_scene(const std::vector<Pane>& panes, int samples, bool film_
     s.samples = samples;
     s.film_transparent = film_transparent;
     s.filter_width = 0.01f;  // pixel centres: the same points at every sample
+    s.exact_transparent_planes = !stochastic;
     return r.render(top_down_ortho(10.0, 6.0f), s);
 }
 
@@ -164,7 +168,7 @@ TEST(ForwardPass, EqualsStochasticTransparencyConverged) {
     FrameResult forward = render_scene({{blend_of(green, 0.4f), 1.0}}, 1, false, true, 0.0f);
     Material hashed = green;
     hashed.alpha = 0.4f;
-    FrameResult stochastic = render_scene({{hashed, 1.0}}, 256, false, true, 0.0f);
+    FrameResult stochastic = render_scene({{hashed, 1.0}}, 256, false, true, 0.0f, false, false, true);
     FrameResult floor_only = render_scene({}, 1, false, true, 0.0f);
     FrameResult pane_opaque = render_scene({{green, 1.0}}, 1, false, true, 0.0f);
     glm::dvec4 mean_f(0), mean_s(0), mean_diff(0);
@@ -233,7 +237,7 @@ TEST(StochasticAlpha, IsStratifiedOverAPixelsSamples) {
     const FrameResult floor_only = render_scene({}, 1, false, true, 0.0f);
     const FrameResult pane_opaque = render_scene({{green, 1.0}}, 1, false, true, 0.0f);
     for (int samples : {4, 16}) {
-        const FrameResult stochastic = render_scene({{hashed, 1.0}}, samples, false, true, 0.0f);
+        const FrameResult stochastic = render_scene({{hashed, 1.0}}, samples, false, true, 0.0f, false, false, true);
         double sum = 0.0;
         int n = 0;
         for (int y = 16; y < 32; ++y)
@@ -264,7 +268,8 @@ TEST(StochasticAlpha, StackedLayersConvergeInEveryPixel) {
     red_hashed.alpha = blue_hashed.alpha = 0.5f;
     const FrameResult F = render_scene({}, 1, false, true, 0.0f), R = render_scene({{red, 1.0}}, 1, false, true, 0.0f),
                       B = render_scene({{blue, 2.0}}, 1, false, true, 0.0f);
-    const FrameResult both = render_scene({{red_hashed, 1.0}, {blue_hashed, 2.0}}, 256, false, true, 0.0f);
+    const FrameResult both =
+        render_scene({{red_hashed, 1.0}, {blue_hashed, 2.0}}, 256, false, true, 0.0f, false, false, true);
     double worst = 0.0, sum = 0.0;
     int n = 0;
     for (int y = 16; y < 32; ++y)
@@ -392,4 +397,161 @@ TEST(ForwardPass, ACancelledFrameOfManyBatchesLeavesTheNextFrameExact) {
     const PassImage& e = *expected.find(Pass::Combined);
     ASSERT_EQ(a.pixels.size(), e.pixels.size());
     for (std::size_t i = 0; i < a.pixels.size(); ++i) ASSERT_EQ(a.pixels[i], e.pixels[i]) << i;
+}
+
+// Partly transparent planes as exact layers (layer_order.h,
+// RenderSettings::exact_transparent_planes): a pane of alpha 0.4 that is
+// not in Blend mode is composited by the forward pass at every sample in a
+// Combined-only frame, so ONE sample is already 0.4 pane + 0.6 floor (the
+// stochastic path shows pane or floor at each pixel and converges there,
+// EqualsStochasticTransparencyConverged).
+TEST(ExactLayers, APartlyTransparentPaneIsTheExactCompositeAtOneSample) {
+    const Material green = diffuse(0.25f, 0.75f, 0.375f);
+    Material pane = green;
+    pane.alpha = 0.4f;
+    const FrameResult floor_only = render_scene({}, 1), pane_opaque = render_scene({{green, 1.0}}, 1);
+    const FrameResult exact = render_scene({{pane, 1.0}}, 1);
+    const FrameResult stochastic = render_scene({{pane, 1.0}}, 1, false, true, 0.25f, false, false, true);
+    const PassImage& F = *floor_only.find(Pass::Combined);
+    const PassImage& P = *pane_opaque.find(Pass::Combined);
+    auto composite = [&](int x, int y) { return 0.4 * pixel4(P, x, y) + 0.6 * pixel4(F, x, y); };
+    const double worst = worst_inside(*exact.find(Pass::Combined), composite);
+    const double worst_stochastic = worst_inside(*stochastic.find(Pass::Combined), composite);
+    std::printf("exact layer, 1 sample: worst relative difference to 0.4 P + 0.6 F %.2e (stochastic %.2e)\n", worst,
+                worst_stochastic);
+    EXPECT_EQ(exact.timings.exact_layers, 1u);
+    EXPECT_GT(exact.timings.forward_ms, 0.0);
+    EXPECT_LT(worst, 1e-6);
+    EXPECT_EQ(stochastic.timings.exact_layers, 0u);
+    EXPECT_GT(worst_stochastic, 0.1);  // pane or floor, not the mix
+    EXPECT_TRUE(exact.warnings.empty());
+}
+
+namespace {
+
+// Column-major rotation about y by atan(slope) (z rises `slope` per x), then
+// a lift to z = height.
+Mat4d tilted(double slope, double height) {
+    const double c = 1.0 / std::sqrt(1.0 + slope * slope), s = slope * c;
+    Mat4d m = identity_matrix();
+    m[0] = c;
+    m[2] = s;
+    m[8] = -s;
+    m[10] = c;
+    m[14] = height;
+    return m;
+}
+
+struct LayerScene {
+    Material big, small;        // the tilted pane's and the small pane's
+    bool with_big = true, with_small = true, small_is_box = false, normal_pass = false;
+    double small_height = 1.2;  // the small pane's z (over x -2..-1)
+};
+
+// A floor, a big pane tilted through z = 1.5 (z = 1.5 + 0.5 x, half size
+// 2), and a small one (half size 0.5) at x = -1.5, above the big pane's low
+// end: nearer the eye there, though its centre is farther than the big
+// pane's (the distance sort of Blend-mode layers would put it behind).
+FrameResult render_layers(const LayerScene& l) {
+    Renderer r;
+    set_world_color(r, 0.25f, 0.25f, 0.25f);
+    Light sun;
+    sun.type = LightType::Sun;
+    sun.angle = 0.0f;
+    const double eye[3] = {1.0, 0.5, 3.0}, target[3] = {0.0, 0.0, 0.0};
+    sun.matrix = tools::look_at(eye, target);
+    sun.energy = 3.0f;
+    r.add_light(sun);
+    add_plane(r, diffuse(0.75f, 0.375f, 0.25f), 10.0f);
+    if (l.with_big) add_plane(r, l.big, 2.0f, 1, tilted(0.5, 1.5), false);
+    if (l.with_small) {
+        if (l.small_is_box) {
+            const tools::MeshArrays box = tools::make_box(0.5f, 0.5f, 0.05f);
+            const std::uint32_t mesh = r.add_mesh(box.view());
+            const std::uint32_t mat = r.add_material(l.small);
+            const Mat4d at = tools::translation(-1.5, 0.0, l.small_height);
+            r.add_instances(mesh, at.data(), 1, nullptr, {mat}, false);
+        } else {
+            add_plane(r, l.small, 0.5f, 1, tools::translation(-1.5, 0.0, l.small_height), false);
+        }
+    }
+    RenderSettings s;
+    s.width = s.height = kSize;
+    s.samples = 1;
+    s.filter_width = 0.01f;
+    if (l.normal_pass) s.passes.insert(Pass::Normal);
+    return r.render(top_down_ortho(10.0, 6.0f), s);
+}
+
+}  // namespace
+
+TEST(ExactLayers, AreDrawnInThePlaneTestsOrder) {
+    // Where the panes overlap (x -1.75..-1): small over big over floor,
+    // a_s S + (1 - a_s)(a_b B + (1 - a_b) F), each surface lit as when it
+    // is alone and opaque; the other order would give a_b B + (1 - a_b)
+    // (a_s S + (1 - a_s) F), which differs by 0.25 |S - B| here.
+    const Material red = diffuse(0.75f, 0.125f, 0.125f), blue = diffuse(0.125f, 0.125f, 0.75f);
+    LayerScene l;
+    l.big = blue;
+    l.small = red;
+    l.with_small = false;
+    const FrameResult B = render_layers(l);
+    l.with_small = true;
+    l.with_big = false;
+    const FrameResult S = render_layers(l);
+    l.with_small = false;
+    const FrameResult F = render_layers(l);
+    l.with_big = l.with_small = true;
+    l.big.alpha = 0.5f;
+    l.small.alpha = 0.5f;
+    const FrameResult both = render_layers(l);
+    EXPECT_EQ(both.timings.exact_layers, 2u);
+    double worst = 0.0, worst_other = 0.0;
+    // Pixel (x + 3) * 8, (y + 3) * 8: x -1.6..-1.1, y -0.4..0.4.
+    for (int y = 22; y <= 26; ++y)
+        for (int x = 12; x <= 15; ++x) {
+            const glm::dvec4 b = pixel4(*B.find(Pass::Combined), x, y), s = pixel4(*S.find(Pass::Combined), x, y),
+                             f = pixel4(*F.find(Pass::Combined), x, y), got = pixel4(*both.find(Pass::Combined), x, y);
+            const glm::dvec4 want = 0.5 * s + 0.5 * (0.5 * b + 0.5 * f), other = 0.5 * b + 0.5 * (0.5 * s + 0.5 * f);
+            for (int c = 0; c < 3; ++c) {
+                worst = std::max(worst, std::abs(got[c] - want[c]) / std::max(want[c], 0.05));
+                worst_other = std::max(worst_other, std::abs(got[c] - other[c]) / std::max(other[c], 0.05));
+            }
+        }
+    std::printf("tilted and small pane: worst relative difference %.2e to small-over-big, %.2e to the other order\n",
+                worst, worst_other);
+    EXPECT_LT(worst, 1e-5);
+    EXPECT_GT(worst_other, 0.1);
+}
+
+TEST(ExactLayers, AreTakenOnlyWhereTheyAreExact) {
+    // Each of these frames keeps every partly transparent surface
+    // stochastic: a small pane crossing the tilted one (each cuts the
+    // other's plane where both are), a transparent box instead of a pane
+    // (not planar: a ray meets it twice), a second pass (the forward layer
+    // reaches Combined only), a Blend-mode material (the forward pass orders
+    // those by object).
+    const Material red = diffuse(0.75f, 0.125f, 0.125f), blue = diffuse(0.125f, 0.125f, 0.75f);
+    LayerScene base;
+    base.big = blue;
+    base.small = red;
+    base.big.alpha = base.small.alpha = 0.5f;
+    EXPECT_EQ(render_layers(base).timings.exact_layers, 2u);
+    LayerScene crossing = base;
+    crossing.small_height = 0.75;  // the big pane is at z 0.5..1 below x -2..-1
+    EXPECT_EQ(render_layers(crossing).timings.exact_layers, 0u);
+    LayerScene box = base;
+    box.small_is_box = true;
+    EXPECT_EQ(render_layers(box).timings.exact_layers, 1u);  // the tilted pane alone
+    LayerScene opaque_box = box;
+    opaque_box.small.alpha = 1.0f;
+    EXPECT_EQ(render_layers(opaque_box).timings.exact_layers, 1u);
+    LayerScene normal = base;
+    normal.normal_pass = true;
+    EXPECT_EQ(render_layers(normal).timings.exact_layers, 0u);
+    LayerScene blend = base;
+    blend.small.blend = true;
+    const FrameResult with_blend = render_layers(blend);
+    EXPECT_EQ(with_blend.timings.exact_layers, 0u);
+    EXPECT_GT(with_blend.timings.forward_ms, 0.0);  // the Blend pane is still drawn forward
 }

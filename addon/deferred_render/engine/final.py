@@ -126,6 +126,9 @@ def _format_timings(timings):
     uploaded, reused = timings.get("images_uploaded", 0), timings.get("images_reused", 0)
     if uploaded or reused:
         text += f"; images {uploaded} uploaded, {reused} kept from the last render"
+    layers = timings.get("exact_layers", 0)
+    if layers:
+        text += f"; {layers} transparent planes composited exactly"
     return text
 
 

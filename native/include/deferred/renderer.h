@@ -99,6 +99,19 @@ struct RenderSettings {
     // or the image is too large for it, the raster path draws the frame,
     // warned.
     bool visibility_buffer = true;
+    // Partly transparent planes as exact layers (layer_order.h): in a frame
+    // whose only output is Combined, the partly transparent materials whose
+    // every surface in view is planar and ordered by the plane test are
+    // drawn by the forward pass, each layer composited with its alpha at
+    // every sample (Cycles' transmittance, exactly) instead of kept in a
+    // share alpha of the samples: the same image converged, without the
+    // coverage's noise. Not taken with other passes, Cryptomatte, shader
+    // AOVs, light groups (the forward layer reaches Combined only), motion
+    // blur (the order is the frame's), Blend-mode materials (the forward
+    // pass's own order is by object), shadow catchers, or emission samples
+    // (FrameTimings::exact_layers says what a frame took). Their shadows
+    // stay stochastic. Off: every partly transparent surface stochastic.
+    bool exact_transparent_planes = true;
     // Benchmarks: count the fragments the shadow maps' draws shade
     // (FrameTimings::shadow_fragments) with a pipeline-statistics query
     // around each map layer's draws. Off for renders: a driver may wait for
@@ -232,6 +245,9 @@ struct FrameTimings {
     // Draws of the Blend-mode surfaces per sample, one per batch of lights
     // (as the lighting's dispatches); 0 without a forward pass.
     std::uint32_t forward_batches = 0;
+    // Partly transparent planar surfaces in view drawn as exact layers
+    // (RenderSettings::exact_transparent_planes), instances; 0: none.
+    std::uint32_t exact_layers = 0;
     // geometry_ms holds the emission samples' passes too (emission_samples.h),
     // and camera_instances_drawn their instances.
     double total_ms = 0;

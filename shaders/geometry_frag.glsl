@@ -362,6 +362,10 @@ vec3 finite_or(vec3 v, vec3 fallback) {
  * lighting pass's dispatches; forward_module.h). The first batch adds the
  * world's light and the surface's emission too. */
 layout(location = 25) uniform uvec2 forward_lights;
+/* 0: every fragment; a convex exact layer is drawn twice (forward_module.cpp,
+ * layer_order.h): 1 only the fragments seen from the front of their
+ * winding, 2 only those seen from behind. */
+layout(location = 26) uniform int forward_side;
 
 /* The surface lit as the lighting pass lights a G-buffer pixel: the draw's
  * lights, the world, its emission. */
@@ -439,6 +443,9 @@ void main() {
     const bool back = false;
 #else
     const bool back = FRONT_FACING == ((v_mirrored & 1u) != 0u);
+#endif
+#ifdef FORWARD_PASS
+    if (forward_side != 0 && back != (forward_side == 2)) discard;
 #endif
     vec3 Ng = normalize(screen_plane_normal());
 #ifdef MATERIAL_GRAPH

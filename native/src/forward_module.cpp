@@ -9,6 +9,7 @@
 #include "../../shaders/shader_defines.h"
 
 #include <algorithm>
+#include <limits>
 #include <string>
 
 namespace deferred {
@@ -82,6 +83,22 @@ std::uint64_t ForwardModule::draw(FrameScene& scene, const ViewVolume& view,
         GLuint bound = 0;  // the program in use (a glUseProgram resets its subroutine)
         for (const Sorted& f : sorted_) {
             const GpuMesh& mesh = scene.mesh(*f.one.draw);
+            // A convex exact layer (layer_order.h) is two: the side facing
+            // the eye, then the far side (geometry_frag.glsl forward_side:
+            // 1 the fragments seen from the front of their winding, 2 from
+            // behind; a mesh facing in has its near side behind).
+            const bool two_sides = mesh.convex && !rank_.empty() &&
+                                   rank_[scene.kept(f.one.first)] != std::numeric_limits<std::uint32_t>::max();
+            const int sides[2] = {two_sides ? (mesh.closed > 0 ? 1 : 2) : 0, mesh.closed > 0 ? 2 : 1};
+            // The rasteriser leaves out the other side's triangles before
+            // shading them (the shader's test is the definition; the same
+            // gl_FrontFacing decides both): side 1 keeps the fragments seen
+            // from the front of their winding, which a mirrored instance's
+            // window winding reverses.
+            const bool mirrored = scene.mirrored(scene.kept(f.one.first));
+            if (two_sides) glEnable(GL_CULL_FACE);
+            for (int side = 0; side < (two_sides ? 2 : 1); ++side) {
+            if (two_sides) glCullFace((sides[side] == 1) != mirrored ? GL_BACK : GL_FRONT);
             for (std::size_t s = 0; s < mesh.slot_ranges.size(); ++s) {
                 const std::uint32_t id = scene.slot_material(*f.one.draw, s);
                 auto program = programs_.find(id);
@@ -96,8 +113,11 @@ std::uint64_t ForwardModule::draw(FrameScene& scene, const ViewVolume& view,
                     materials_->bind_for_draw(std::uint32_t(m.graph), mesh);
                     scene.bind_attributes(mesh);
                 }
+                glProgramUniform1i(program->second, 26, sides[side]);
                 scene.draw_range(f.one, mesh.slot_ranges[s].first, mesh.slot_ranges[s].second);
             }
+            }
+            if (two_sides) glDisable(GL_CULL_FACE);
         }
     }
     end_sample();
@@ -135,6 +155,7 @@ void ForwardModule::begin_sample() const {
     glDisable(GL_DEPTH_TEST);  // tested against the opaque depth in the shader
     glDepthMask(GL_FALSE);
     glDisable(GL_CULL_FACE);   // two-sided, as Cycles
+    glFrontFace(GL_CCW);       // gl_FrontFacing as geometry_frag.glsl reads it
     // Front to back "under" with premultiplied colour (src = a L): c = T src
     // + c; the alpha channel keeps the transmittance, T = (1 - a) T.
     glEnable(GL_BLEND);

@@ -374,7 +374,10 @@ void FrameScene::draw_range(const Culled& c, std::uint32_t first, std::uint32_t 
     } else {
         glDrawArraysInstanced(GL_TRIANGLES, GLint(first * 3), GLsizei(count * 3), GLsizei(c.count));
     }
-    if (cull) glDisable(GL_CULL_FACE);
+    if (cull) {
+        glDisable(GL_CULL_FACE);
+        glFrontFace(GL_CCW);  // what the two-sided passes' gl_FrontFacing reads (geometry_frag.glsl)
+    }
 }
 
 std::uint64_t FrameScene::draw_culled(const Test& keep, bool casters_only, const DrawStyle& style,

@@ -91,8 +91,10 @@ public:
     std::size_t instance_count() const { return instances_.size(); }
     // Every batch, in the scene's order.
     const std::vector<Draw>& draws() const { return draws_; }
-    // Instance i's matrix as the vertex stage has it (camera-relative).
+    // Instance i's matrix as the vertex stage has it (camera-relative), and
+    // whether it mirrors (negative determinant: its winding is reversed).
     glm::dmat4 model_matrix(std::uint32_t i) const;
+    bool mirrored(std::uint32_t i) const { return (instances_[i].ids.w & 1u) != 0u; }
     const std::vector<Bound>& bounds() const { return bounds_; }
     // The boxes of the instances whose bounding sphere `view` contains: each
     // its mesh's axis-aligned bounds through its matrix (camera-relative).

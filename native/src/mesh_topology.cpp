@@ -109,4 +109,33 @@ bool planar_mesh(const float* positions, std::size_t vertex_count, const std::ui
     return true;
 }
 
+bool convex_mesh(const float* positions, std::size_t vertex_count, const std::uint32_t* indices,
+                 std::size_t triangle_count, int closed) {
+    if (closed == 0 || triangle_count == 0 || !positions || !indices) return false;
+    if (double(vertex_count) * double(triangle_count) > kMaxConvexTestWork) return false;
+    auto vertex = [&](std::uint32_t i) {
+        return glm::dvec3(positions[3 * std::size_t(i)], positions[3 * std::size_t(i) + 1],
+                          positions[3 * std::size_t(i) + 2]);
+    };
+    std::vector<bool> used(vertex_count, false);
+    glm::dvec3 lo(1e300), hi(-1e300);
+    for (std::size_t i = 0; i < 3 * triangle_count; ++i) {
+        if (indices[i] >= vertex_count) return false;
+        used[indices[i]] = true;
+        lo = glm::min(lo, vertex(indices[i]));
+        hi = glm::max(hi, vertex(indices[i]));
+    }
+    const double tolerance = 1e-5 * glm::length(hi - lo);
+    for (std::size_t t = 0; t < triangle_count; ++t) {
+        const glm::dvec3 a = vertex(indices[3 * t]), b = vertex(indices[3 * t + 1]), c = vertex(indices[3 * t + 2]);
+        glm::dvec3 n = glm::cross(b - a, c - a);
+        const double len = glm::length(n);
+        if (!(len > 0.0)) continue;  // a degenerate triangle bounds nothing
+        n *= double(closed) / len;   // outward
+        for (std::size_t v = 0; v < vertex_count; ++v)
+            if (used[v] && glm::dot(n, vertex(std::uint32_t(v)) - a) > tolerance) return false;
+    }
+    return true;
+}
+
 }  // namespace deferred

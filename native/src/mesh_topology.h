@@ -28,4 +28,14 @@ int closed_orientation(const float* positions, std::size_t vertex_count, const s
 bool planar_mesh(const float* positions, std::size_t vertex_count, const std::uint32_t* indices,
                  std::size_t triangle_count, double normal[3], double& offset);
 
+// A closed mesh (closed_orientation() = `closed`, +1 or -1) that bounds a
+// convex solid: every vertex a triangle uses lies on the solid's side of
+// every triangle's plane, within 1e-5 of the vertices' extent. A view ray
+// from outside meets such a surface at most twice, first where it faces
+// the eye (layer_order.h). The test is vertices x triangles: meshes over
+// kMaxConvexTestWork of it are not tested (false).
+constexpr double kMaxConvexTestWork = 2e7;
+bool convex_mesh(const float* positions, std::size_t vertex_count, const std::uint32_t* indices,
+                 std::size_t triangle_count, int closed);
+
 }  // namespace deferred

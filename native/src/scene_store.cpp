@@ -283,6 +283,7 @@ std::uint32_t SceneStore::add_mesh(const MeshData& m, const std::string& key) {
     if (!m.motion_positions) {
         g.closed = closed_orientation(m.positions, m.vertex_count, m.indices, m.triangle_count);
         g.planar = planar_mesh(m.positions, m.vertex_count, m.indices, m.triangle_count, g.plane_normal, g.plane_offset);
+        g.convex = convex_mesh(m.positions, m.vertex_count, m.indices, m.triangle_count, g.closed);
     }
     g.terminator_reach = terminator_reach(m);
     // Triangles sorted by material slot (stable), so each slot is one draw

@@ -56,6 +56,8 @@ struct GpuMesh {
     bool planar = false;
     double plane_normal[3] = {0.0, 0.0, 1.0};
     double plane_offset = 0.0;
+    // convex_mesh() (mesh_topology.h): closed and bounding a convex solid.
+    bool convex = false;
     // The most any point of it is lifted by the shadow terminator offset,
     // before its instance's matrix stretches it (object units;
     // terminator_reach() below). 0 without normals.

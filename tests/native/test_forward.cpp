@@ -525,10 +525,13 @@ TEST(ExactLayers, AreDrawnInThePlaneTestsOrder) {
 }
 
 TEST(ExactLayers, AreTakenOnlyWhereTheyAreExact) {
-    // Each of these frames keeps every partly transparent surface
-    // stochastic: a small pane crossing the tilted one (each cuts the
-    // other's plane where both are), a transparent box instead of a pane
-    // (not planar: a ray meets it twice), a second pass (the forward layer
+    // A small pane crossing the tilted one (each cuts the other's plane
+    // where both are): one of them stays stochastic. Each of the other
+    // frames keeps every partly transparent surface stochastic but the
+    // tilted pane or all of them: a transparent box of six separate
+    // faces instead of the pane (neither planar nor closed: a ray may meet
+    // it twice, in no known order; a welded box is convex, the next
+    // test), a second pass (the forward layer
     // reaches Combined only), a Blend-mode material (the forward pass orders
     // those by object).
     const Material red = diffuse(0.75f, 0.125f, 0.125f), blue = diffuse(0.125f, 0.125f, 0.75f);
@@ -539,7 +542,7 @@ TEST(ExactLayers, AreTakenOnlyWhereTheyAreExact) {
     EXPECT_EQ(render_layers(base).timings.exact_layers, 2u);
     LayerScene crossing = base;
     crossing.small_height = 0.75;  // the big pane is at z 0.5..1 below x -2..-1
-    EXPECT_EQ(render_layers(crossing).timings.exact_layers, 0u);
+    EXPECT_EQ(render_layers(crossing).timings.exact_layers, 1u);
     LayerScene box = base;
     box.small_is_box = true;
     EXPECT_EQ(render_layers(box).timings.exact_layers, 1u);  // the tilted pane alone
@@ -554,4 +557,86 @@ TEST(ExactLayers, AreTakenOnlyWhereTheyAreExact) {
     const FrameResult with_blend = render_layers(blend);
     EXPECT_EQ(with_blend.timings.exact_layers, 0u);
     EXPECT_GT(with_blend.timings.forward_ms, 0.0);  // the Blend pane is still drawn forward
+}
+
+namespace {
+
+// A closed box (8 shared vertices, 12 triangles wound outwards): a convex
+// solid (mesh_topology.h convex_mesh), unlike tools::make_box's separate faces.
+tools::MeshArrays welded_box(float hx, float hy, float hz) {
+    tools::MeshArrays m;
+    for (int c = 0; c < 8; ++c)
+        m.positions.insert(m.positions.end(), {c & 1 ? hx : -hx, c & 2 ? hy : -hy, c & 4 ? hz : -hz});
+    // Each face's corners counter-clockwise seen from outside.
+    const std::uint32_t faces[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+    for (const auto& f : faces) m.indices.insert(m.indices.end(), {f[0], f[1], f[2], f[0], f[2], f[3]});
+    return m;
+}
+
+}  // namespace
+
+TEST(ExactLayers, AConvexSolidIsItsNearSideThenItsFarSide) {
+    // A closed box over the floor, seen from above, its top red and its
+    // other faces blue, all of alpha 0.5: every ray meets the top (from the
+    // front), then the bottom (from behind). As an exact layer, drawn near
+    // side then far side, ONE sample is 0.5 red + 0.25 blue + 0.25 floor
+    // (the other order would be 0.5 blue + 0.25 red + 0.25 floor); it
+    // equals stochastic coverage at 256 samples over the box (mean per
+    // channel, within 4 of the mean's standard deviations, from one
+    // stochastic sample's per-pixel spread).
+    auto render = [](bool stochastic, int samples) {
+        Renderer r;
+        set_world_color(r, 0.0f, 0.0f, 0.0f);
+        Light sun;
+        sun.type = LightType::Sun;
+        sun.angle = 0.0f;
+        const double eye[3] = {1.0, 0.5, 3.0}, target[3] = {0.0, 0.0, 0.0};
+        sun.matrix = tools::look_at(eye, target);
+        sun.energy = 3.0f;
+        r.add_light(sun);
+        add_plane(r, diffuse(0.75f, 0.375f, 0.25f), 10.0f);
+        Material red = diffuse(0.75f, 0.125f, 0.125f), blue = diffuse(0.125f, 0.125f, 0.75f);
+        red.alpha = blue.alpha = 0.5f;
+        const tools::MeshArrays box = welded_box(2.0f, 2.0f, 0.25f);
+        std::vector<std::int32_t> slots(box.indices.size() / 3, 1);
+        slots[2] = slots[3] = 0;  // the +z face (faces[1])
+        MeshData data = box.view();
+        data.material_indices = slots.data();
+        const std::uint32_t mesh = r.add_mesh(data);
+        const std::uint32_t red_id = r.add_material(red), blue_id = r.add_material(blue);
+        const Mat4d at = tools::translation(0.0, 0.0, 1.0);
+        r.add_instances(mesh, at.data(), 1, nullptr, {red_id, blue_id}, false);
+        RenderSettings s;
+        s.width = s.height = kSize;
+        s.samples = samples;
+        s.filter_width = 0.01f;
+        s.exact_transparent_planes = !stochastic;
+        return r.render(top_down_ortho(10.0, 6.0f), s);
+    };
+    const FrameResult exact = render(false, 1), stochastic = render(true, 256), one = render(true, 1);
+    EXPECT_EQ(exact.timings.exact_layers, 1u);
+    EXPECT_EQ(stochastic.timings.exact_layers, 0u);
+    glm::dvec4 mean_e(0), mean_s(0);
+    for (int y = 16; y < 32; ++y)
+        for (int x = 16; x < 32; ++x) {
+            mean_e += pixel4(*exact.find(Pass::Combined), x, y) / 256.0;
+            mean_s += pixel4(*stochastic.find(Pass::Combined), x, y) / 256.0;
+        }
+    double sd_one = 0.0, sd_exact = 0.0;
+    for (int y = 16; y < 32; ++y)
+        for (int x = 16; x < 32; ++x) {
+            const glm::dvec3 d1 = glm::dvec3(pixel4(*one.find(Pass::Combined), x, y) - mean_s);
+            const glm::dvec3 de = glm::dvec3(pixel4(*exact.find(Pass::Combined), x, y) - mean_s);
+            sd_one += glm::dot(d1, d1) / 256.0;
+            sd_exact += glm::dot(de, de) / 256.0;
+        }
+    sd_one = std::sqrt(sd_one);
+    sd_exact = std::sqrt(sd_exact);
+    std::printf("closed box: exact at 1 sample %.5f %.5f %.5f, stochastic x256 %.5f %.5f %.5f; per-pixel spread "
+                "around it at 1 sample: stochastic %.4f, exact %.4f\n", mean_e.x, mean_e.y, mean_e.z, mean_s.x,
+                mean_s.y, mean_s.z, sd_one, sd_exact);
+    // 256 pixels x 256 samples: the mean's standard deviation is sd_one / 256.
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(mean_e[c], mean_s[c], 4.0 * sd_one / 256.0 + 1e-6);
+    EXPECT_GT(mean_e.x, mean_e.z + 0.05);  // red over blue: the near side first
+    EXPECT_LT(sd_exact, 0.1 * sd_one);
 }

@@ -82,10 +82,12 @@ void draw_material_slots(const FrameScene& scene, const MaterialModule& material
     }
 }
 
-std::uint64_t GeometryStage::draw(FrameScene& scene, const FrameScene::Test& keep) {
+std::uint64_t GeometryStage::draw(FrameScene& scene, const FrameScene::Test& keep, bool data) {
     const std::uint64_t n = scene.cull(keep, false);
+    const std::vector<bool>& skip = data ? data_skipped_ : forward_;
+    auto is_forward = [&](std::uint32_t id) { return id < skip.size() && skip[id]; };
     glUseProgram(geometry_);
-    const bool forward_pass = std::find(forward_.begin(), forward_.end(), true) != forward_.end();
+    const bool forward_pass = std::find(skip.begin(), skip.end(), true) != skip.end();
     // Per slot range when some slots are not this program's or not the
     // G-buffer's (node materials, Blend-mode materials).
     const bool by_slot = !graph_programs_.empty() || forward_pass;

@@ -44,7 +44,13 @@ public:
                  bool graph_programs = true);
     // Materials drawn by the forward pass instead (forward_module.h): left
     // out of the G-buffer.
-    void exclude(const std::vector<bool>& forward) { forward_ = forward; }
+    // The data G-buffer (draw with `data`) leaves out `data_skipped`
+    // instead: the Blend-mode materials, which write no data pass (as in
+    // EEVEE), while the exact layers (layer_order.h) stay in it with the
+    // Alpha Threshold's coverage, as every partly transparent surface.
+    void exclude(const std::vector<bool>& forward) { forward_ = data_skipped_ = forward; }
+    void exclude_from_data(const std::vector<bool>& data_skipped) { data_skipped_ = data_skipped; }
+    const std::vector<bool>& data_skipped() const { return data_skipped_; }
 
     GLuint program() const { return geometry_; }
     // material id -> its graph's program, for the graphs that compiled.
@@ -58,9 +64,10 @@ public:
     // Something in the scene can be partly transparent this sample.
     bool stochastic_alpha() const { return scene_alpha_ || alpha_graphs_; }
 
-    // Draws the instances that pass `keep` into the bound G-buffer; returns
-    // how many were kept.
-    std::uint64_t draw(FrameScene& scene, const FrameScene::Test& keep);
+    // Draws the instances that pass `keep` into the bound G-buffer (`data`:
+    // the data G-buffer, leaving out data_skipped() instead of forward());
+    // returns how many were kept.
+    std::uint64_t draw(FrameScene& scene, const FrameScene::Test& keep, bool data = false);
     // Draws the slot ranges of the last cull's instances that use node
     // material `id`, with `program`.
     void draw_material(const FrameScene& scene, std::uint32_t id, GLuint program) const;
@@ -104,7 +111,7 @@ private:
     GLuint geometry_ = 0;
     bool scene_alpha_ = false, alpha_graphs_ = false;
     std::vector<std::pair<std::uint32_t, GLuint>> graph_programs_;
-    std::vector<bool> failed_, alpha_, forward_, partly_transparent_;  // per material id
+    std::vector<bool> failed_, alpha_, forward_, data_skipped_, partly_transparent_;  // per material id
     std::map<std::uint32_t, GLuint> aov_programs_;
     std::vector<std::vector<std::pair<std::uint32_t, int>>> aov_writers_;  // per AOV: (material id, slot)
     std::map<std::uint32_t, GLuint> light_casters_, world_casters_;

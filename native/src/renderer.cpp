@@ -897,7 +897,15 @@ void Renderer::Impl::prepare_programs(Frame& f) {
     forward_variant.defines.push_back("FORWARD_PASS");
     f.geometry.exclude(forward.prepare(*shaders, materials, f.scene, f.geometry, forward_variant, lights.count(),
                                        LightingStage::batch_size(lighting), f.exact_layers, result.warnings));
+    // The exact layers stay in the data G-buffer (the frame has only data
+    // passes besides Combined); Blend-mode materials write no data pass.
+    std::vector<bool> data_skipped = f.geometry.forward();
+    for (std::uint32_t id = 0; id < data_skipped.size(); ++id)
+        data_skipped[id] = data_skipped[id] && scene.materials()[id].blend;
+    f.geometry.exclude_from_data(data_skipped);
     result.timings.exact_layers = f.exact_layers.instances;
+    bool blend_drawn = false;
+    for (std::uint32_t id = 0; id < data_skipped.size(); ++id) blend_drawn = blend_drawn || data_skipped[id];
     if (forward.active()) {
         // What the forward pass does not write (forward_module.h): said, not silent.
         std::vector<std::string> skipped;
@@ -906,7 +914,7 @@ void Renderer::Impl::prepare_programs(Frame& f) {
         if (!settings.cryptomatte.empty()) skipped.push_back("Cryptomatte");
         if (!settings.aovs.empty()) skipped.push_back("shader AOVs");
         if (settings.light_groups > 0) skipped.push_back("light groups");
-        if (!skipped.empty()) {
+        if (!skipped.empty() && blend_drawn) {
             std::string list;
             for (const std::string& name : skipped) list += (list.empty() ? "" : ", ") + name;
             result.warnings.push_back("Blend-mode materials reach Combined only; " + list +
@@ -920,7 +928,7 @@ void Renderer::Impl::prepare_programs(Frame& f) {
     if (want_visibility) {
         std::vector<VisibilityBuffer::GraphMaterial> graphs;
         for (auto& [id, program] : f.geometry.graph_programs())
-            if (!f.geometry.is_forward(id))
+            if (!f.geometry.is_forward(id) || !data_skipped[id])  // an exact layer: the data G-buffer draws it
                 graphs.push_back({id, std::uint32_t(scene.materials()[id].graph), f.geometry.is_alpha_graph(id)});
         try {
             visibility.prepare(*shaders, materials, base, graphs, f.geometry.partly_transparent(), result.warnings);
@@ -935,6 +943,7 @@ void Renderer::Impl::prepare_programs(Frame& f) {
             const std::vector<bool> forward_materials = f.geometry.forward();
             f.geometry.prepare(*shaders, materials, f.scene, base, f.scene_alpha, result.warnings);
             f.geometry.exclude(forward_materials);
+            f.geometry.exclude_from_data(data_skipped);
             result.timings.material_programs = f.geometry.distinct_graph_programs();
         }
     }
@@ -1017,9 +1026,15 @@ void Renderer::Impl::place_at_shutter_time(Frame& f, int sample) {
 // sample, and that lose nothing by a forward pass.
 ExactLayers Renderer::Impl::exact_layers(const Frame& f) const {
     const RenderSettings& s = f.settings;
+    // Combined and the data G-buffer's passes (which keep every partly
+    // transparent surface at the Alpha Threshold, exact layers too); the
+    // forward layer reaches no light, colour or Mist pass.
     const std::vector<Pass> passes = s.passes.list();
-    const bool combined_only = std::all_of(passes.begin(), passes.end(), [](Pass p) { return p == Pass::Combined; });
-    if (!s.exact_transparent_planes || !combined_only || !s.cryptomatte.empty() || !s.aovs.empty() ||
+    const bool layer_passes = std::all_of(passes.begin(), passes.end(), [](Pass p) {
+        return p == Pass::Combined || p == Pass::Depth || p == Pass::Position || p == Pass::Normal || p == Pass::UV ||
+               p == Pass::IndexOB || p == Pass::IndexMA;
+    });
+    if (!s.exact_transparent_planes || !layer_passes || !s.cryptomatte.empty() || !s.aovs.empty() ||
         s.light_groups > 0 || s.motion_blur || f.plan.catchers || emission_sample_count(f) > 1)
         return {};
     std::vector<bool> transparent(scene.materials().size(), false);
@@ -1085,7 +1100,7 @@ void Renderer::Impl::render_sample(Frame& f, int sample) {
 
     const FrameScene::Test in_view = f.in_view();
     // resolve_only: the materials an emission sample's visibility buffer resolves (emission_samples.h).
-    auto draw_gbuffer = [&](const std::vector<bool>* resolve_only = nullptr) {
+    auto draw_gbuffer = [&](const std::vector<bool>* resolve_only = nullptr, bool data = false) {
         gbuffer.bind_for_geometry();
         glEnable(GL_DEPTH_TEST);
         glDepthFunc(GL_GREATER);  // reversed Z
@@ -1094,9 +1109,10 @@ void Renderer::Impl::render_sample(Frame& f, int sample) {
         glDisable(GL_BLEND);
         if (f.visibility) {
             f.camera_instances_drawn += f.scene.cull(in_view, false);
-            visibility.draw(f.scene, materials, gbuffer, f.geometry.forward(), resolve_only);
+            visibility.draw(f.scene, materials, gbuffer, data ? f.geometry.data_skipped() : f.geometry.forward(),
+                            resolve_only);
         } else {
-            f.camera_instances_drawn += f.geometry.draw(f.scene, in_view);
+            f.camera_instances_drawn += f.geometry.draw(f.scene, in_view, data);
         }
         glBindFramebuffer(GL_FRAMEBUFFER, 0);
     };
@@ -1143,7 +1159,7 @@ void Renderer::Impl::render_sample(Frame& f, int sample) {
     if (f.passes.data_gbuffer() && (sample == 0 || f.passes.data_every_sample())) {
         f.geometry.set_alpha_mode(true, settings.alpha_threshold);
         if (f.visibility) visibility.set_alpha_mode(true, settings.alpha_threshold);
-        draw_gbuffer();
+        draw_gbuffer(nullptr, true);
         draw_motion();
         glMemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
         gpu_timer.lap(f.geometry_ms);

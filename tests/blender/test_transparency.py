@@ -15,6 +15,10 @@ samples (the reference), ours at 256. Per object (object-index pass of
 Cycles, eroded) and on the floor's shadow regions the mean of ours must be
 within MEAN_LIMIT of Cycles', relative; a region with an opaque-drawn pane
 or an opaque shadow is off by 40-60 %.
+(A Diffuse Color pass keeps that comparison stochastic.) Exact layers
+(native layer_order.h), with Combined and the data passes only: the planes
+and the spheres composited by the forward pass at every sample, less noisy
+than stochastic at 4 samples and within MEAN_LIMIT at 16.
 Blend Mode (EEVEE's setting): Blend on the panes renders them with the
 forward pass, within MEAN_LIMIT of the same Cycles reference at 16
 samples; Alpha Clip at 0.5 equals a 0/1 alpha exactly.
@@ -155,6 +159,10 @@ def build_scene():
     layer = scene.view_layers[0]
     U.set_all_passes(layer, False)
     layer.use_pass_object_index = True
+    # A colour pass keeps every partly transparent surface stochastic (the
+    # forward layer of exact layers reaches no colour pass): the main
+    # comparison is the stochastic path's; exact_layers() turns it off.
+    layer.use_pass_diffuse_color = True
     scene.cycles.samples = CYCLES_SAMPLES
     scene.cycles.max_bounces = 0
     # Blender's default (the test file has 0, which makes Cycles' transparent
@@ -267,33 +275,45 @@ def blend_mode(checks, scene, cycles):
 
 
 EXACT_SAMPLES = 4
-PANE_BLOCKS = (("alpha 0.4 pane", (0.08, 0.30)), ("checker alpha pane", (0.30, 0.48)), ("two 0.5 panes", (0.72, 0.92)))
+PANE_BLOCKS = (("alpha 0.4 pane", (0.08, 0.30)), ("checker alpha pane", (0.30, 0.48)),
+               ("diffuse/transparent sphere", (0.52, 0.70)), ("two 0.5 panes", (0.72, 0.92)))
 
 
 def exact_layers(checks, scene, cycles):
-    """With Combined the only pass, the panes (planar, partly transparent,
-    ordered by the plane test: native layer_order.h) are composited by the
+    """With Combined and data passes only, the panes (planar, partly
+    transparent, ordered by the plane test: native layer_order.h) and the
+    sphere (convex: its near side, then its far side) are composited by the
     forward pass at every sample instead of stochastically, though their
-    Blend Mode is Opaque: the five planes are taken (the alpha 0 one too),
-    the sphere is not (not planar). At EXACT_SAMPLES samples each pane's
-    block is nearer Cycles' 1024 samples, per pixel, than the same render
-    with Object Index on (which keeps them stochastic), and its mean is
-    within MEAN_LIMIT at BLEND_SAMPLES."""
+    Blend Mode is Opaque: all seven are taken (the alpha 0 plane and the
+    shadowless sphere, opaque to the camera, too), with
+    Object Index on as well (the data G-buffer keeps them at the Alpha
+    Threshold). A colour pass (Diffuse Color) keeps them stochastic. At
+    EXACT_SAMPLES samples each block is nearer Cycles' 1024 samples, per
+    pixel, than the stochastic render, and its mean is within MEAN_LIMIT at
+    BLEND_SAMPLES."""
     from deferred_render.engine import final
     layer = scene.view_layers[0]
     runs = {}
     try:
-        for name, index_pass, samples in (("exact", False, EXACT_SAMPLES), ("stochastic", True, EXACT_SAMPLES),
-                                          ("exact16", False, BLEND_SAMPLES)):
+        for name, index_pass, colour_pass, samples in (("exact", False, False, EXACT_SAMPLES),
+                                                       ("exact_index", True, False, EXACT_SAMPLES),
+                                                       ("stochastic", True, True, EXACT_SAMPLES),
+                                                       ("exact16", False, False, BLEND_SAMPLES)):
             layer.use_pass_object_index = index_pass
+            layer.use_pass_diffuse_color = colour_pass
             scene.deferred_render.samples = samples
-            ours, _ = render(scene, "DEFERRED_RENDER") if index_pass else (render_combined(scene), None)
+            ours = render(scene, "DEFERRED_RENDER")[0] if index_pass else render_combined(scene)
             runs[name] = (ours, int(final.last_timings.get("exact_layers", 0)))
     finally:
         layer.use_pass_object_index = True
+        layer.use_pass_diffuse_color = True
         scene.deferred_render.samples = OURS_SAMPLES
-    checks.check(runs["exact"][1] == 5, "Combined only: the five planes are exact layers", f"{runs['exact'][1]}")
-    checks.check(runs["stochastic"][1] == 0, "with Object Index on: none (stochastic)", f"{runs['stochastic'][1]}")
+    checks.check(runs["exact"][1] == 7, "Combined only: the five planes and both spheres are exact layers",
+                 f"{runs['exact'][1]}")
+    checks.check(runs["exact_index"][1] == 7, "with Object Index on too", f"{runs['exact_index'][1]}")
+    checks.check(runs["stochastic"][1] == 0, "with Diffuse Color on: none (stochastic)", f"{runs['stochastic'][1]}")
+    same = float(np.abs(runs["exact"][0] - runs["exact_index"][0]).max())
+    checks.check(same < 1e-4, "Object Index on leaves Combined as it is", f"max difference {same:.2e}")
     h, w = cycles.shape[:2]
     rows = slice(int(h * 0.2), int(h * 0.8))
     for label, cols in PANE_BLOCKS:

@@ -444,7 +444,8 @@ Mat4d tilted(double slope, double height) {
 
 struct LayerScene {
     Material big, small;        // the tilted pane's and the small pane's
-    bool with_big = true, with_small = true, small_is_box = false, normal_pass = false;
+    bool with_big = true, with_small = true, small_is_box = false;
+    std::vector<Pass> passes;   // besides Combined
     double small_height = 1.2;  // the small pane's z (over x -2..-1)
 };
 
@@ -479,7 +480,7 @@ FrameResult render_layers(const LayerScene& l) {
     s.width = s.height = kSize;
     s.samples = 1;
     s.filter_width = 0.01f;
-    if (l.normal_pass) s.passes.insert(Pass::Normal);
+    for (Pass p : l.passes) s.passes.insert(p);
     return r.render(top_down_ortho(10.0, 6.0f), s);
 }
 
@@ -531,9 +532,9 @@ TEST(ExactLayers, AreTakenOnlyWhereTheyAreExact) {
     // tilted pane or all of them: a transparent box of six separate
     // faces instead of the pane (neither planar nor closed: a ray may meet
     // it twice, in no known order; a welded box is convex, the next
-    // test), a second pass (the forward layer
-    // reaches Combined only), a Blend-mode material (the forward pass orders
-    // those by object).
+    // test), a colour pass (the forward layer reaches Combined only; data
+    // passes keep the layers, the data G-buffer has them), a Blend-mode
+    // material (the forward pass orders those by object).
     const Material red = diffuse(0.75f, 0.125f, 0.125f), blue = diffuse(0.125f, 0.125f, 0.75f);
     LayerScene base;
     base.big = blue;
@@ -550,8 +551,11 @@ TEST(ExactLayers, AreTakenOnlyWhereTheyAreExact) {
     opaque_box.small.alpha = 1.0f;
     EXPECT_EQ(render_layers(opaque_box).timings.exact_layers, 1u);
     LayerScene normal = base;
-    normal.normal_pass = true;
-    EXPECT_EQ(render_layers(normal).timings.exact_layers, 0u);
+    normal.passes = {Pass::Normal, Pass::Depth};  // data passes: the data G-buffer has them
+    EXPECT_EQ(render_layers(normal).timings.exact_layers, 2u);
+    LayerScene colour = base;
+    colour.passes = {Pass::Normal, Pass::DiffCol};
+    EXPECT_EQ(render_layers(colour).timings.exact_layers, 0u);
     LayerScene blend = base;
     blend.small.blend = true;
     const FrameResult with_blend = render_layers(blend);
@@ -639,4 +643,52 @@ TEST(ExactLayers, AConvexSolidIsItsNearSideThenItsFarSide) {
     for (int c = 0; c < 3; ++c) EXPECT_NEAR(mean_e[c], mean_s[c], 4.0 * sd_one / 256.0 + 1e-6);
     EXPECT_GT(mean_e.x, mean_e.z + 0.05);  // red over blue: the near side first
     EXPECT_LT(sd_exact, 0.1 * sd_one);
+}
+
+TEST(ExactLayers, DataPassesKeepTheAlphaThreshold) {
+    // With Depth and IndexOB asked, the pane is still an exact layer in
+    // Combined (one sample: the composite of the opaque renders), and the
+    // data passes come from the data G-buffer as with stochastic alpha: a
+    // pane of alpha 0.6 reaches the Alpha Threshold (0.5) and is the depth
+    // there, one of 0.4 is not (the floor's depth shows). Orthographic from
+    // z = 10: the pane at z = 1 is at depth 9, the floor at 10.
+    const Material green = diffuse(0.25f, 0.75f, 0.375f);
+    auto render = [&](float alpha, bool with_pane) {
+        Renderer r;
+        set_world_color(r, 0.25f, 0.25f, 0.25f);
+        Light sun;
+        sun.type = LightType::Sun;
+        sun.angle = 0.0f;
+        const double eye[3] = {1.0, 0.5, 3.0}, target[3] = {0.0, 0.0, 0.0};
+        sun.matrix = tools::look_at(eye, target);
+        sun.energy = 3.0f;
+        r.add_light(sun);
+        add_plane(r, diffuse(0.75f, 0.375f, 0.25f), 10.0f);
+        Material pane = green;
+        pane.alpha = alpha;
+        if (with_pane) add_plane(r, pane, 2.0f, 1, tools::translation(0, 0, 1.0), false);
+        RenderSettings s;
+        s.width = s.height = kSize;
+        s.samples = 1;
+        s.filter_width = 0.01f;
+        s.passes.insert(Pass::Depth);
+        s.passes.insert(Pass::IndexOB);
+        return r.render(top_down_ortho(10.0, 6.0f), s);
+    };
+    const FrameResult floor_only = render(1.0f, false), opaque = render(1.0f, true);
+    for (float alpha : {0.4f, 0.6f}) {
+        const FrameResult f = render(alpha, true);
+        EXPECT_EQ(f.timings.exact_layers, 1u);
+        EXPECT_TRUE(f.warnings.empty()) << f.warnings.front();
+        const PassImage& depth = *f.find(Pass::Depth);
+        const double d = depth.pixels[(std::size_t(24) * depth.width + 24) * depth.channels];
+        const double worst = worst_inside(*f.find(Pass::Combined), [&](int x, int y) {
+            return double(alpha) * pixel4(*opaque.find(Pass::Combined), x, y) +
+                   double(1.0f - alpha) * pixel4(*floor_only.find(Pass::Combined), x, y);
+        });
+        std::printf("alpha %.1f with Depth and IndexOB: depth at the pane %.4f; Combined's worst relative difference "
+                    "to the composite %.2e\n", alpha, d, worst);
+        EXPECT_NEAR(d, alpha >= 0.5f ? 9.0 : 10.0, 1e-3);
+        EXPECT_LT(worst, 1e-5);
+    }
 }

@@ -99,16 +99,19 @@ struct RenderSettings {
     // or the image is too large for it, the raster path draws the frame,
     // warned.
     bool visibility_buffer = true;
-    // Partly transparent planes as exact layers (layer_order.h): in a frame
-    // whose only output is Combined, the partly transparent materials whose
-    // every surface in view is planar and ordered by the plane test are
-    // drawn by the forward pass, each layer composited with its alpha at
-    // every sample (Cycles' transmittance, exactly) instead of kept in a
-    // share alpha of the samples: the same image converged, without the
-    // coverage's noise. Not taken with other passes, Cryptomatte, shader
-    // AOVs, light groups (the forward layer reaches Combined only), motion
-    // blur (the order is the frame's), Blend-mode materials (the forward
-    // pass's own order is by object), shadow catchers, or emission samples
+    // Partly transparent planes and convex solids as exact layers
+    // (layer_order.h): the partly transparent materials whose every surface
+    // in view is planar or convex and ordered by the plane test are drawn by
+    // the forward pass, each layer composited with its alpha at every
+    // sample (Cycles' transmittance, exactly) instead of kept in a share
+    // alpha of the samples: the same image converged, without the
+    // coverage's noise. Taken in frames whose passes are Combined and the
+    // data passes (Depth, Position, Normal, UV, IndexOB, IndexMA: the data
+    // G-buffer keeps the layers at the Alpha Threshold, as before); not
+    // with light, colour or Mist passes, Cryptomatte, shader AOVs, light
+    // groups (the forward layer reaches none of them), motion blur (the
+    // order is the frame's), Blend-mode materials (the forward pass orders
+    // those by object), shadow catchers, or emission samples
     // (FrameTimings::exact_layers says what a frame took). Their shadows
     // stay stochastic. Off: every partly transparent surface stochastic.
     bool exact_transparent_planes = true;

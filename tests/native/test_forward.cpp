@@ -651,44 +651,50 @@ TEST(ExactLayers, DataPassesKeepTheAlphaThreshold) {
     // data passes come from the data G-buffer as with stochastic alpha: a
     // pane of alpha 0.6 reaches the Alpha Threshold (0.5) and is the depth
     // there, one of 0.4 is not (the floor's depth shows). Orthographic from
-    // z = 10: the pane at z = 1 is at depth 9, the floor at 10.
+    // z = 10: the pane at z = 1 is at depth 9, the floor at 10. Through the
+    // visibility buffer and the raster G-buffer.
     const Material green = diffuse(0.25f, 0.75f, 0.375f);
-    auto render = [&](float alpha, bool with_pane) {
-        Renderer r;
-        set_world_color(r, 0.25f, 0.25f, 0.25f);
-        Light sun;
-        sun.type = LightType::Sun;
-        sun.angle = 0.0f;
-        const double eye[3] = {1.0, 0.5, 3.0}, target[3] = {0.0, 0.0, 0.0};
-        sun.matrix = tools::look_at(eye, target);
-        sun.energy = 3.0f;
-        r.add_light(sun);
-        add_plane(r, diffuse(0.75f, 0.375f, 0.25f), 10.0f);
-        Material pane = green;
-        pane.alpha = alpha;
-        if (with_pane) add_plane(r, pane, 2.0f, 1, tools::translation(0, 0, 1.0), false);
-        RenderSettings s;
-        s.width = s.height = kSize;
-        s.samples = 1;
-        s.filter_width = 0.01f;
-        s.passes.insert(Pass::Depth);
-        s.passes.insert(Pass::IndexOB);
-        return r.render(top_down_ortho(10.0, 6.0f), s);
-    };
-    const FrameResult floor_only = render(1.0f, false), opaque = render(1.0f, true);
-    for (float alpha : {0.4f, 0.6f}) {
-        const FrameResult f = render(alpha, true);
-        EXPECT_EQ(f.timings.exact_layers, 1u);
-        EXPECT_TRUE(f.warnings.empty()) << f.warnings.front();
-        const PassImage& depth = *f.find(Pass::Depth);
-        const double d = depth.pixels[(std::size_t(24) * depth.width + 24) * depth.channels];
-        const double worst = worst_inside(*f.find(Pass::Combined), [&](int x, int y) {
-            return double(alpha) * pixel4(*opaque.find(Pass::Combined), x, y) +
-                   double(1.0f - alpha) * pixel4(*floor_only.find(Pass::Combined), x, y);
-        });
-        std::printf("alpha %.1f with Depth and IndexOB: depth at the pane %.4f; Combined's worst relative difference "
-                    "to the composite %.2e\n", alpha, d, worst);
-        EXPECT_NEAR(d, alpha >= 0.5f ? 9.0 : 10.0, 1e-3);
-        EXPECT_LT(worst, 1e-5);
+    for (bool visibility : {true, false}) {
+        auto render = [&](float alpha, bool with_pane) {
+            Renderer r;
+            set_world_color(r, 0.25f, 0.25f, 0.25f);
+            Light sun;
+            sun.type = LightType::Sun;
+            sun.angle = 0.0f;
+            const double eye[3] = {1.0, 0.5, 3.0}, target[3] = {0.0, 0.0, 0.0};
+            sun.matrix = tools::look_at(eye, target);
+            sun.energy = 3.0f;
+            r.add_light(sun);
+            add_plane(r, diffuse(0.75f, 0.375f, 0.25f), 10.0f);
+            Material pane = green;
+            pane.alpha = alpha;
+            if (with_pane) add_plane(r, pane, 2.0f, 1, tools::translation(0, 0, 1.0), false);
+            RenderSettings s;
+            s.width = s.height = kSize;
+            s.samples = 1;
+            s.filter_width = 0.01f;
+            s.passes.insert(Pass::Depth);
+            s.passes.insert(Pass::IndexOB);
+            s.visibility_buffer = visibility;
+            return r.render(top_down_ortho(10.0, 6.0f), s);
+        };
+        const FrameResult floor_only = render(1.0f, false), opaque = render(1.0f, true);
+        for (float alpha : {0.4f, 0.6f}) {
+            const FrameResult f = render(alpha, true);
+            EXPECT_EQ(f.timings.exact_layers, 1u);
+            EXPECT_TRUE(f.warnings.empty()) << f.warnings.front();
+            const PassImage& depth = *f.find(Pass::Depth);
+            const double d = depth.pixels[(std::size_t(24) * depth.width + 24) * depth.channels];
+            const double worst = worst_inside(*f.find(Pass::Combined), [&](int x, int y) {
+                return double(alpha) * pixel4(*opaque.find(Pass::Combined), x, y) +
+                       double(1.0f - alpha) * pixel4(*floor_only.find(Pass::Combined), x, y);
+            });
+            std::printf("%s, alpha %.1f with Depth and IndexOB: depth at the pane %.4f; Combined's worst relative "
+                        "difference to the composite %.2e\n", visibility ? "visibility buffer" : "raster G-buffer", alpha,
+                        d, worst);
+            EXPECT_EQ(f.timings.visibility_buffer, visibility);
+            EXPECT_NEAR(d, alpha >= 0.5f ? 9.0 : 10.0, 1e-3);
+            EXPECT_LT(worst, 1e-5);
+        }
     }
 }

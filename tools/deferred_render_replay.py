@@ -306,7 +306,8 @@ def main(argv=None):
                  else ""))
         print(f"GL context {t_context * 1e3:.0f} ms, scene upload {t_scene * 1e3:.0f} ms")
         if runs and runs[-1].get("exact_layers"):
-            print(f"exact layers: {runs[-1]['exact_layers']} partly transparent planes composited by the forward pass")
+            print(f"exact layers: {runs[-1]['exact_layers']} partly transparent surfaces (planes, convex solids) "
+                  f"composited by the forward pass")
         print("| run | wall ms | " + " | ".join(s[:-3] for s in STAGES) + " |")
         print("| ---: | ---: | " + " | ".join("---:" for _ in STAGES) + " |")
         for k, r in enumerate(runs):

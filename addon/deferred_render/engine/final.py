@@ -128,7 +128,7 @@ def _format_timings(timings):
         text += f"; images {uploaded} uploaded, {reused} kept from the last render"
     layers = timings.get("exact_layers", 0)
     if layers:
-        text += f"; {layers} transparent planes composited exactly"
+        text += f"; {layers} transparent surfaces composited exactly"
     return text
 
 

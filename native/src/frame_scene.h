@@ -95,6 +95,8 @@ public:
     // whether it mirrors (negative determinant: its winding is reversed).
     glm::dmat4 model_matrix(std::uint32_t i) const;
     bool mirrored(std::uint32_t i) const { return (instances_[i].ids.w & 1u) != 0u; }
+    // Whether instance i is a holdout object (Object > Visibility > Holdout).
+    bool holdout(std::uint32_t i) const { return (instances_[i].ids.w & 2u) != 0u; }
     const std::vector<Bound>& bounds() const { return bounds_; }
     // The boxes of the instances whose bounding sphere `view` contains: each
     // its mesh's axis-aligned bounds through its matrix (camera-relative).

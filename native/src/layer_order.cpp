@@ -232,7 +232,10 @@ ExactLayers select_exact_layers(const FrameScene& scene, const std::vector<bool>
                 const glm::dmat4 m = scene.model_matrix(i);
                 const glm::dmat3 linear(m);
                 const double det = glm::determinant(linear);
-                if (!(mesh.planar || mesh.convex) || !(std::abs(det) > 0.0) || !std::isfinite(det)) {
+                // A holdout object stays in the G-buffer (its hole is the
+                // deferred path's), as does what is neither planar nor convex.
+                if (!(mesh.planar || mesh.convex) || scene.holdout(i) || !(std::abs(det) > 0.0) ||
+                    !std::isfinite(det)) {
                     for (std::uint32_t id : ids) held[id] = true;
                     changed = true;
                     continue;

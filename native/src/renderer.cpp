@@ -886,6 +886,11 @@ void Renderer::Impl::prepare_programs(Frame& f) {
     // Blend-mode materials (Material::blend): drawn by the forward pass, not
     // into the G-buffer, lit by the lighting pass's own code.
     ShaderVariant forward_variant;
+    // The closure models no surface has are left out of its lighting code
+    // too, as of the lighting pass's (a CPU rasteriser runs both sides of
+    // every branch).
+    for (const std::string& d : base.defines)
+        if (d.rfind("CLOSURES_NO_", 0) == 0) forward_variant.defines.push_back(d);
     lights.add_defines(forward_variant);
     if (!shadows.empty()) forward_variant.defines.push_back("HAS_SHADOWS");
     if (f.shadow_rays) {

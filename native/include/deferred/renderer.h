@@ -248,8 +248,8 @@ struct FrameTimings {
     // Draws of the Blend-mode surfaces per sample, one per batch of lights
     // (as the lighting's dispatches); 0 without a forward pass.
     std::uint32_t forward_batches = 0;
-    // Partly transparent planar surfaces in view drawn as exact layers
-    // (RenderSettings::exact_transparent_planes), instances; 0: none.
+    // Partly transparent planar or convex surfaces in view drawn as exact
+    // layers (RenderSettings::exact_transparent_planes), instances; 0: none.
     std::uint32_t exact_layers = 0;
     // geometry_ms holds the emission samples' passes too (emission_samples.h),
     // and camera_instances_drawn their instances.

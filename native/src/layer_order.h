@@ -81,10 +81,11 @@ struct ExactLayers {
 
 // Of the `transparent` materials (per id: partly transparent, stochastic
 // otherwise), those whose every instance in `view` is planar or convex
-// (GpuMesh::planar, convex) and ordered by order_layers among the others. Instances out of view neither
-// take part nor hold a material back (the camera never draws them); their
-// shadows stay the stochastic ones. At most kMaxExactLayers instances are
-// ordered (the test is quadratic); with more, none.
+// (GpuMesh::planar, convex), not a holdout object, and ordered by
+// order_layers among the others. Instances out of view neither take part
+// nor hold a material back (the camera never draws them); their shadows
+// stay the stochastic ones. At most kMaxExactLayers instances are ordered
+// (the test is quadratic); with more, none.
 constexpr std::size_t kMaxExactLayers = 1024;
 ExactLayers select_exact_layers(const FrameScene& scene, const std::vector<bool>& transparent, const ViewVolume& view);
 

@@ -336,6 +336,32 @@ def test_materials(checks):
     checks.check(np.allclose(params["base_color"], (0.9, 0.1, 0.1)) and params["pass_index"] == 7
                  and "Translucent" in notes[0], "unknown shader -> viewport colour, keeps pass index", notes[0])
 
+    # Multiscatter GGX, shaded as GGX, is named where Cycles' is measurably
+    # brighter (tools/cycles_probe/probe_multiscatter.py's table: a metal
+    # at roughness 0.5 11 %, a dielectric at 0.2 0.01 %); a linked
+    # Roughness takes its worst value (graph path: roughness 1, 131 %).
+    def multiscatter(metallic, roughness):
+        def build(nodes, links, bsdf, out):
+            bsdf.distribution = 'MULTI_GGX'
+            bsdf.inputs["Metallic"].default_value = metallic
+            bsdf.inputs["Roughness"].default_value = roughness
+        return build
+    _, notes = material_export.material_params(_material("MultiMetal", multiscatter(1.0, 0.5)))
+    checks.check(len(notes) == 1 and "Multiscatter GGX" in notes[0] and "about 11 %" in notes[0],
+                 "Multiscatter GGX on a rough metal: named with Cycles' excess", "; ".join(notes))
+    _, notes = material_export.material_params(_material("MultiSmooth", multiscatter(0.0, 0.2)))
+    checks.check(notes == [], "Multiscatter GGX on a smooth dielectric: within 2 %, not named", "; ".join(notes))
+
+    def multiscatter_textured(nodes, links, bsdf, out):
+        bsdf.distribution = 'MULTI_GGX'
+        bsdf.inputs["Metallic"].default_value = 1.0
+        links.new(nodes.new("ShaderNodeTexNoise").outputs[0], bsdf.inputs["Roughness"])
+    from deferred_render.materials import builder
+    graph = builder.build_material_graph(_material("MultiTextured", multiscatter_textured))
+    named = [n for n in graph.notes if "Multiscatter GGX" in n]
+    checks.check(len(named) == 1 and "up to 131 % brighter (Roughness linked" in named[0],
+                 "Multiscatter GGX with a linked Roughness (node graph): its worst case named", "; ".join(graph.notes))
+
     nonode = bpy.data.materials.new("NoNodes")
     nonode.use_nodes = False
     nonode.diffuse_color = (0.2, 0.4, 0.6, 1)

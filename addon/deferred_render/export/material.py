@@ -39,7 +39,7 @@ a material without nodes renders with.
 import math
 
 from ..materials.builder import material_output
-from ..materials.nodes.shader import NEAR_ZERO_IOR, NEAR_ZERO_IOR_NOTE
+from ..materials.nodes.shader import NEAR_ZERO_IOR, NEAR_ZERO_IOR_NOTE, multiscatter_note
 
 # Native parameter -> (kind, Principled input names: Blender 3.x first, then 4.x).
 # Every read of a Principled BSDF input goes through this table.
@@ -185,7 +185,12 @@ def _principled(node, notes):
             notes.append(f"'{socket.name}' input (linked, ignored)")
         elif neutral is not None and abs(_scalar(socket.default_value) - neutral) > 1e-6:
             notes.append(f"'{socket.name}' = {_scalar(socket.default_value):.3g} (not rendered)")
-    # 'MULTI_GGX' has no closed form: shaded as GGX (see shared/REFERENCE.md).
+    # 'MULTI_GGX' has no closed form: shaded as GGX (see shared/REFERENCE.md),
+    # named where Cycles' is measurably brighter (materials/nodes/shader.py).
+    if getattr(node, "distribution", "GGX") == "MULTI_GGX":
+        note = multiscatter_note(node.name, float(params.get("metallic", 0.0)), float(params.get("roughness", 0.5)))
+        if note:
+            notes.append(note)
     socket = _find_input(node, PRINCIPLED_TRANSMISSION)
     transmission = 0.0 if socket is None else _finite(
         _scalar(_input_value(socket, notes, f"'{socket.name}'")), 0.0)

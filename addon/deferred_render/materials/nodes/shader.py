@@ -23,6 +23,52 @@ NEAR_ZERO_IOR = 1e-3
 NEAR_ZERO_IOR_NOTE = ("'{name}': 'IOR' = {ior:.3g} with Transmission: Cycles 3.4 renders this surface black "
                       "(its glass closure is not finite at an IOR near 0); rendered as the IOR's limit, a mirror")
 
+# Multiscatter GGX (a Principled BSDF's distribution; the library materials
+# use it, a new one in Blender 3.4 is GGX) is shaded as GGX: Cycles' random walk between microfacets returns the energy single scattering
+# loses at high roughness, which this engine does not model. Measured by
+# tools/cycles_probe/probe_multiscatter.py (multiscatter_table.py): a
+# sphere under a uniform world is 0.2-1.9 % brighter in Cycles for a
+# dielectric, 11 % for a metal at roughness 0.5 and 2.3x at 1. Named where
+# the estimate passes MULTISCATTER_NOTE_ABOVE (a linked input: its worst
+# value).
+MULTISCATTER_NOTE_ABOVE = 1.02
+
+
+def _interpolate(xs, ys, x):
+    x = min(max(x, xs[0]), xs[-1])
+    for k in range(len(xs) - 1):
+        if x <= xs[k + 1]:
+            t = (x - xs[k]) / (xs[k + 1] - xs[k])
+            return ys[k] + t * (ys[k + 1] - ys[k])
+    return ys[-1]
+
+
+def multiscatter_ratio(metallic, roughness):
+    """Cycles' Principled BSDF mean with Multiscatter GGX over GGX (the
+    measured table, interpolated); a None input (linked) takes its worst
+    value."""
+    from .. import multiscatter_table as t
+    def row(m):
+        if roughness is None:
+            return max(t.RATIO[t.METALLIC.index(m)])
+        return _interpolate(t.ROUGHNESS, t.RATIO[t.METALLIC.index(m)], roughness)
+    column = [row(m) for m in t.METALLIC]
+    return max(column) if metallic is None else _interpolate(t.METALLIC, column, metallic)
+
+
+def multiscatter_note(name, metallic, roughness):
+    """The note for a Principled BSDF with Multiscatter GGX, or None where
+    Cycles' is within MULTISCATTER_NOTE_ABOVE of GGX."""
+    ratio = multiscatter_ratio(metallic, roughness)
+    if ratio < MULTISCATTER_NOTE_ABOVE:
+        return None
+    linked = [label for label, v in (("Metallic", metallic), ("Roughness", roughness)) if v is None]
+    how = "up to" if linked else "about"
+    why = f"{' and '.join(linked)} linked; " if linked else ""
+    return (f"'{name}': Multiscatter GGX shaded as GGX: Cycles renders it {how} {100.0 * (ratio - 1.0):.0f} % "
+            f"brighter ({why}its multiple scattering, measured on a sphere under a uniform world)")
+
+
 # Shader nodes without a reflecting lobe (for Add Shader's note).
 _NOT_REFLECTING = {"ShaderNodeEmission", "ShaderNodeBackground", "ShaderNodeBsdfTransparent", "ShaderNodeHoldout"}
 
@@ -71,6 +117,10 @@ def principled(b):
             b._graph.note(NEAR_ZERO_IOR_NOTE.format(name=b.node.name, ior=ior))
     if b.is_linked("Clearcoat Normal"):
         b._graph.note(f"'{b.node.name}': 'Clearcoat Normal' (the base normal is used)")
+    if getattr(b.node, "distribution", "GGX") == "MULTI_GGX":
+        note = multiscatter_note(b.node.name, _value(b, "Metallic"), _value(b, "Roughness"))
+        if note:
+            b._graph.note(note)
     alpha = _value(b, "Alpha")
     if alpha is None or alpha < 1.0:
         b._graph.uses_alpha = True  # stochastic transparency (the program discards)

@@ -188,6 +188,28 @@ def exp_velvet():
                               "Principled BSDF", "Transmission", 0.0), "Material Output", "Displacement"))]
 
 
+def exp_building():
+    """'Building': Mix(Mix(Glass Beckmann 0, Glossy Beckmann 0.14 by 0.73), Diffuse) by a Brick texture's Fac
+    (the mortar: Diffuse), whose Fac x 0.05 is also its Displacement (a step: bump only where the offsets
+    straddle the mortar's edges). Its Squash 0 (every 3rd row) makes a row of zero-width bricks, which Cycles
+    renders as one brick (svm_brick's x is NaN there)."""
+    b = "Building"
+
+    def windows(glass_fac=None, displacement=True):
+        m = set_input(library(b), "Mix Shader", "Fac", 0.0)
+        if glass_fac is not None:
+            set_input(m, "Mix Shader.001", "Fac", glass_fac)
+        return m if displacement else unlink(m, "Material Output", "Displacement")
+
+    return [("as is", library(b)),
+            ("Displacement unlinked", unlink(library(b), "Material Output", "Displacement")),
+            ("mortar: Diffuse only", set_input(library(b), "Mix Shader", "Fac", 1.0)),
+            ("bricks: Glass and Glossy", windows()),
+            ("bricks, no Displacement", windows(displacement=False)),
+            ("bricks: Glass only", windows(0.0)),
+            ("bricks: Glossy only", windows(1.0))]
+
+
 def exp_diffuse():
     """Diffuse BSDF (rendered as Principled's Burley diffuse at roughness 1)."""
     c = (0.8, 0.8, 0.8, 1)
@@ -455,6 +477,7 @@ EXPERIMENTS = {
     "suzanne": exp_suzanne,
     "group_normal": exp_group_normal,
     "velvet": exp_velvet,
+    "building": exp_building,
     "diffuse": exp_diffuse,
     "glossy": exp_glossy,
     "beckmann": exp_beckmann,

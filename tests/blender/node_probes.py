@@ -517,6 +517,31 @@ def _converter_cases():
             Case("wavelength", "ShaderNodeWavelength", wavelength)]
 
 
+def _brick(fancy, squash=0.7):
+    def f(t):
+        inputs = {"Vector": t.tex_coords(1.0), "Color1": (0.8, 0.3, 0.1), "Color2": (0.2, 0.5, 0.7),
+                  "Mortar": (0.9, 0.9, 0.8), "Scale": 2.0, "Mortar Size": 0.08}   # mortar ~2 px wide
+        props = {}
+        if fancy:
+            inputs.update({"Mortar Size": 0.1, "Mortar Smooth": 0.4, "Bias": 0.3,
+                           "Brick Width": 0.6, "Row Height": 0.3})
+            # Squash 0 (the materials library's 'Building'): a row of
+            # zero-width bricks, one brick between horizontal mortar
+            # lines in Cycles (svm_brick's x is NaN there).
+            props = {"offset": 0.3, "offset_frequency": 3, "squash": squash, "squash_frequency": 2}
+        n = t.node("ShaderNodeTexBrick", inputs, **props)
+        color = t.split(t.out(n, "Color"))
+        return t.pack(color[0], color[2], t.out(n, "Fac"))
+    return f
+
+
+def _late_cases():
+    """Cases added after the grid was laid out, appended last so that no
+    other tile moves (a tile's place shifts where its inputs' steep parts
+    land against the pixel grid)."""
+    return [Case("brick_squash_0", "ShaderNodeTexBrick", _brick(True, 0.0))]
+
+
 def _texture_cases():
     def w_input(t):
         return t.lin(1.3, 0.7, 0.25)
@@ -575,19 +600,7 @@ def _texture_cases():
             "Vector": t.tex_coords(1.0, z=(0.3, 0.2)), "Color1": (0.8, 0.2, 0.1), "Color2": (0.1, 0.3, 0.7),
             "Scale": 3.0}), "Color")
 
-    def brick(fancy):
-        def f(t):
-            inputs = {"Vector": t.tex_coords(1.0), "Color1": (0.8, 0.3, 0.1), "Color2": (0.2, 0.5, 0.7),
-                      "Mortar": (0.9, 0.9, 0.8), "Scale": 2.0, "Mortar Size": 0.08}   # mortar ~2 px wide
-            props = {}
-            if fancy:
-                inputs.update({"Mortar Size": 0.1, "Mortar Smooth": 0.4, "Bias": 0.3,
-                               "Brick Width": 0.6, "Row Height": 0.3})
-                props = {"offset": 0.3, "offset_frequency": 3, "squash": 0.7, "squash_frequency": 2}
-            n = t.node("ShaderNodeTexBrick", inputs, **props)
-            color = t.split(t.out(n, "Color"))
-            return t.pack(color[0], color[2], t.out(n, "Fac"))
-        return f
+    brick = _brick
 
     def gradient(kind):
         def f(t):
@@ -964,7 +977,7 @@ def all_cases():
     cases = (_math_cases() + _vector_math_cases() + _clamp_map_range_cases() + _mix_cases() + _mix_rgb_cases()
              + _color_cases() + _separate_combine_cases() + _ramp_curve_cases() + _converter_cases()
              + _texture_cases() + _image_cases() + _input_cases() + _attribute_cases() + _vector_cases()
-             + _normal_cases() + _proxy_cases())
+             + _normal_cases() + _proxy_cases() + _late_cases())
     names = [c.name for c in cases]
     dup = {n for n in names if names.count(n) > 1}
     assert not dup, f"duplicate case names: {dup}"

@@ -442,6 +442,20 @@ Mat4d tilted(double slope, double height) {
     return m;
 }
 
+// render_scene's light and floor: a grey world, the hard sun from (1, 0.5,
+// 3), the floor (half size 10).
+void add_sun_and_floor(Renderer& r, float world) {
+    set_world_color(r, world, world, world);
+    Light sun;
+    sun.type = LightType::Sun;
+    sun.angle = 0.0f;
+    const double eye[3] = {1.0, 0.5, 3.0}, target[3] = {0.0, 0.0, 0.0};
+    sun.matrix = tools::look_at(eye, target);
+    sun.energy = 3.0f;
+    r.add_light(sun);
+    add_plane(r, diffuse(0.75f, 0.375f, 0.25f), 10.0f);
+}
+
 struct LayerScene {
     Material big, small;        // the tilted pane's and the small pane's
     bool with_big = true, with_small = true, small_is_box = false;
@@ -455,15 +469,7 @@ struct LayerScene {
 // pane's (the distance sort of Blend-mode layers would put it behind).
 FrameResult render_layers(const LayerScene& l) {
     Renderer r;
-    set_world_color(r, 0.25f, 0.25f, 0.25f);
-    Light sun;
-    sun.type = LightType::Sun;
-    sun.angle = 0.0f;
-    const double eye[3] = {1.0, 0.5, 3.0}, target[3] = {0.0, 0.0, 0.0};
-    sun.matrix = tools::look_at(eye, target);
-    sun.energy = 3.0f;
-    r.add_light(sun);
-    add_plane(r, diffuse(0.75f, 0.375f, 0.25f), 10.0f);
+    add_sun_and_floor(r, 0.25f);
     if (l.with_big) add_plane(r, l.big, 2.0f, 1, tilted(0.5, 1.5), false);
     if (l.with_small) {
         if (l.small_is_box) {
@@ -590,15 +596,7 @@ TEST(ExactLayers, AConvexSolidIsItsNearSideThenItsFarSide) {
     // stochastic sample's per-pixel spread).
     auto render = [](bool stochastic, int samples) {
         Renderer r;
-        set_world_color(r, 0.0f, 0.0f, 0.0f);
-        Light sun;
-        sun.type = LightType::Sun;
-        sun.angle = 0.0f;
-        const double eye[3] = {1.0, 0.5, 3.0}, target[3] = {0.0, 0.0, 0.0};
-        sun.matrix = tools::look_at(eye, target);
-        sun.energy = 3.0f;
-        r.add_light(sun);
-        add_plane(r, diffuse(0.75f, 0.375f, 0.25f), 10.0f);
+        add_sun_and_floor(r, 0.0f);
         Material red = diffuse(0.75f, 0.125f, 0.125f), blue = diffuse(0.125f, 0.125f, 0.75f);
         red.alpha = blue.alpha = 0.5f;
         const tools::MeshArrays box = welded_box(2.0f, 2.0f, 0.25f);
@@ -657,15 +655,7 @@ TEST(ExactLayers, DataPassesKeepTheAlphaThreshold) {
     for (bool visibility : {true, false}) {
         auto render = [&](float alpha, bool with_pane) {
             Renderer r;
-            set_world_color(r, 0.25f, 0.25f, 0.25f);
-            Light sun;
-            sun.type = LightType::Sun;
-            sun.angle = 0.0f;
-            const double eye[3] = {1.0, 0.5, 3.0}, target[3] = {0.0, 0.0, 0.0};
-            sun.matrix = tools::look_at(eye, target);
-            sun.energy = 3.0f;
-            r.add_light(sun);
-            add_plane(r, diffuse(0.75f, 0.375f, 0.25f), 10.0f);
+            add_sun_and_floor(r, 0.25f);
             Material pane = green;
             pane.alpha = alpha;
             if (with_pane) add_plane(r, pane, 2.0f, 1, tools::translation(0, 0, 1.0), false);

@@ -2924,9 +2924,6 @@ float brick_noise(uint n)
   return 0.5 * (float(nn) / 1073741824.0);
 }
 
-/* Cycles' min() for floats, (a < b) ? a : b: a NaN first argument gives b. */
-float brick_cmin(float a, float b) { return a < b ? a : b; }
-
 /* brick.h: svm_brick(), returns (tint, mortar). `rownum % frequency` is only tested against
  * zero, which |rownum| % frequency gives without GLSL's undefined negative remainder. */
 vec2 svm_brick(vec3 p,
@@ -2955,7 +2952,8 @@ vec2 svm_brick(vec3 p,
   /* Cycles' CPU kernel is built with fast math, where `brick_width * bricknum`
    * uses floorf()'s float itself (the int round trip folded away): a row
    * squashed to width 0 (Squash 0) has x = (p.x + offset) - 0 * inf = NaN,
-   * and its min() ((a < b) ? a : b) then drops the vertical mortar, so
+   * and its min() ((a < b) ? a : b: a NaN first argument gives the
+   * second) then drops the vertical mortar, so
    * such a row is one brick between horizontal mortar lines (measured:
    * Cycles 3.4.1, Brick Width 0.75, Squash 0 every 3rd row, 26 % mortar;
    * with the int round trip it was all mortar, 56 %). The tint's brick
@@ -2971,7 +2969,12 @@ vec2 svm_brick(vec3 p,
   /* (rownum << 16) + (bricknum & 0xFFFF) in C int arithmetic, wrapped, as uint bits. */
   float tint = clamp(
       brick_noise((uint(rownum) << 16) + uint(bricknum & 0xFFFF)) + bias, 0.0, 1.0);
-  float min_dist = brick_cmin(brick_cmin(x, y), brick_cmin(brick_width - x, row_height - y));
+  /* x NaN (no width): Cycles' min(NaN, y) is y, min(NaN, row_height - y)
+   * row_height - y; said explicitly rather than left to a driver's NaN
+   * rules (a GPU compiler may assume finite floats). */
+  const bool no_width = brick_width == 0.0 || isinf(brick) || isnan(brick);
+  float min_dist = no_width ? min(y, row_height - y) :
+                              min(min(x, y), min(brick_width - x, row_height - y));
 
   float mortar;
   if (min_dist >= mortar_size) {

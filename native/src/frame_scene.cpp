@@ -249,6 +249,17 @@ glm::dmat4 FrameScene::model_matrix(std::uint32_t i) const {
     return out;
 }
 
+Box FrameScene::instance_box(std::uint32_t i, const GpuMesh& mesh) const {
+    const glm::dmat4 m = model_matrix(i);
+    Box b;
+    b.center = glm::dvec3(m[3]);
+    for (int k = 0; k < 3; ++k) {
+        b.center += glm::dvec3(m[k]) * mesh.bound_center[k];
+        b.half[std::size_t(k)] = glm::dvec3(m[k]) * mesh.bound_half[k];
+    }
+    return b;
+}
+
 std::vector<Box> FrameScene::boxes_in_view(const ViewVolume& view) const {
     std::vector<Box> boxes;
     for (const Draw& d : draws_) {
@@ -258,15 +269,7 @@ std::vector<Box> FrameScene::boxes_in_view(const ViewVolume& view) const {
             if (!view.contains(bounds_[i].center, bounds_[i].radius)) continue;
             // The packed matrix the vertex stage uses (float: box_in_volume's
             // widening covers its rounding).
-            const gpu::mat4& m = instances_[i].model;
-            auto column = [&](int c) { return glm::dvec3(m.cols[c].x, m.cols[c].y, m.cols[c].z); };
-            Box b;
-            b.center = column(3);
-            for (int k = 0; k < 3; ++k) {
-                b.center += column(k) * mesh.bound_center[k];
-                b.half[std::size_t(k)] = column(k) * mesh.bound_half[k];
-            }
-            boxes.push_back(b);
+            boxes.push_back(instance_box(i, mesh));
         }
     }
     return boxes;

@@ -94,6 +94,9 @@ public:
     // Instance i's matrix as the vertex stage has it (camera-relative), and
     // whether it mirrors (negative determinant: its winding is reversed).
     glm::dmat4 model_matrix(std::uint32_t i) const;
+    // Instance i's box: its mesh's axis-aligned bounds through that matrix
+    // (camera-relative; float: callers widen for its rounding).
+    Box instance_box(std::uint32_t i, const GpuMesh& mesh) const;
     bool mirrored(std::uint32_t i) const { return (instances_[i].ids.w & 1u) != 0u; }
     // Whether instance i is a holdout object (Object > Visibility > Holdout).
     bool holdout(std::uint32_t i) const { return (instances_[i].ids.w & 2u) != 0u; }

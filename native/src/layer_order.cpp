@@ -249,11 +249,11 @@ ExactLayers select_exact_layers(const FrameScene& scene, const std::vector<bool>
                     l.normal = glm::normalize(glm::transpose(glm::inverse(linear)) * n_obj);
                     l.offset = glm::dot(l.normal, glm::dvec3(m * glm::dvec4(n_obj * mesh.plane_offset, 1.0)));
                 }
+                const Box box = scene.instance_box(i, mesh);
                 for (int c = 0; c < 8; ++c) {
-                    glm::dvec3 p;
-                    for (int k = 0; k < 3; ++k)
-                        p[k] = mesh.bound_center[k] + ((c >> k) & 1 ? mesh.bound_half[k] : -mesh.bound_half[k]);
-                    l.corners.push_back(glm::dvec3(m * glm::dvec4(p, 1.0)));
+                    glm::dvec3 p = box.center;
+                    for (int k = 0; k < 3; ++k) p += (c >> k & 1 ? 1.0 : -1.0) * box.half[std::size_t(k)];
+                    l.corners.push_back(p);
                 }
                 l.center = b.center;
                 l.radius = b.radius;

@@ -34,6 +34,20 @@ struct Pane {
     double height;
 };
 
+// The scenes' light and floor: a grey world, a hard sun from (1, 0.5, 3)
+// (its light the same at every sample), the floor (half size 10).
+void add_sun_and_floor(Renderer& r, float world, bool with_floor = true) {
+    set_world_color(r, world, world, world);
+    Light sun;
+    sun.type = LightType::Sun;
+    sun.angle = 0.0f;
+    const double eye[3] = {1.0, 0.5, 3.0}, target[3] = {0.0, 0.0, 0.0};
+    sun.matrix = tools::look_at(eye, target);
+    sun.energy = 3.0f;
+    r.add_light(sun);
+    if (with_floor) add_plane(r, diffuse(0.75f, 0.375f, 0.25f), 10.0f);
+}
+
 // A floor and the given panes (half size 2, z = height, no shadow of their
 // own); the camera covers 6 m, so the panes cover the middle of the frame.
 // `rays`: shadow rays instead of maps, and an opaque caster out of the
@@ -47,15 +61,7 @@ FrameResult render_scene(const std::vector<Pane>& panes, int samples, bool film_
                          bool with_floor = true, float world = 0.25f, bool rays = false, bool emitter = false,
                          bool stochastic = false) {
     Renderer r;
-    set_world_color(r, world, world, world);
-    Light sun;
-    sun.type = LightType::Sun;
-    sun.angle = 0.0f;  // a hard sun: its light is the same at every sample
-    const double eye[3] = {1.0, 0.5, 3.0}, target[3] = {0.0, 0.0, 0.0};
-    sun.matrix = tools::look_at(eye, target);
-    sun.energy = 3.0f;
-    r.add_light(sun);
-    if (with_floor) add_plane(r, diffuse(0.75f, 0.375f, 0.25f), 10.0f);
+    add_sun_and_floor(r, world, with_floor);
     // Added nearest first, so the pass's own sorting is what orders them.
     std::vector<Pane> order = panes;
     std::sort(order.begin(), order.end(), [](const Pane& a, const Pane& b) { return a.height > b.height; });
@@ -440,20 +446,6 @@ Mat4d tilted(double slope, double height) {
     m[10] = c;
     m[14] = height;
     return m;
-}
-
-// render_scene's light and floor: a grey world, the hard sun from (1, 0.5,
-// 3), the floor (half size 10).
-void add_sun_and_floor(Renderer& r, float world) {
-    set_world_color(r, world, world, world);
-    Light sun;
-    sun.type = LightType::Sun;
-    sun.angle = 0.0f;
-    const double eye[3] = {1.0, 0.5, 3.0}, target[3] = {0.0, 0.0, 0.0};
-    sun.matrix = tools::look_at(eye, target);
-    sun.energy = 3.0f;
-    r.add_light(sun);
-    add_plane(r, diffuse(0.75f, 0.375f, 0.25f), 10.0f);
 }
 
 struct LayerScene {

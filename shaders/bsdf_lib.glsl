@@ -97,7 +97,10 @@ PrincipledWeights principled_weights(SurfaceParams s) {
     w.cspec0 = clamp(spec * 0.08 * mix(vec3(1.0), principled_tint(s.base_color), s.specular_tint) * (1.0 - m) +
                          s.base_color * m, 0.0, 1.0);
     w.glossy_model = s.glossy_model;
-    if (s.glossy_model != 0) w.cspec0 = max(s.base_color, vec3(0.0)); /* the Glossy BSDF's closure weight */
+    /* A Glossy BSDF's closure weight: its colour; a Diffuse + grey Glossy
+     * mix (metallic 0, node_shader_lib.glsl merge_diffuse_glossy) keeps the
+     * diffuse colour in base and the glossy weight in specular_tint. */
+    if (s.glossy_model != 0) w.cspec0 = s.metallic < 0.5 ? vec3(max(s.specular_tint, 0.0)) : max(s.base_color, vec3(0.0));
     w.spec_eta = 2.0 / (1.0 - sqrt(0.08 * spec)) - 1.0;
     w.spec_F0 = fresnel_dielectric_cos(1.0, w.spec_eta);
     float alpha = clamp(s.roughness * s.roughness, 0.0, 1.0);

@@ -66,7 +66,9 @@ vec2 gbuffer_unorm16(vec2 v) { return unpackUnorm2x16(packUnorm2x16(v)); }
 SurfaceParams gbuffer_unpack(vec4 base, vec4 params0, vec4 params1, vec2 normal_enc) {
     SurfaceParams s;
     s.base_color = base.rgb;
-    s.diffuse_sigma = base.a >= 0.0 && base.a <= 1.0 ? base.a : -1.0;
+    /* A Glossy BSDF's model (base.a > 1.5): its diffuse lobe, where it has
+     * one (a Diffuse + Glossy mix, merge_diffuse_glossy), is Lambert. */
+    s.diffuse_sigma = base.a >= 0.0 && base.a <= 1.0 ? base.a : base.a > 1.5 ? 0.0 : -1.0;
     s.glossy_model = base.a > 1.5 ? int(base.a + 0.5) - 1 : 0;
 #ifdef CLOSURES_NO_OREN_NAYAR
     /* No Diffuse BSDF in the scene: every diffuse lobe is Burley's, a

@@ -481,6 +481,7 @@ Renderer::Impl::FramePlan Renderer::Impl::plan_frame(const RenderSettings& setti
         if (m.graph >= 0) continue;
         if (m.glossy_model == 2) plan.beckmann = true;
         if (m.glossy_model <= 0 && m.diffuse_roughness >= 0.0f) plan.oren_nayar = true;
+        if (m.glossy_model > 0 && m.metallic < 0.5f) plan.oren_nayar = true;  // Lambert + Glossy (scene.h)
     }
     if (materials.uses_node("node_bsdf_diffuse")) plan.oren_nayar = true;
     if (materials.uses_node("node_bsdf_glossy")) plan.beckmann = true;

@@ -177,6 +177,37 @@ Closure pick_closure(Closure a, Closure b, float pb) {
     return a;
 }
 
+/* A Lambert Diffuse BSDF `d` and a grey Glossy BSDF `g` (one normal) mixed
+ * with weights wd and wg, as one closure instead of one of them drawn per
+ * sample: Cycles sums the two closures, wd Cd Lambert + wg k Glossy (k the
+ * glossy colour's grey), and so does this closure, exactly and with no
+ * noise from the pick (a Layer Weight or Fresnel mix of a diffuse and a
+ * sharp glossy lobe, the materials library's Ceramic Polished, drew the
+ * glossy side in a few samples of a pixel: speckles of its highlight).
+ * Its layout (gbuffer_lib.glsl, bsdf_lib.glsl principled_weights): the
+ * glossy model, metallic 0 (so the diffuse lobe is base colour = wd Cd,
+ * Lambert), the glossy weight wg k in specular_tint (a Glossy BSDF's
+ * weight is otherwise its base colour). Not where the diffuse lobe is
+ * Oren-Nayar (the model field holds the glossy model, not sigma), the
+ * glossy colour is not grey or its weight is above 1 (the G-buffer keeps
+ * specular_tint in [0, 1]): those are picked. */
+bool merged_diffuse_glossy(Closure c) { return c.glossy_model > 0.5 && c.metallic < 0.5; }
+
+bool merge_diffuse_glossy(Closure d, Closure g, float wd, float wg, out Closure c) {
+    c = d;
+    const bool diffuse = d.glossy_model < 0.5 && d.diffuse_sigma == 0.0 && d.metallic == 0.0 && d.specular == 0.0 &&
+                         d.sheen == 0.0 && d.clearcoat == 0.0;
+    const bool glossy = g.glossy_model > 0.5 && g.metallic == 1.0 && g.sheen == 0.0 && g.clearcoat == 0.0 &&
+                        g.base_color.r == g.base_color.g && g.base_color.g == g.base_color.b;
+    const float k = wg * g.base_color.r;
+    if (!diffuse || !glossy || !all(equal(d.N, g.N)) || !(k <= 1.0)) return false;
+    c = g;
+    c.base_color = d.base_color * wd;
+    c.metallic = 0.0;
+    c.specular_tint = k;
+    return true;
+}
+
 /* A closure is the opaque part of the surface, with coverage `alpha`: the
  * surface contributes alpha x (its lobes and emission) and lets 1 - alpha of
  * what is behind through (the geometry pass keeps it with probability alpha).
@@ -229,8 +260,9 @@ void node_mix_shader(float fac, Closure a, Closure b, out Closure c) {
         c.specular *= w;
         c.sheen *= w;
         c.clearcoat *= w;
+        if (merged_diffuse_glossy(c)) c.specular_tint *= w;
         c.reflects = (a.reflects != 0.0 || b.reflects != 0.0) ? 1.0 : 0.0;
-    } else {
+    } else if (!merge_diffuse_glossy(a, b, wa * inv, wb * inv, c) && !merge_diffuse_glossy(b, a, wb * inv, wa * inv, c)) {
         c = pick_closure(a, b, wb * inv);
     }
     c.emission = emission;
@@ -263,11 +295,13 @@ void node_add_shader(Closure a, Closure b, out Closure c) {
         c.specular = min(c.specular * w, 12.0);
         c.sheen *= w;
         c.clearcoat *= w;
-    } else {
+        if (merged_diffuse_glossy(c)) c.specular_tint = min(c.specular_tint * w, 1.0);
+    } else if (!merge_diffuse_glossy(a, b, wa * inv, wb * inv, c) && !merge_diffuse_glossy(b, a, wb * inv, wa * inv, c)) {
         c = pick_closure(a, b, wb / max(wa + wb, 1e-30));
         float scale = (wa + wb) * inv;
         c.base_color *= scale;
         c.specular = min(c.specular * scale, 12.0);
+        if (merged_diffuse_glossy(c)) c.specular_tint = min(c.specular_tint * scale, 1.0);
     }
     c.emission = emission;
     c.alpha = coverage;

@@ -218,12 +218,14 @@ def test_showcase(checks):
                  "Add(Principled, Emission) -> BSDF + emission radiance", str(mat["emission"]))
     cyl, _, slots = instance_of(rec, 4)
     mat = rec.materials[slots[0]]
-    alt = rec.materials[mat.get("mix_with", -1)] if mat.get("mix_with", -1) >= 0 else {}
-    checks.check(mat["metallic"] == 0.0 and np.allclose(mat["base_color"], (0.2, 0.7, 0.2), atol=1e-6)
-                 and abs(mat["mix_probability"] - 0.3) < 1e-6 and alt.get("metallic") == 1.0
-                 and abs(alt.get("roughness", 0) - 0.25) < 1e-6 and alt.get("mix_with") == -1,
-                 "Mix(Diffuse, Glossy, 0.3) -> stochastic mix: Diffuse, else Glossy with probability 0.3",
-                 f"{mat} / {alt}")
+    # A Lambert Diffuse and a grey Glossy mix as one set, their sum
+    # (export/material.py _diffuse_glossy): diffuse 0.7 x its colour, the
+    # glossy model with weight 0.3 x 0.8 in specular_tint, no chain.
+    checks.check(mat["metallic"] == 0.0 and np.allclose(mat["base_color"], (0.14, 0.49, 0.14), atol=1e-6)
+                 and mat.get("glossy_model") == 1 and abs(mat["specular_tint"] - 0.24) < 1e-6
+                 and abs(mat["roughness"] - 0.25) < 1e-6 and mat.get("mix_with", -1) == -1,
+                 "Mix(Diffuse, Glossy, 0.3) -> one set: diffuse 0.7 x colour, glossy weight 0.3 x 0.8",
+                 f"{mat}")
 
 
 def test_instancing(checks):
@@ -313,9 +315,10 @@ def test_materials(checks):
         params, _ = material_export.material_params(_material(f"Mix{fac}", mix))
         checks.check(np.allclose(params["base_color"], expect), f"Mix factor {fac} picks one side")
 
-    def add_two(nodes, links, bsdf, out):
+    def add_two(nodes, links, bsdf, out, tint=(1.0, 0.5, 0.2, 1.0)):
         a = nodes.new("ShaderNodeBsdfDiffuse")
         b = nodes.new("ShaderNodeBsdfGlossy")
+        b.inputs["Color"].default_value = tint  # a tinted glossy: no one set sums the two
         add = nodes.new("ShaderNodeAddShader")
         links.new(a.outputs[0], add.inputs[0])
         links.new(b.outputs[0], add.inputs[1])
@@ -325,6 +328,11 @@ def test_materials(checks):
     params, notes = material_export.material_params(mat)
     checks.check(np.allclose(params["base_color"], (0.3, 0.6, 0.9)) and len(notes) == 1,
                  "Add of two BSDFs -> viewport colour fallback, one note", "; ".join(notes))
+    params, notes = material_export.material_params(
+        _material("AddGrey", lambda *a: add_two(*a, tint=(0.5, 0.5, 0.5, 1.0))))
+    checks.check(params.get("glossy_model") == 1 and params["metallic"] == 0.0
+                 and np.allclose(params["base_color"], (0.8, 0.8, 0.8)) and abs(params["specular_tint"] - 0.5) < 1e-6
+                 and not notes, "Add(Diffuse, grey Glossy) -> one set, their sum", f"{params}; {notes}")
 
     def unknown(nodes, links, bsdf, out):
         t = nodes.new("ShaderNodeBsdfTranslucent")

@@ -381,6 +381,100 @@ def test_persistent_data(checks, scene, plane):
         del os.environ["DEFERRED_SHADER_CACHE"]
 
 
+def test_diffuse_glossy_summed(checks, scene, plane):
+    """A Mix (or Add) of a Lambert Diffuse BSDF and a grey Glossy BSDF is
+    one closure, their sum as Cycles evaluates it, in every sample: at 1
+    sample each pixel equals the Diffuse at its weight plus the Glossy at
+    its weight, rendered apart (one of the two drawn per sample, as before,
+    leaves each pixel at one of them whole: the speckles of a sharp glossy
+    highlight in a few of a pixel's samples). DiffCol / GlossCol carry the
+    two weights. A coloured Glossy is still drawn one side at a time: right
+    in the mean only."""
+    sun = bpy.data.objects.new("sun", bpy.data.lights.new("sun", 'SUN'))
+    scene.collection.objects.link(sun)
+    sun.data.energy = 3.0
+    sun.data.angle = 0.0
+    sun.rotation_euler = (math.radians(35), 0.0, math.radians(20))
+    layer = scene.view_layers[0]
+    layer.use_pass_diffuse_color = layer.use_pass_glossy_color = True
+    fac, cd, k, rough = 0.3, (0.8, 0.5, 0.2), 0.9, 0.4
+
+    def material(name, mode, color=(k, k, k), fac=fac):
+        mat = bpy.data.materials.new(name)
+        mat.use_nodes = True
+        nt = mat.node_tree
+        nt.nodes.clear()
+        out = nt.nodes.new("ShaderNodeOutputMaterial")
+        diffuse = nt.nodes.new("ShaderNodeBsdfDiffuse")
+        diffuse.inputs["Color"].default_value = (*cd, 1.0)
+        glossy = nt.nodes.new("ShaderNodeBsdfGlossy")
+        glossy.distribution = 'BECKMANN'
+        glossy.inputs["Color"].default_value = (*color, 1.0)
+        glossy.inputs["Roughness"].default_value = rough
+        if mode == "diffuse":
+            diffuse.inputs["Color"].default_value = (*[c * (1 - fac) for c in cd], 1.0)
+            nt.links.new(diffuse.outputs[0], out.inputs["Surface"])
+        elif mode == "glossy":
+            glossy.inputs["Color"].default_value = (*[c * fac for c in color], 1.0)
+            nt.links.new(glossy.outputs[0], out.inputs["Surface"])
+        else:
+            node = nt.nodes.new("ShaderNodeAddShader" if mode == "add" else "ShaderNodeMixShader")
+            if mode in ("mix", "graph"):
+                node.inputs["Fac"].default_value = fac
+                if mode == "graph":
+                    # A Fresnel factor: the node graph's program mixes (the
+                    # exporter's constant sets do the rest); on this plane,
+                    # seen head on, it is F0 everywhere.
+                    fresnel = nt.nodes.new("ShaderNodeFresnel")
+                    fresnel.inputs["IOR"].default_value = 1.45
+                    nt.links.new(fresnel.outputs[0], node.inputs["Fac"])
+                nt.links.new(diffuse.outputs[0], node.inputs[1])
+                nt.links.new(glossy.outputs[0], node.inputs[2])
+            else:  # Add of the two at their weights
+                diffuse.inputs["Color"].default_value = (*[c * (1 - fac) for c in cd], 1.0)
+                glossy.inputs["Color"].default_value = (*[c * fac for c in color], 1.0)
+                nt.links.new(glossy.outputs[0], node.inputs[0])
+                nt.links.new(diffuse.outputs[0], node.inputs[1])
+            nt.links.new(node.outputs[0], out.inputs["Surface"])
+        return mat
+
+    try:
+        passes = ("Combined", "DiffCol", "GlossCol")
+        d, _ = render_combined(scene, plane, material("dg_diffuse", "diffuse"), "dg_diffuse", passes)
+        g, _ = render_combined(scene, plane, material("dg_glossy", "glossy"), "dg_glossy", passes)
+        expected = d["Combined"] + g["Combined"]
+        checks.check(float(g["Combined"].mean()) > 0.05 * float(d["Combined"].mean()),
+                     "the glossy lobe lights the plane", f"glossy {g['Combined'].mean():.4g}")
+        for mode in ("mix", "add"):
+            r, _ = render_combined(scene, plane, material("dg_" + mode, mode), "dg_" + mode, passes)
+            err = float(np.abs(r["Combined"] - expected).max() / expected.max())
+            checks.check(err < 2e-3, f"{mode}: every pixel of 1 sample is the sum of its two BSDFs",
+                         f"max |difference| / max {err:.3g}")
+            dc = float(np.abs(r["DiffCol"] - np.array(cd) * (1 - fac)).max())
+            gc = float(np.abs(r["GlossCol"] - k * fac).max())
+            checks.check(dc < 2e-3 and gc < 2e-3, f"{mode}: DiffCol and GlossCol are the weighted colours",
+                         f"DiffCol {dc:.3g}, GlossCol {gc:.3g} off")
+        f0 = ((1.45 - 1.0) / (1.45 + 1.0)) ** 2  # fresnel_dielectric_cos(1, 1.45)
+        d0, _ = render_combined(scene, plane, material("dg_diffuse_f0", "diffuse", fac=f0), "dg_diffuse_f0")
+        g0, _ = render_combined(scene, plane, material("dg_glossy_f0", "glossy", fac=f0), "dg_glossy_f0")
+        r, _ = render_combined(scene, plane, material("dg_graph", "graph"), "dg_graph")
+        expected = d0["Combined"] + g0["Combined"]
+        err = float(np.abs(r["Combined"] - expected).max() / expected.max())
+        checks.check(err < 5e-3, "node graph: every pixel of 1 sample is the sum of its two BSDFs",
+                     f"max |difference| / max {err:.3g}")
+        # A tinted glossy side cannot share the closure: drawn one at a time
+        # (pixels are either side whole), its mean still the sum's.
+        tint = (0.9, 0.6, 0.3)
+        r, _ = render_combined(scene, plane, material("dg_tint", "mix", tint), "dg_tint", passes)
+        g_t, _ = render_combined(scene, plane, material("dg_tint_glossy", "glossy", tint), "dg_tint_glossy", passes)
+        spread = float(r["Combined"][..., 0].std())
+        checks.check(spread > 1e-3, "a tinted glossy side is still drawn one side at a time",
+                     f"pixel spread {spread:.3g}")
+    finally:
+        layer.use_pass_diffuse_color = layer.use_pass_glossy_color = False
+        bpy.data.objects.remove(sun)
+
+
 def main():
     checks = U.Checks("node materials")
     if not U.require_engine(checks):
@@ -388,7 +482,8 @@ def main():
     scene, plane = setup_scene()
     for test in (test_groups_reroutes_mutes, test_unsupported_node_named, test_geometry_mesh_values,
                  test_alpha_rendered, test_bad_trees,
-                 test_image_sizes, test_emission_pass, test_program_cache, test_persistent_data):
+                 test_image_sizes, test_emission_pass, test_program_cache, test_persistent_data,
+                 test_diffuse_glossy_summed):
         checks.run(test.__name__, test, checks, scene, plane)
     checks.finish()
 

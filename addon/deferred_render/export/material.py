@@ -363,12 +363,21 @@ def _mix(a, b, t):
                     "clearcoat", "clearcoat_roughness", "alpha", "diffuse_roughness", "glossy_model"):
             out[key] = b[key]
         out["specular"] = t * b["specular"]
+        if _summed_diffuse_glossy(b):
+            out["specular_tint"] = t * b["specular_tint"]  # its glossy weight
     elif not _reflects(b):
         for key in ("metallic", "roughness", "specular", "specular_tint", "sheen", "sheen_tint",
                     "clearcoat", "clearcoat_roughness", "alpha", "diffuse_roughness", "glossy_model"):
             out[key] = a[key]
         out["specular"] = (1.0 - t) * a["specular"]
+        if _summed_diffuse_glossy(a):
+            out["specular_tint"] = (1.0 - t) * a["specular_tint"]
     return out
+
+
+def _summed_diffuse_glossy(p):
+    """A set made by _diffuse_glossy: its glossy weight is specular_tint."""
+    return p["glossy_model"] > 0 and p["metallic"] < 0.5
 
 
 # A stochastic mix: a list of (parameter set, weight), weights summing to 1.
@@ -393,8 +402,50 @@ def _exactly_mixable(a, b):
     return a["specular_tint"] == 0.0 and (a["sheen"] == 0.0 or a["sheen_tint"] == 0.0)
 
 
+def _lambert_diffuse(p):
+    """A Diffuse BSDF of roughness 0 alone (Lambert)."""
+    return (p["glossy_model"] == 0 and p["diffuse_roughness"] == 0.0 and p["metallic"] == 0.0 and
+            p["specular"] == 0.0 and p["sheen"] == 0.0 and p["clearcoat"] == 0.0)
+
+
+def _grey_glossy(p):
+    """A Glossy BSDF alone (metallic 1: no diffuse lobe) of a grey colour."""
+    c = p["base_color"]
+    return (p["glossy_model"] > 0 and p["metallic"] == 1.0 and p["sheen"] == 0.0 and p["clearcoat"] == 0.0 and
+            c[0] == c[1] == c[2])
+
+
+def _diffuse_glossy(a, b, wa, wb):
+    """wa a + wb b as one set where a is a Lambert diffuse and b a grey glossy
+    (or the other way round) of one coverage: the glossy model with metallic
+    0, the diffuse weight in base_color and the glossy weight in
+    specular_tint (native Material, scene.h; shaders/nodes/node_shader_lib.glsl
+    merge_diffuse_glossy, the graphs' same rule). Cycles sums the two
+    closures; a stochastic mix would draw one of them per sample. None where
+    the sets are not those, or the glossy weight is above 1."""
+    for d, g, wd, wg in ((a, b, wa, wb), (b, a, wb, wa)):
+        if not (_lambert_diffuse(d) and _grey_glossy(g) and d["alpha"] == g["alpha"]):
+            continue
+        k = wg * g["base_color"][0]
+        if not 0.0 <= k <= 1.0:
+            continue
+        out = dict(g)
+        out["base_color"] = tuple(wd * x for x in d["base_color"])
+        out["metallic"] = 0.0
+        out["specular_tint"] = k
+        ed, eg = _emitted(d), _emitted(g)
+        out["emission"] = tuple(wd * x + wg * y for x, y in zip(ed, eg))
+        out["emission_strength"] = 1.0
+        return out
+    return None
+
+
 def _mixture(a, b, t, notes):
     """(1 - t) a + t b for parameter sets or mixtures."""
+    if not isinstance(a, list) and not isinstance(b, list):
+        summed = _diffuse_glossy(a, b, 1.0 - t, t)
+        if summed is not None:
+            return summed
     if not isinstance(a, list) and not isinstance(b, list) and \
             (not _reflects(a) or not _reflects(b) or _exactly_mixable(a, b)):
         return _mix(a, b, t)
@@ -429,6 +480,9 @@ def _add(a, b, notes):
             raise _Unreduced("Add Shader of two reflecting BSDFs")
         return [(_add(p, emitter, notes), w) for p, w in mixture]
     if _reflects(a) and _reflects(b):
+        summed = _diffuse_glossy(a, b, 1.0, 1.0)
+        if summed is not None:
+            return summed
         raise _Unreduced("Add Shader of two reflecting BSDFs")
     base = a if _reflects(a) else b
     out = dict(base)

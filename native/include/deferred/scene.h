@@ -67,7 +67,10 @@ struct Material {
     float diffuse_roughness = -1.0f;
     // The specular lobe: 0 the Principled BSDF's (GGX with its Fresnel);
     // 1 a Glossy BSDF with GGX, 2 with Beckmann: weight `base_color`, no
-    // Fresnel (metallic should be 1, so there is no diffuse lobe).
+    // Fresnel, with metallic 1 (no diffuse lobe). With metallic 0 the sum
+    // of a Lambert Diffuse BSDF and a grey Glossy BSDF (a Mix or Add of the
+    // two, as Cycles sums their closures): diffuse weight `base_color`,
+    // glossy weight `specular_tint` (grey).
     int glossy_model = 0;
     std::uint32_t pass_index = 0;  // IndexMA
     // Stochastic mix (a Mix Shader of BSDFs that one parameter set cannot

@@ -511,7 +511,9 @@ void main() {
                                                : clamp(finite_or(c.diffuse_sigma, -1.0), -1.0, 1.0));
     vec4 surf_params0 = vec4(clamp(finite_or(c.metallic, 0.0), 0.0, 1.0), clamp(finite_or(c.roughness, 0.5), 0.0, 1.0),
                              clamp(finite_or(c.specular, 0.0), 0.0, 12.0),
-                             clamp(finite_or(c.specular_tint, 0.0), 0.0, 1.0));
+                             /* a tint fraction, or a summed Diffuse + Glossy's glossy weight (node_shader_lib.glsl) */
+                             clamp(finite_or(c.specular_tint, 0.0), 0.0,
+                                   c.glossy_model > 0.5 && c.metallic < 0.5 ? 65504.0 : 1.0));
     vec4 surf_params1 = clamp(vec4(finite_or(c.sheen, 0.0), finite_or(c.sheen_tint, 0.0), finite_or(c.clearcoat, 0.0),
                                    finite_or(c.clearcoat_roughness, 0.0)), vec4(0.0), vec4(1.0));
     uint surf_material_index = uint(materials[v_material].emission.w);

@@ -188,9 +188,8 @@ Closure pick_closure(Closure a, Closure b, float pb) {
  * glossy model, metallic 0 (so the diffuse lobe is base colour = wd Cd,
  * Lambert), the glossy weight wg k in specular_tint (a Glossy BSDF's
  * weight is otherwise its base colour). Not where the diffuse lobe is
- * Oren-Nayar (the model field holds the glossy model, not sigma), the
- * glossy colour is not grey or its weight is above 1 (the G-buffer keeps
- * specular_tint in [0, 1]): those are picked. */
+ * Oren-Nayar (the model field holds the glossy model, not sigma) or the
+ * glossy colour is not grey: those are picked. */
 bool merged_diffuse_glossy(Closure c) { return c.glossy_model > 0.5 && c.metallic < 0.5; }
 
 bool merge_diffuse_glossy(Closure d, Closure g, float wd, float wg, out Closure c) {
@@ -200,7 +199,7 @@ bool merge_diffuse_glossy(Closure d, Closure g, float wd, float wg, out Closure 
     const bool glossy = g.glossy_model > 0.5 && g.metallic == 1.0 && g.sheen == 0.0 && g.clearcoat == 0.0 &&
                         g.base_color.r == g.base_color.g && g.base_color.g == g.base_color.b;
     const float k = wg * g.base_color.r;
-    if (!diffuse || !glossy || !all(equal(d.N, g.N)) || !(k <= 1.0)) return false;
+    if (!diffuse || !glossy || !all(equal(d.N, g.N)) || !(k >= 0.0)) return false;
     c = g;
     c.base_color = d.base_color * wd;
     c.metallic = 0.0;
@@ -295,13 +294,13 @@ void node_add_shader(Closure a, Closure b, out Closure c) {
         c.specular = min(c.specular * w, 12.0);
         c.sheen *= w;
         c.clearcoat *= w;
-        if (merged_diffuse_glossy(c)) c.specular_tint = min(c.specular_tint * w, 1.0);
+        if (merged_diffuse_glossy(c)) c.specular_tint *= w;
     } else if (!merge_diffuse_glossy(a, b, wa * inv, wb * inv, c) && !merge_diffuse_glossy(b, a, wb * inv, wa * inv, c)) {
         c = pick_closure(a, b, wb / max(wa + wb, 1e-30));
         float scale = (wa + wb) * inv;
         c.base_color *= scale;
         c.specular = min(c.specular * scale, 12.0);
-        if (merged_diffuse_glossy(c)) c.specular_tint = min(c.specular_tint * scale, 1.0);
+        if (merged_diffuse_glossy(c)) c.specular_tint *= scale;
     }
     c.emission = emission;
     c.alpha = coverage;

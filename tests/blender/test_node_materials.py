@@ -38,13 +38,18 @@ def setup_scene():
     return scene, plane
 
 
-def emission_material(name):
-    """A material whose Surface is an Emission shader; returns (material, emission node)."""
+def empty_material(name):
+    """A node material with only its Output node: (material, tree, output)."""
     mat = bpy.data.materials.new(name)
     mat.use_nodes = True
     nt = mat.node_tree
     nt.nodes.clear()
-    out = nt.nodes.new("ShaderNodeOutputMaterial")
+    return mat, nt, nt.nodes.new("ShaderNodeOutputMaterial")
+
+
+def emission_material(name):
+    """A material whose Surface is an Emission shader; returns (material, emission node)."""
+    mat, nt, out = empty_material(name)
     em = nt.nodes.new("ShaderNodeEmission")
     nt.links.new(em.outputs[0], out.inputs["Surface"])
     return mat, em
@@ -387,9 +392,11 @@ def test_diffuse_glossy_summed(checks, scene, plane):
     sample each pixel equals the Diffuse at its weight plus the Glossy at
     its weight, rendered apart (one of the two drawn per sample, as before,
     leaves each pixel at one of them whole: the speckles of a sharp glossy
-    highlight in a few of a pixel's samples). DiffCol / GlossCol carry the
-    two weights. A coloured Glossy is still drawn one side at a time: right
-    in the mean only."""
+    highlight in a few of a pixel's samples) — constant sets (the
+    exporter's) and node graphs (a Fresnel factor or colour: the graph's
+    program) alike, mixed again with an Emission too. DiffCol / GlossCol
+    carry the two weights. A tinted Glossy is still drawn one side at a
+    time: right in the mean only."""
     sun = bpy.data.objects.new("sun", bpy.data.lights.new("sun", 'SUN'))
     scene.collection.objects.link(sun)
     sun.data.energy = 3.0
@@ -398,79 +405,109 @@ def test_diffuse_glossy_summed(checks, scene, plane):
     layer = scene.view_layers[0]
     layer.use_pass_diffuse_color = layer.use_pass_glossy_color = True
     fac, cd, k, rough = 0.3, (0.8, 0.5, 0.2), 0.9, 0.4
+    f0 = ((4.0 - 1.0) / (4.0 + 1.0)) ** 2  # a Fresnel node of IOR 4 seen head on: fresnel_dielectric_cos(1, 4)
 
-    def material(name, mode, color=(k, k, k), fac=fac):
-        mat = bpy.data.materials.new(name)
-        mat.use_nodes = True
-        nt = mat.node_tree
-        nt.nodes.clear()
-        out = nt.nodes.new("ShaderNodeOutputMaterial")
+    def bsdfs(nt, diffuse_color, glossy_color):
         diffuse = nt.nodes.new("ShaderNodeBsdfDiffuse")
-        diffuse.inputs["Color"].default_value = (*cd, 1.0)
+        diffuse.inputs["Color"].default_value = (*diffuse_color, 1.0)
         glossy = nt.nodes.new("ShaderNodeBsdfGlossy")
         glossy.distribution = 'BECKMANN'
-        glossy.inputs["Color"].default_value = (*color, 1.0)
+        glossy.inputs["Color"].default_value = (*glossy_color, 1.0)
         glossy.inputs["Roughness"].default_value = rough
-        if mode == "diffuse":
-            diffuse.inputs["Color"].default_value = (*[c * (1 - fac) for c in cd], 1.0)
-            nt.links.new(diffuse.outputs[0], out.inputs["Surface"])
-        elif mode == "glossy":
-            glossy.inputs["Color"].default_value = (*[c * fac for c in color], 1.0)
-            nt.links.new(glossy.outputs[0], out.inputs["Surface"])
-        else:
-            node = nt.nodes.new("ShaderNodeAddShader" if mode == "add" else "ShaderNodeMixShader")
-            if mode in ("mix", "graph"):
-                node.inputs["Fac"].default_value = fac
-                if mode == "graph":
-                    # A Fresnel factor: the node graph's program mixes (the
-                    # exporter's constant sets do the rest); on this plane,
-                    # seen head on, it is F0 everywhere.
-                    fresnel = nt.nodes.new("ShaderNodeFresnel")
-                    fresnel.inputs["IOR"].default_value = 1.45
-                    nt.links.new(fresnel.outputs[0], node.inputs["Fac"])
-                nt.links.new(diffuse.outputs[0], node.inputs[1])
-                nt.links.new(glossy.outputs[0], node.inputs[2])
-            else:  # Add of the two at their weights
-                diffuse.inputs["Color"].default_value = (*[c * (1 - fac) for c in cd], 1.0)
-                glossy.inputs["Color"].default_value = (*[c * fac for c in color], 1.0)
-                nt.links.new(glossy.outputs[0], node.inputs[0])
-                nt.links.new(diffuse.outputs[0], node.inputs[1])
-            nt.links.new(node.outputs[0], out.inputs["Surface"])
+        return diffuse, glossy
+
+    def fresnel(nt):
+        node = nt.nodes.new("ShaderNodeFresnel")
+        node.inputs["IOR"].default_value = 4.0
+        return node.outputs[0]
+
+    def alone(name, which, color):
+        mat, nt, out = empty_material(name)
+        diffuse, glossy = bsdfs(nt, color, color)
+        nt.links.new((diffuse if which == "diffuse" else glossy).outputs[0], out.inputs["Surface"])
         return mat
 
+    def mixed(name, glossy_color=(k, k, k), mix_fac=fac, graph=False, emission=None):
+        mat, nt, out = empty_material(name)
+        diffuse, glossy = bsdfs(nt, cd, glossy_color)
+        mix = nt.nodes.new("ShaderNodeMixShader")
+        mix.inputs["Fac"].default_value = mix_fac
+        if graph:
+            nt.links.new(fresnel(nt), mix.inputs["Fac"])
+        nt.links.new(diffuse.outputs[0], mix.inputs[1])
+        nt.links.new(glossy.outputs[0], mix.inputs[2])
+        surface = mix.outputs[0]
+        if emission is not None:  # mixed again, half and half, with an Emission
+            em = nt.nodes.new("ShaderNodeEmission")
+            em.inputs["Color"].default_value = (*emission, 1.0)
+            outer = nt.nodes.new("ShaderNodeMixShader")
+            outer.inputs["Fac"].default_value = 0.5
+            nt.links.new(surface, outer.inputs[1])
+            nt.links.new(em.outputs[0], outer.inputs[2])
+            surface = outer.outputs[0]
+        nt.links.new(surface, out.inputs["Surface"])
+        return mat
+
+    def added(name, graph=False):
+        mat, nt, out = empty_material(name)
+        diffuse, glossy = bsdfs(nt, [c * (1 - fac) for c in cd], (k * fac,) * 3)
+        if graph:
+            nt.links.new(fresnel(nt), glossy.inputs["Color"])
+        add = nt.nodes.new("ShaderNodeAddShader")
+        nt.links.new(glossy.outputs[0], add.inputs[0])
+        nt.links.new(diffuse.outputs[0], add.inputs[1])
+        nt.links.new(add.outputs[0], out.inputs["Surface"])
+        return mat
+
+    def render(mat):
+        return render_combined(scene, plane, mat, mat.name, ("Combined", "DiffCol", "GlossCol"))[0]
+
     try:
-        passes = ("Combined", "DiffCol", "GlossCol")
-        d, _ = render_combined(scene, plane, material("dg_diffuse", "diffuse"), "dg_diffuse", passes)
-        g, _ = render_combined(scene, plane, material("dg_glossy", "glossy"), "dg_glossy", passes)
-        expected = d["Combined"] + g["Combined"]
+        d = render(alone("dg_diffuse", "diffuse", [c * (1 - fac) for c in cd]))
+        g = render(alone("dg_glossy", "glossy", (k * fac,) * 3))
         checks.check(float(g["Combined"].mean()) > 0.05 * float(d["Combined"].mean()),
                      "the glossy lobe lights the plane", f"glossy {g['Combined'].mean():.4g}")
-        for mode in ("mix", "add"):
-            r, _ = render_combined(scene, plane, material("dg_" + mode, mode), "dg_" + mode, passes)
+        d0 = render(alone("dg_diffuse_f0", "diffuse", [c * (1 - f0) for c in cd]))
+        g0 = render(alone("dg_glossy_f0", "glossy", (k * f0,) * 3))
+        gf = render(alone("dg_glossy_fresnel", "glossy", (f0,) * 3))
+        e = (0.2, 0.2, 0.2)
+        cases = [
+            ("mix", mixed("dg_mix"), d["Combined"] + g["Combined"], (1 - fac) * np.array(cd), k * fac),
+            ("add", added("dg_add"), d["Combined"] + g["Combined"], (1 - fac) * np.array(cd), k * fac),
+            ("node graph mix (Fresnel factor)", mixed("dg_graph_mix", graph=True),
+             d0["Combined"] + g0["Combined"], (1 - f0) * np.array(cd), k * f0),
+            ("node graph add (Fresnel colour)", added("dg_graph_add", graph=True),
+             d["Combined"] + gf["Combined"], (1 - fac) * np.array(cd), f0),
+            ("mix, mixed again with an Emission", mixed("dg_mix_emission", emission=e),
+             0.5 * (d["Combined"] + g["Combined"]) + 0.5 * np.array(e), 0.5 * (1 - fac) * np.array(cd),
+             0.5 * k * fac),
+        ]
+        for what, mat, expected, diffcol, glosscol in cases:
+            r = render(mat)
             err = float(np.abs(r["Combined"] - expected).max() / expected.max())
-            checks.check(err < 2e-3, f"{mode}: every pixel of 1 sample is the sum of its two BSDFs",
+            checks.check(err < 2e-3, f"{what}: every pixel of 1 sample is the sum of its two BSDFs",
                          f"max |difference| / max {err:.3g}")
-            dc = float(np.abs(r["DiffCol"] - np.array(cd) * (1 - fac)).max())
-            gc = float(np.abs(r["GlossCol"] - k * fac).max())
-            checks.check(dc < 2e-3 and gc < 2e-3, f"{mode}: DiffCol and GlossCol are the weighted colours",
+            dc = float(np.abs(r["DiffCol"] - diffcol).max())
+            gc = float(np.abs(r["GlossCol"] - glosscol).max())
+            checks.check(dc < 2e-3 and gc < 2e-3, f"{what}: DiffCol and GlossCol are the weighted colours",
                          f"DiffCol {dc:.3g}, GlossCol {gc:.3g} off")
-        f0 = ((1.45 - 1.0) / (1.45 + 1.0)) ** 2  # fresnel_dielectric_cos(1, 1.45)
-        d0, _ = render_combined(scene, plane, material("dg_diffuse_f0", "diffuse", fac=f0), "dg_diffuse_f0")
-        g0, _ = render_combined(scene, plane, material("dg_glossy_f0", "glossy", fac=f0), "dg_glossy_f0")
-        r, _ = render_combined(scene, plane, material("dg_graph", "graph"), "dg_graph")
-        expected = d0["Combined"] + g0["Combined"]
-        err = float(np.abs(r["Combined"] - expected).max() / expected.max())
-        checks.check(err < 5e-3, "node graph: every pixel of 1 sample is the sum of its two BSDFs",
-                     f"max |difference| / max {err:.3g}")
         # A tinted glossy side cannot share the closure: drawn one at a time
-        # (pixels are either side whole), its mean still the sum's.
+        # (at 1 sample each pixel is one side whole), converging to the sum.
         tint = (0.9, 0.6, 0.3)
-        r, _ = render_combined(scene, plane, material("dg_tint", "mix", tint), "dg_tint", passes)
-        g_t, _ = render_combined(scene, plane, material("dg_tint_glossy", "glossy", tint), "dg_tint_glossy", passes)
+        r = render(mixed("dg_tint", glossy_color=tint))
         spread = float(r["Combined"][..., 0].std())
         checks.check(spread > 1e-3, "a tinted glossy side is still drawn one side at a time",
                      f"pixel spread {spread:.3g}")
+        scene.deferred_render.samples = 64
+        r = render(mixed("dg_tint_64", glossy_color=tint))
+        scene.deferred_render.samples = 1
+        g_t = render(alone("dg_tint_glossy", "glossy", [c * fac for c in tint]))
+        inner = (slice(3, -3), slice(3, -3))  # the plane's edge pixels: background in the filter's reach
+        want = float((d["Combined"] + g_t["Combined"])[inner].mean())
+        rel = abs(float(r["Combined"][inner].mean()) - want) / want
+        checks.check(rel < 0.02, "and its mean converges to the sum (64 samples)", f"relative difference {rel:.3g}")
     finally:
+        scene.deferred_render.samples = 1
         layer.use_pass_diffuse_color = layer.use_pass_glossy_color = False
         bpy.data.objects.remove(sun)
 

@@ -64,6 +64,15 @@ TEST_F(GpuBsdf, MatchesOracleWithin1e4Relative) {
             m.metallic = 1.0f;
             m.sheen = m.clearcoat = 0.0f;
         }
+        // And one in sixteen a Lambert Diffuse BSDF summed with a grey Glossy
+        // one (a Mix or Add of the two, scene.h glossy_model): metallic 0,
+        // the glossy weight in specular_tint.
+        if (i % 16 == 5) {
+            m.glossy_model = 1 + (i / 16) % 2;
+            m.metallic = m.sheen = m.clearcoat = 0.0f;
+            m.specular = 0.5f;
+            m.diffuse_roughness = 0.0f;
+        }
         const glm::dvec3 N = random_dir(rng, glm::dvec3(0, 0, 1), -1.0);
         // Keep away from exactly grazing configurations, where float cos
         // cannot carry 1e-4 relative precision.

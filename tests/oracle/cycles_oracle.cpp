@@ -76,6 +76,9 @@ Prepared prepare(const deferred::Material& mat) {
         p.diffuse_weight = base * diffuse_weight;
         p.roughness = roughness;
         if (mat.diffuse_roughness >= 0.0f) p.diffuse_sigma = std::min(double(mat.diffuse_roughness), 1.0);
+        // A Glossy BSDF's set with a diffuse lobe (metallic 0) is a Lambert
+        // Diffuse BSDF summed with it (scene.h glossy_model).
+        if (mat.glossy_model != 0) p.diffuse_sigma = 0.0;
     }
 
     // Sheen: tint normalised by linear_rgb_to_gray (Rec.709 Y), NOT the
@@ -102,7 +105,8 @@ Prepared prepare(const deferred::Material& mat) {
         if (mat.glossy_model != 0) {
             // A Glossy BSDF: bsdf_microfacet_{ggx,beckmann}_setup, weight = colour.
             p.glossy_model = mat.glossy_model;
-            p.spec_cspec0 = glm::max(base, dvec3(0.0));
+            // (With metallic 0: the summed Diffuse + Glossy's grey glossy weight.)
+            p.spec_cspec0 = metallic < 0.5 ? dvec3(std::max(double(mat.specular_tint), 0.0)) : glm::max(base, dvec3(0.0));
         }
     }
 

@@ -422,7 +422,8 @@ def _diffuse_glossy(a, b, wa, wb):
     specular_tint (native Material, scene.h; shaders/nodes/node_shader_lib.glsl
     merge_diffuse_glossy, the graphs' same rule). Cycles sums the two
     closures; a stochastic mix would draw one of them per sample. None where
-    the sets are not those, or the glossy weight is above 1."""
+    the sets are not those, or the glossy weight is above 1 (a native
+    Material's specular_tint is at most 1; the graphs' G-buffer holds more)."""
     for d, g, wd, wg in ((a, b, wa, wb), (b, a, wb, wa)):
         if not (_lambert_diffuse(d) and _grey_glossy(g) and d["alpha"] == g["alpha"]):
             continue
@@ -433,6 +434,7 @@ def _diffuse_glossy(a, b, wa, wb):
         out["base_color"] = tuple(wd * x for x in d["base_color"])
         out["metallic"] = 0.0
         out["specular_tint"] = k
+        out["diffuse_roughness"] = 0.0  # Lambert (the native packing keeps the glossy model)
         ed, eg = _emitted(d), _emitted(g)
         out["emission"] = tuple(wd * x + wg * y for x, y in zip(ed, eg))
         out["emission_strength"] = 1.0

@@ -235,11 +235,13 @@ def mix_shader(b):
 @register("ShaderNodeAddShader")
 def add_shader(b):
     reflecting = 0
+    kinds = set()
     for identifier in ("Shader", "Shader_001"):
         socket = next(s for s in b.node.inputs if s.identifier == identifier)
         source = graph_walk.resolve_input(socket, b.ctx)  # through reroutes, groups, mutes
         if isinstance(source, graph_walk.Output) and source.node.bl_idname not in _NOT_REFLECTING:
             reflecting += 1
+            kinds.add(source.node.bl_idname)
         if isinstance(source, graph_walk.Output) and source.node.bl_idname == "ShaderNodeBsdfTransparent":
             # A white Transparent BSDF added to a closure passes all the light
             # behind *and* shows the other side (Cycles): coverage 0 cannot
@@ -248,7 +250,10 @@ def add_shader(b):
             if color.is_linked or min(color.default_value[:3]) >= 1.0:
                 b._graph.note(f"'{b.node.name}': Add Shader with a white (or linked) Transparent BSDF: the other "
                               "side's light is dropped where the surface passes all the light behind it")
-    if reflecting == 2:
+    # A Diffuse with a Glossy BSDF: summed where the glossy colour is grey
+    # (node_shader_lib.glsl merge_diffuse_glossy), else one drawn at twice
+    # its weight, exact for these two lobes (both linear in their colour).
+    if reflecting == 2 and not kinds <= {"ShaderNodeBsdfDiffuse", "ShaderNodeBsdfGlossy"}:
         b._graph.note(f"'{b.node.name}': Add Shader of two BSDFs is drawn one at a time at twice the weight "
                       "(exact for diffuse and metallic lobes only)")
     b.call("node_add_shader", [b.input("Shader", "closure"), b.input("Shader_001", "closure")],

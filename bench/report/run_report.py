@@ -102,7 +102,7 @@ PLANS = {
     # moon (0.05 W/m2) casts shadow maps, so no extra shadow-free run.
     "many_lights": {"ref_spp": 256, "unocc_spp": 128, "ours": [1, 4, 16], "eevee": [1, 4],
                     "cycles": [1, 4, 16, 64], "ours_noshadow": []},
-    "instancing":  {"ref_spp": 512, "unocc_spp": 256, "ours": [1, 4, 16, 64], "eevee": [1, 4, 16],
+    "instancing":  {"ref_spp": 512, "unocc_spp": 256, "ours_rays": [1, 4, 16, 64], "ours": [1, 4, 16, 64], "eevee": [1, 4, 16],
                     "cycles": [1, 4, 16, 64], "ours_noshadow": [16, 64]},
     "analytic":    {"ref_spp": 1024, "unocc_spp": 1024, "ours_rays": [1, 4, 16, 64, 256], "ours": [1, 4, 16, 64], "eevee": [1, 4, 16, 64],
                     "cycles": [1, 4, 16, 64], "ours_noshadow": [4, 16, 64]},
